@@ -1,0 +1,8 @@
+//! BSDFs. fovea shades every surface with the Disney "principled" BRDF ([`disney`]).
+//!
+//! Conventions: directions are in the local shading frame (`z` is the shading normal), both point away from
+//! the surface, `wo` towards the viewer, `wi` towards the light. `eval` returns the BRDF value `f` without
+//! the cosine factor; `pdf` is a solid-angle density over `wi`.
+pub mod disney;
+
+pub use disney::{BsdfSample, DisneyParams};

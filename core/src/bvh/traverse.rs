@@ -1,0 +1,1 @@
+//! Closest-hit and any-hit traversal with a fixed-size stack.

@@ -1,0 +1,1 @@
+//! Watertight ray-triangle intersection (Woop, Benthin, Wald 2013).

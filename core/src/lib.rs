@@ -1,0 +1,33 @@
+//! # fovea-core
+//!
+//! The one place where fovea's rendering math lives: camera, ray-triangle test, BVH traversal, the Disney
+//! BRDF, light sampling, multiple importance sampling, the per-sample path integrator, foveation (regions,
+//! block ownership, block fill) and post-processing.
+//!
+//! The crate is `no_std` and written in the subset of Rust that rust-gpu compiles to SPIR-V: no recursion,
+//! no function pointers or `dyn`, no iterators over local arrays, no `Option<&T>`, no `static mut`, no
+//! `bool` in buffer types and no `f64`. The CPU host calls these functions natively; the GPU kernel calls the
+//! very same functions compiled to SPIR-V, so the two backends can be diffed against each other.
+//!
+//! Types shared with the GPU live in [`scene::layout`]; they are `#[repr(C)]`, [`bytemuck::Pod`] and made of
+//! 4-byte scalars and `[f32; 4]` / `[u32; 4]` arrays only (never `glam::Vec3`, whose size differs between
+//! the CPU and rust-gpu).
+#![no_std]
+#![deny(unsafe_code)]
+#![allow(clippy::too_many_arguments)]
+
+pub mod bsdf;
+pub mod bvh;
+pub mod camera;
+pub mod foveation;
+pub mod geometry;
+pub mod integrator;
+pub mod lights;
+pub mod material;
+pub mod math;
+pub mod post;
+pub mod rng;
+pub mod sampling;
+pub mod scene;
+
+pub use glam;

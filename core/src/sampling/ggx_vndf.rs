@@ -1,0 +1,1 @@
+//! GGX distribution of visible normals: evaluation and sampling.

@@ -1,0 +1,1 @@
+//! Cosine-weighted hemisphere, uniform sphere, disk and triangle warps.

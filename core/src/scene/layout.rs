@@ -1,0 +1,203 @@
+//! GPU-layout scene types: exactly the bytes both backends receive.
+//!
+//! Every type here is `#[repr(C)]`, [`Pod`], built from 4-byte scalars and 4-byte-element arrays, and a
+//! multiple of 16 bytes where it is an array element, so that its Rust layout equals its std430 layout in
+//! SPIR-V. `glam::Vec3` is never used (12 bytes on the CPU, 16 in rust-gpu). Absent references are
+//! [`INVALID_INDEX`]; booleans are bits in a `u32` flags word.
+use bytemuck::{Pod, Zeroable};
+
+/// Marks an absent index (no texture, no light, no triangle hit).
+pub const INVALID_INDEX: u32 = u32::MAX;
+
+/// A node of the binary bounding-volume hierarchy (32 bytes), in depth-first order with node 0 the root.
+///
+/// Interior nodes (`triangle_count == 0`) keep their two children next to each other at `left_or_first`
+/// and `left_or_first + 1`. Leaves hold triangles `left_or_first .. left_or_first + triangle_count` of the
+/// (BVH-ordered) triangle arrays.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    pub bounds_min: [f32; 3],
+    pub left_or_first: u32,
+    pub bounds_max: [f32; 3],
+    pub triangle_count: u32,
+}
+
+impl BvhNode {
+    /// Whether this node is a leaf.
+    #[inline]
+    #[must_use]
+    pub fn is_leaf(&self) -> bool {
+        self.triangle_count != 0
+    }
+}
+
+/// World-space vertex positions of one triangle (48 bytes; `w` is unused and zero), in BVH leaf order.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TrianglePositions {
+    pub v0: [f32; 4],
+    pub v1: [f32; 4],
+    pub v2: [f32; 4],
+}
+
+/// What shading needs to know about one triangle besides its positions (16 bytes), in BVH leaf order.
+///
+/// `vertices` index the per-vertex arrays [`super::SceneView::normals`] and [`super::SceneView::uvs`];
+/// those arrays are empty when the scene needs no shading normals or no texture coordinates.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriangleInfo {
+    pub vertices: [u32; 3],
+    pub material: u32,
+}
+
+/// [`Material::flags`]: the material has an alpha cut-out (glTF MASK or BLEND, OBJ `map_d` / `d < 1`).
+pub const MATERIAL_ALPHA_CUTOUT: u32 = 1;
+/// [`Material::flags`]: the material emits from both faces (otherwise only from the front face, the side
+/// the counter-clockwise winding faces).
+pub const MATERIAL_DOUBLE_SIDED_EMISSION: u32 = 2;
+
+/// A Disney "principled" material (Burley 2012) with optional textures (112 bytes).
+///
+/// Texture values multiply the factors as in glTF: base colour (RGB, alpha in A), metallic in B and
+/// roughness in G of `metallic_roughness_texture`, tangent-space normal map, emissive colour.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Material {
+    /// Linear RGB base colour and, in `w`, the opacity used by the alpha cut-out.
+    pub base_color: [f32; 4],
+    /// Linear RGB emitted radiance (factor × strength); `w` unused.
+    pub emission: [f32; 4],
+    pub metallic: f32,
+    /// Perceptual roughness; the GGX alpha is its square.
+    pub roughness: f32,
+    pub anisotropic: f32,
+    pub specular: f32,
+    pub specular_tint: f32,
+    pub sheen: f32,
+    pub sheen_tint: f32,
+    pub clearcoat: f32,
+    pub clearcoat_gloss: f32,
+    /// Opacity below which a point is cut out (when [`MATERIAL_ALPHA_CUTOUT`] is set).
+    pub alpha_cutoff: f32,
+    /// glTF `normalTexture.scale`.
+    pub normal_scale: f32,
+    /// `MATERIAL_*` bits.
+    pub flags: u32,
+    pub base_color_texture: u32,
+    pub metallic_roughness_texture: u32,
+    pub normal_texture: u32,
+    pub emission_texture: u32,
+    /// A separate opacity texture (OBJ `map_d`), read from its alpha channel; [`INVALID_INDEX`] if none.
+    pub alpha_texture: u32,
+    pub _pad: [u32; 3],
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            base_color: [0.8, 0.8, 0.8, 1.0],
+            emission: [0.0; 4],
+            metallic: 0.0,
+            roughness: 0.5,
+            anisotropic: 0.0,
+            specular: 0.5,
+            specular_tint: 0.0,
+            sheen: 0.0,
+            sheen_tint: 0.0,
+            clearcoat: 0.0,
+            clearcoat_gloss: 1.0,
+            alpha_cutoff: 0.5,
+            normal_scale: 1.0,
+            flags: 0,
+            base_color_texture: INVALID_INDEX,
+            metallic_roughness_texture: INVALID_INDEX,
+            normal_texture: INVALID_INDEX,
+            emission_texture: INVALID_INDEX,
+            alpha_texture: INVALID_INDEX,
+            _pad: [0; 3],
+        }
+    }
+}
+
+impl Material {
+    /// Whether the material emits light.
+    #[inline]
+    #[must_use]
+    pub fn is_emissive(&self) -> bool {
+        self.emission[0] > 0.0 || self.emission[1] > 0.0 || self.emission[2] > 0.0
+    }
+}
+
+/// [`TextureInfo::flags`]: texels are sRGB-encoded colour and are decoded to linear on fetch.
+pub const TEXTURE_SRGB: u32 = 1;
+
+/// Where one texture's RGBA8 texels lie in [`super::SceneView::texels`] (16 bytes). Texels are row-major,
+/// top row first, one `u32` each (R in the low byte). Addressing wraps (glTF's default REPEAT).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TextureInfo {
+    pub offset: u32,
+    pub width: u32,
+    pub height: u32,
+    pub flags: u32,
+}
+
+/// [`Light::kind`]: an emissive triangle ([`Light::index`] is the triangle).
+pub const LIGHT_TRIANGLE: u32 = 0;
+/// [`Light::kind`]: the environment (constant or map, see [`SceneGlobals`]).
+pub const LIGHT_ENVIRONMENT: u32 = 1;
+/// [`Light::kind`]: a KHR_lights_punctual point light.
+pub const LIGHT_POINT: u32 = 2;
+/// [`Light::kind`]: a KHR_lights_punctual spot light.
+pub const LIGHT_SPOT: u32 = 3;
+/// [`Light::kind`]: a KHR_lights_punctual directional light.
+pub const LIGHT_DIRECTIONAL: u32 = 4;
+
+/// One entry of the light list that next-event estimation picks from (64 bytes).
+///
+/// Lights are chosen with probability `pmf`, proportional to an estimate of their power; the matching
+/// cumulative table is [`super::SceneView::light_cdf`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Light {
+    /// `LIGHT_*`.
+    pub kind: u32,
+    /// The emissive triangle for [`LIGHT_TRIANGLE`].
+    pub index: u32,
+    /// Probability of picking this light.
+    pub pmf: f32,
+    pub _pad: u32,
+    /// Point and spot: world position; `w`: spot `cos(inner cone angle)`.
+    pub position: [f32; 4],
+    /// Spot and directional: the direction light travels (unit); `w` unused.
+    pub direction: [f32; 4],
+    /// Point and spot: intensity in W/sr per channel; directional: irradiance. `w`: spot
+    /// `cos(outer cone angle)`.
+    pub intensity: [f32; 4],
+}
+
+/// [`SceneGlobals::environment_kind`]: no environment; escaping rays see black.
+pub const ENVIRONMENT_NONE: u32 = 0;
+/// [`SceneGlobals::environment_kind`]: constant radiance `environment_radiance` in every direction.
+pub const ENVIRONMENT_CONSTANT: u32 = 1;
+/// [`SceneGlobals::environment_kind`]: an equirectangular HDR map scaled by `environment_radiance`.
+pub const ENVIRONMENT_MAP: u32 = 2;
+
+/// Scene-wide constants (48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SceneGlobals {
+    /// Constant environment radiance, or the scale of the environment map; `w` unused.
+    pub environment_radiance: [f32; 4],
+    /// `ENVIRONMENT_*`.
+    pub environment_kind: u32,
+    pub environment_width: u32,
+    pub environment_height: u32,
+    /// Number of entries in the light list.
+    pub light_count: u32,
+    /// Integral of the environment map's sampling function over the unit square (normalises its pdf).
+    pub environment_integral: f32,
+    pub _pad: [u32; 3],
+}

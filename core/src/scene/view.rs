@@ -1,0 +1,38 @@
+//! [`SceneView`]: borrowed slices of the packed scene, the one argument every traversal and shading
+//! function takes. The CPU host builds it from `Vec`s, the GPU kernel from storage buffers.
+use super::layout::{
+    BvhNode, Light, Material, SceneGlobals, TextureInfo, TriangleInfo, TrianglePositions,
+};
+
+/// The packed scene as borrowed slices. Arrays a scene does not need are empty.
+#[derive(Clone, Copy)]
+pub struct SceneView<'a> {
+    pub globals: SceneGlobals,
+    /// BVH nodes, root first (see [`BvhNode`]).
+    pub nodes: &'a [BvhNode],
+    /// Triangle positions in BVH leaf order.
+    pub triangles: &'a [TrianglePositions],
+    /// Per-triangle vertex indices and material, parallel to `triangles`.
+    pub triangle_info: &'a [TriangleInfo],
+    /// Per-vertex shading normals (`xyz`, `w` unused). Empty when the scene has no shading normals; a zero
+    /// normal means "use the geometric normal".
+    pub normals: &'a [[f32; 4]],
+    /// Per-vertex texture coordinates. Empty when no material has a texture.
+    pub uvs: &'a [[f32; 2]],
+    pub materials: &'a [Material],
+    pub textures: &'a [TextureInfo],
+    /// RGBA8 texels of all textures, one `u32` per texel.
+    pub texels: &'a [u32],
+    /// The light list next-event estimation picks from.
+    pub lights: &'a [Light],
+    /// Cumulative light-selection table: `light_count + 1` entries from 0 to 1.
+    pub light_cdf: &'a [f32],
+    /// For each triangle, its index in `lights`, or `INVALID_INDEX`. Empty without emissive triangles.
+    pub triangle_light: &'a [u32],
+    /// Equirectangular environment map texels (linear RGB, `w` unused), row-major, top row first.
+    pub environment_texels: &'a [[f32; 4]],
+    /// Environment importance sampling: marginal CDF over rows (`height + 1` entries).
+    pub environment_marginal_cdf: &'a [f32],
+    /// Environment importance sampling: one CDF per row (`height * (width + 1)` entries).
+    pub environment_conditional_cdf: &'a [f32],
+}

@@ -1,0 +1,1 @@
+//! fovea-scene: loading, BVH build and packing.
