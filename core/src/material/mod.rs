@@ -1,1 +1,3 @@
-//! TODO-doc
+//! From a hit to shading inputs: texture fetches, alpha cut-outs and the Disney parameters at a point.
+pub mod alpha;
+pub mod texture;

@@ -1,0 +1,41 @@
+//! Alpha cut-outs: whether a hit point on a cut-out material is a hole that rays pass through.
+use glam::Vec2;
+
+use super::texture::sample_texture;
+use crate::scene::{SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
+
+/// Interpolated texture coordinates of `triangle` at barycentrics (`b1`, `b2`); zero when the scene has no
+/// texture coordinates.
+#[inline]
+#[must_use]
+pub fn interpolate_uv(scene: &SceneView, triangle: u32, b1: f32, b2: f32) -> Vec2 {
+    if scene.uvs.is_empty() {
+        return Vec2::ZERO;
+    }
+    let v = scene.triangle_info[triangle as usize].vertices;
+    let t0 = Vec2::from(scene.uvs[v[0] as usize]);
+    let t1 = Vec2::from(scene.uvs[v[1] as usize]);
+    let t2 = Vec2::from(scene.uvs[v[2] as usize]);
+    t0 * (1.0 - b1 - b2) + t1 * b1 + t2 * b2
+}
+
+/// Whether the point at barycentrics (`b1`, `b2`) of `triangle` is cut out (its opacity is below the
+/// material's cutoff). Materials without [`MATERIAL_ALPHA_CUTOUT`] are never cut out.
+#[must_use]
+pub fn is_cut_out(scene: &SceneView, triangle: u32, b1: f32, b2: f32) -> bool {
+    let material = &scene.materials[scene.triangle_info[triangle as usize].material as usize];
+    if material.flags & MATERIAL_ALPHA_CUTOUT == 0 {
+        return false;
+    }
+    let mut alpha = material.base_color[3];
+    if material.alpha_texture != INVALID_INDEX || material.base_color_texture != INVALID_INDEX {
+        let uv = interpolate_uv(scene, triangle, b1, b2);
+        let texture = if material.alpha_texture != INVALID_INDEX {
+            material.alpha_texture
+        } else {
+            material.base_color_texture
+        };
+        alpha *= sample_texture(scene, texture, uv).w;
+    }
+    alpha < material.alpha_cutoff
+}
