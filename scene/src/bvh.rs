@@ -1,0 +1,1 @@
+//! BVH construction: binned SAH, built in parallel, flattened for traversal.

@@ -1,0 +1,1 @@
+//! Environment lighting: constant radiance or an equirectangular HDR map with its sampling tables.

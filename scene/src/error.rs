@@ -1,0 +1,1 @@
+//! Errors of the scene pipeline, each naming the file and what is wrong with it.

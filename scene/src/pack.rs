@@ -1,0 +1,1 @@
+//! Packing a loaded scene into core layout arrays.

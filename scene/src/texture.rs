@@ -1,0 +1,1 @@
+//! Texture decoding into RGBA8 texels.
