@@ -1,1 +1,33 @@
-fn main() {}
+//! `fovea`: the command line of the fovea foveated path tracer.
+mod args;
+mod error;
+mod output;
+mod parse;
+mod render;
+mod scene_setup;
+mod stats;
+mod trace;
+
+use clap::Parser;
+
+fn main() -> std::process::ExitCode {
+    let cli = args::Cli::parse();
+    let result = match &cli.command {
+        args::Command::Render(r) => render::run(r),
+        args::Command::Devices => {
+            println!(
+                "0: cpu  {}",
+                stats::cpu_device_name(rayon::current_num_threads())
+            );
+            println!("(Vulkan devices: this build has no Vulkan backend yet)");
+            Ok(())
+        }
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("fovea: error: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

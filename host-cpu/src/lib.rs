@@ -1,1 +1,20 @@
-//! fovea-cpu.
+//! # fovea-cpu
+//!
+//! The CPU host: it schedules core's per-sample integrator over the foveated image with rayon and runs
+//! core's block fill. It owns no rendering math: every value comes from a `fovea_core` function that the
+//! GPU kernel calls too.
+//!
+//! A frame is rendered in three passes:
+//! 1. **Samples.** Rows are processed in bands as tall as the coarsest block, so no block straddles two
+//!    bands and bands are independent. Each block (found as the pixel whose owning block starts there)
+//!    traces exactly its region's samples per pixel or block, and their mean is written to every pixel of
+//!    the block (the "replicated" image). No ray is traced for a pixel that a block covers.
+//! 2. **Cell means** for each block size above 1 ([`fovea_core::foveation::fill::cell_mean`]).
+//! 3. **Fill**: every pixel of a coarse block interpolates bilinearly between neighbouring cell centres
+//!    ([`fovea_core::foveation::fill::fill_pixel`]), or keeps the block value in replicate mode.
+//!
+//! Random numbers are keyed by block, frame and sample, and each block's samples are summed in a fixed
+//! order, so the image does not depend on the number of threads.
+pub mod render;
+
+pub use render::{render_frame, FrameImage, RenderStats};

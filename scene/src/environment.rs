@@ -1,1 +1,200 @@
-//! Environment lighting: constant radiance or an equirectangular HDR map with its sampling tables.
+//! Environment lighting: none, a constant radiance, or an equirectangular HDR map with the tables that
+//! importance-sample it (`fovea_core::lights::environment` reads them).
+use std::path::Path;
+
+use fovea_core::lights::environment::uv_to_direction;
+use fovea_core::math::color::luminance;
+use glam::{Vec2, Vec3};
+
+use crate::error::SceneError;
+
+/// What lights the scene from infinitely far away.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Environment {
+    /// Nothing: escaping rays see black.
+    #[default]
+    None,
+    /// The same radiance from every direction (the paper's "sky").
+    Constant([f32; 3]),
+    /// An equirectangular map (row 0 at the top, `+y` up), multiplied by `scale`.
+    Map {
+        width: u32,
+        height: u32,
+        texels: Vec<[f32; 4]>,
+        scale: [f32; 3],
+    },
+}
+
+/// Sampling tables of an environment map: a marginal table over rows and one conditional table per row,
+/// proportional to luminance × sin θ, and the integral that normalises them.
+pub struct EnvironmentTables {
+    pub marginal_cdf: Vec<f32>,
+    pub conditional_cdf: Vec<f32>,
+    pub integral: f32,
+}
+
+/// Builds a normalised cumulative table from non-negative weights (uniform when they sum to zero).
+/// Returns the table (`weights.len() + 1` entries) and the weights' sum.
+pub fn build_cdf(weights: &[f64]) -> (Vec<f32>, f64) {
+    let total: f64 = weights.iter().map(|w| w.max(0.0)).sum();
+    let n = weights.len().max(1);
+    let mut cdf = Vec::with_capacity(n + 1);
+    cdf.push(0.0f32);
+    let mut acc = 0.0f64;
+    for (i, w) in weights.iter().enumerate() {
+        acc += if total > 0.0 {
+            w.max(0.0) / total
+        } else {
+            1.0 / n as f64
+        };
+        cdf.push(if i + 1 == weights.len() {
+            1.0
+        } else {
+            acc.min(1.0) as f32
+        });
+    }
+    if weights.is_empty() {
+        cdf.push(1.0);
+    }
+    (cdf, total)
+}
+
+impl EnvironmentTables {
+    /// Tables for a `width` × `height` map.
+    pub fn build(width: u32, height: u32, texels: &[[f32; 4]]) -> Self {
+        let (w, h) = (width as usize, height as usize);
+        let mut conditional = Vec::with_capacity(h * (w + 1));
+        let mut row_weights = Vec::with_capacity(h);
+        for y in 0..h {
+            let sin_theta = ((y as f64 + 0.5) / h as f64 * std::f64::consts::PI).sin();
+            let weights: Vec<f64> = (0..w)
+                .map(|x| {
+                    let t = texels[y * w + x];
+                    luminance(Vec3::new(t[0], t[1], t[2])).max(0.0) as f64 * sin_theta
+                })
+                .collect();
+            let (cdf, sum) = build_cdf(&weights);
+            conditional.extend_from_slice(&cdf);
+            row_weights.push(sum);
+        }
+        let (marginal, total) = build_cdf(&row_weights);
+        Self {
+            marginal_cdf: marginal,
+            conditional_cdf: conditional,
+            integral: (total / (w * h) as f64) as f32,
+        }
+    }
+}
+
+impl Environment {
+    /// Loads an equirectangular `.hdr` (Radiance) or `.exr` map.
+    pub fn load_map(path: &Path, scale: [f32; 3]) -> Result<Self, SceneError> {
+        let image = image::ImageReader::open(path)
+            .map_err(|e| SceneError::Io {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            })?
+            .with_guessed_format()
+            .map_err(|e| SceneError::Io {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            })?
+            .decode()
+            .map_err(|e| SceneError::Texture {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            })?
+            .into_rgba32f();
+        let (width, height) = image.dimensions();
+        let texels = image
+            .pixels()
+            .map(|p| {
+                let c = |v: f32| if v.is_finite() { v.max(0.0) } else { 0.0 };
+                [c(p[0]), c(p[1]), c(p[2]), 0.0]
+            })
+            .collect();
+        Ok(Self::Map {
+            width,
+            height,
+            texels,
+            scale,
+        })
+    }
+
+    /// Mean radiance over the sphere (for the light-selection power estimate).
+    pub fn mean_radiance(&self) -> Vec3 {
+        match self {
+            Environment::None => Vec3::ZERO,
+            Environment::Constant(c) => Vec3::from(*c),
+            Environment::Map {
+                width,
+                height,
+                texels,
+                scale,
+            } => {
+                // Solid-angle weighted mean: rows weighted by sin θ.
+                let (w, h) = (*width as usize, *height as usize);
+                let mut sum = glam::DVec3::ZERO;
+                let mut weight = 0.0f64;
+                for y in 0..h {
+                    let s = ((y as f64 + 0.5) / h as f64 * std::f64::consts::PI).sin();
+                    for x in 0..w {
+                        let t = texels[y * w + x];
+                        sum += glam::DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64) * s;
+                        weight += s;
+                    }
+                }
+                let mean = if weight > 0.0 {
+                    sum / weight
+                } else {
+                    glam::DVec3::ZERO
+                };
+                mean.as_vec3() * Vec3::from(*scale)
+            }
+        }
+    }
+
+    /// Direction of the brightest texel (handy for tests and for placing a sun).
+    pub fn brightest_direction(&self) -> Vec3 {
+        match self {
+            Environment::Map {
+                width,
+                height,
+                texels,
+                ..
+            } => {
+                let (i, _) = texels
+                    .iter()
+                    .enumerate()
+                    .fold((0, f32::MIN), |best, (i, t)| {
+                        let l = luminance(Vec3::new(t[0], t[1], t[2]));
+                        if l > best.1 {
+                            (i, l)
+                        } else {
+                            best
+                        }
+                    });
+                let (x, y) = (i as u32 % width, i as u32 / width);
+                uv_to_direction(Vec2::new(
+                    (x as f32 + 0.5) / *width as f32,
+                    (y as f32 + 0.5) / *height as f32,
+                ))
+            }
+            _ => Vec3::Y,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cdf_is_normalised_and_handles_zero_weights() {
+        let (cdf, total) = build_cdf(&[1.0, 0.0, 3.0]);
+        assert_eq!(total, 4.0);
+        assert_eq!(cdf, vec![0.0, 0.25, 0.25, 1.0]);
+        let (cdf, _) = build_cdf(&[0.0, 0.0]);
+        assert_eq!(cdf, vec![0.0, 0.5, 1.0]);
+    }
+}

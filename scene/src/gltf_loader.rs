@@ -1,1 +1,1109 @@
-//! glTF 2.0 loading.
+//! glTF 2.0 loading (`.gltf` with external or embedded buffers, `.glb`).
+//!
+//! The loader walks the default scene (or the first; without scenes, every root node) with node transforms
+//! and flattens every TRIANGLES primitive into world space (TRIANGLE_STRIP and TRIANGLE_FAN are converted;
+//! POINTS and LINES are skipped with a warning). Normals are transformed by the inverse transpose of the
+//! node matrix and the winding is flipped where the matrix mirrors (negative determinant), so that
+//! counter-clockwise stays the front face.
+//!
+//! Materials are glTF metallic-roughness (glTF 2.0 §3.9) mapped onto the Disney parameters of
+//! `fovea_core::scene::Material`:
+//!
+//! | glTF | fovea |
+//! |---|---|
+//! | `baseColorFactor`, `baseColorTexture` | `base_color` (linear RGBA), texture sRGB |
+//! | `metallicFactor`, `roughnessFactor`, `metallicRoughnessTexture` | `metallic`, `roughness`, texture linear (B = metallic, G = roughness) |
+//! | `normalTexture` (+`scale`) | `normal_texture` (linear), `normal_scale` |
+//! | `emissiveFactor` × `KHR_materials_emissive_strength`, `emissiveTexture` | `emission`, texture sRGB |
+//! | `alphaMode` MASK (`alphaCutoff`) / BLEND | `MATERIAL_ALPHA_CUTOUT` with that cutoff / 0.5 (BLEND is approximated by a cut-out) |
+//! | `doubleSided` | `MATERIAL_DOUBLE_SIDED_EMISSION` (only matters if the material emits) |
+//! | - | `specular` 0.5, no specular tint, sheen, clearcoat or anisotropy |
+//!
+//! Only `TEXCOORD_0` is read (a texture asking for another set gets a warning and uses set 0);
+//! `occlusionTexture` is ignored. Images are decoded by [`crate::texture`] with the option's limits: from a
+//! buffer view, a data URI or an external file (missing file: a warning, and the material keeps its
+//! factors only).
+//!
+//! `KHR_lights_punctual` lights are placed by their node's world transform. Their `intensity` is used
+//! directly as a radiometric quantity: W/sr for point and spot lights, W/m² (irradiance) for directional
+//! lights, times the linear `color`; `range` is ignored. The camera is the first node (in traversal order)
+//! with a perspective camera.
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use fovea_core::scene::{
+    Light, Material, INVALID_INDEX, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT,
+    MATERIAL_ALPHA_CUTOUT, MATERIAL_DOUBLE_SIDED_EMISSION,
+};
+use glam::{Mat3, Mat4, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::Mode;
+
+use crate::error::SceneError;
+use crate::mesh::{CameraDesc, LoadOptions, LoadedScene};
+use crate::texture::{decode_texture_bytes, load_texture_file, TextureLimits};
+
+/// Loads a `.gltf` or `.glb` file.
+pub fn load_gltf(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    let bytes = std::fs::read(path).map_err(|e| SceneError::from_io(path, e))?;
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| SceneError::Gltf {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
+    drop(bytes);
+    let gltf::Gltf { document, blob } = gltf;
+    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let buffers = load_buffers(path, &base, &document, blob)?;
+    let mut loader = Loader {
+        path,
+        base,
+        document: &document,
+        buffers: &buffers,
+        limits: options.texture_limits(),
+        scene: LoadedScene::default(),
+        material_slots: HashMap::new(),
+        texture_slots: HashMap::new(),
+        any_normals: false,
+        any_uvs: false,
+    };
+    loader.walk()?;
+    let mut scene = loader.scene;
+    if let Some(mtl) = &options.mtl_override {
+        scene.warnings.push(format!(
+            "{}: the MTL override {} applies to OBJ files only; ignored",
+            path.display(),
+            mtl.display()
+        ));
+    }
+    if !loader.any_normals {
+        scene.normals.clear();
+    }
+    if !loader.any_uvs {
+        scene.uvs.clear();
+    }
+    scene.validate(path)?;
+    Ok(scene)
+}
+
+/// Reads every buffer: the GLB `BIN` chunk, a data URI or an external file (relative to the glTF file).
+fn load_buffers(
+    path: &Path,
+    base: &Path,
+    document: &gltf::Document,
+    mut blob: Option<Vec<u8>>,
+) -> Result<Vec<Vec<u8>>, SceneError> {
+    let mut out = Vec::new();
+    for buffer in document.buffers() {
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => blob.take().ok_or_else(|| SceneError::Gltf {
+                path: path.to_owned(),
+                message: format!(
+                    "buffer {} refers to the GLB BIN chunk, which is missing",
+                    buffer.index()
+                ),
+            })?,
+            gltf::buffer::Source::Uri(uri) => read_uri(path, base, uri)?,
+        };
+        if data.len() < buffer.length() {
+            return Err(SceneError::BufferTooShort {
+                path: path.to_owned(),
+                what: format!("buffer {} (byteLength)", buffer.index()),
+                needed: buffer.length() as u64,
+                available: data.len() as u64,
+            });
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// Whether `uri` is a `data:` URI.
+fn is_data_uri(uri: &str) -> bool {
+    uri.starts_with("data:")
+}
+
+/// Decodes `%XX` escapes of a relative URI.
+fn percent_decode(uri: &str) -> String {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' && i + 2 < bytes.len() {
+            let hex = std::str::from_utf8(&bytes[i + 1..i + 3]).ok();
+            if let Some(v) = hex.and_then(|h| u8::from_str_radix(h, 16).ok()) {
+                out.push(v);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(bytes[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// The file a relative (or `file:`) URI names.
+fn uri_path(base: &Path, uri: &str) -> PathBuf {
+    let rest = uri
+        .strip_prefix("file://")
+        .or_else(|| uri.strip_prefix("file:"))
+        .unwrap_or(uri);
+    base.join(percent_decode(rest))
+}
+
+/// Reads the bytes a buffer or image URI refers to.
+fn read_uri(path: &Path, base: &Path, uri: &str) -> Result<Vec<u8>, SceneError> {
+    if is_data_uri(uri) {
+        // The gltf crate decodes base64 data URIs for buffer sources; reuse it for images too.
+        gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None)
+            .map(|d| d.0)
+            .map_err(|e| SceneError::Gltf {
+                path: path.to_owned(),
+                message: format!("bad data URI: {e}"),
+            })
+    } else if uri.contains("://") {
+        Err(SceneError::Gltf {
+            path: path.to_owned(),
+            message: format!("unsupported URI scheme in {uri:?}"),
+        })
+    } else {
+        let file = uri_path(base, uri);
+        std::fs::read(&file).map_err(|e| SceneError::from_io(file, e))
+    }
+}
+
+/// Flattening state.
+struct Loader<'a> {
+    path: &'a Path,
+    base: PathBuf,
+    document: &'a gltf::Document,
+    buffers: &'a [Vec<u8>],
+    limits: TextureLimits,
+    scene: LoadedScene,
+    /// glTF material index (`None` = the default material) → index in `scene.materials`.
+    material_slots: HashMap<Option<usize>, u32>,
+    /// (image index, sRGB) → index in `scene.textures`, or `INVALID_INDEX` if the image is missing.
+    texture_slots: HashMap<(usize, bool), u32>,
+    any_normals: bool,
+    any_uvs: bool,
+}
+
+impl Loader<'_> {
+    fn warn(&mut self, message: String) {
+        self.scene
+            .warnings
+            .push(format!("{}: {message}", self.path.display()));
+    }
+
+    fn malformed(&self, message: String) -> SceneError {
+        SceneError::InvalidAccessor {
+            path: self.path.to_owned(),
+            message,
+        }
+    }
+
+    /// Walks the scene graph iteratively with world transforms.
+    fn walk(&mut self) -> Result<(), SceneError> {
+        let document = self.document;
+        let roots: Vec<gltf::Node> = match document
+            .default_scene()
+            .or_else(|| document.scenes().next())
+        {
+            Some(scene) => scene.nodes().collect(),
+            None => {
+                let mut is_child = vec![false; document.nodes().len()];
+                for node in document.nodes() {
+                    for child in node.children() {
+                        is_child[child.index()] = true;
+                    }
+                }
+                if document.nodes().len() > 0 {
+                    self.warn("no scene defined; rendering every root node".to_owned());
+                }
+                document.nodes().filter(|n| !is_child[n.index()]).collect()
+            }
+        };
+        let mut stack: Vec<(gltf::Node, Mat4)> = roots
+            .into_iter()
+            .rev()
+            .map(|n| (n, Mat4::IDENTITY))
+            .collect();
+        let mut visits = 0usize;
+        let visit_limit = 16 * document.nodes().len().max(1) + 1024;
+        while let Some((node, parent)) = stack.pop() {
+            visits += 1;
+            if visits > visit_limit {
+                return Err(SceneError::Gltf {
+                    path: self.path.to_owned(),
+                    message: "node hierarchy is cyclic or absurdly instanced".to_owned(),
+                });
+            }
+            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            if let Some(mesh) = node.mesh() {
+                self.add_mesh(&mesh, world)?;
+            }
+            if let Some(camera) = node.camera() {
+                self.add_camera(&camera, world);
+            }
+            if let Some(light) = node.light() {
+                self.add_light(&light, world);
+            }
+            let children: Vec<gltf::Node> = node.children().collect();
+            for child in children.into_iter().rev() {
+                stack.push((child, world));
+            }
+        }
+        Ok(())
+    }
+
+    fn add_camera(&mut self, camera: &gltf::Camera, world: Mat4) {
+        if self.scene.camera.is_some() {
+            return;
+        }
+        match camera.projection() {
+            gltf::camera::Projection::Perspective(p) => {
+                let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+                let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
+                self.scene.camera = Some(CameraDesc {
+                    position: world.transform_point3(Vec3::ZERO).to_array(),
+                    forward: forward.to_array(),
+                    up: up.to_array(),
+                    yfov_radians: p.yfov(),
+                    aspect_ratio: p.aspect_ratio(),
+                });
+            }
+            gltf::camera::Projection::Orthographic(_) => {
+                self.warn(format!(
+                    "camera {} is orthographic; ignored",
+                    camera.index()
+                ));
+            }
+        }
+    }
+
+    fn add_light(&mut self, light: &gltf::khr_lights_punctual::Light, world: Mat4) {
+        use gltf::khr_lights_punctual::Kind;
+        let c = Vec3::from(light.color()) * light.intensity();
+        let position = world.transform_point3(Vec3::ZERO);
+        let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+        let mut l = Light {
+            index: INVALID_INDEX,
+            intensity: [c.x, c.y, c.z, 0.0],
+            ..Light::default()
+        };
+        match light.kind() {
+            Kind::Point => {
+                l.kind = LIGHT_POINT;
+                l.position = [position.x, position.y, position.z, 0.0];
+            }
+            Kind::Spot {
+                inner_cone_angle,
+                outer_cone_angle,
+            } => {
+                l.kind = LIGHT_SPOT;
+                l.position = [position.x, position.y, position.z, inner_cone_angle.cos()];
+                l.direction = [direction.x, direction.y, direction.z, 0.0];
+                l.intensity[3] = outer_cone_angle.cos();
+            }
+            Kind::Directional => {
+                l.kind = LIGHT_DIRECTIONAL;
+                l.direction = [direction.x, direction.y, direction.z, 0.0];
+            }
+        }
+        if direction == Vec3::ZERO && l.kind != LIGHT_POINT {
+            self.warn(format!(
+                "light {} has a degenerate node transform; skipped",
+                light.index()
+            ));
+            return;
+        }
+        self.scene.punctual_lights.push(l);
+    }
+
+    /// Checks that `accessor` has one of the accepted (dimensions, component type) pairs and that its
+    /// bytes lie inside the buffer.
+    fn check_accessor(
+        &self,
+        accessor: &gltf::Accessor,
+        what: &str,
+        dims: Dimensions,
+        types: &[DataType],
+    ) -> Result<(), SceneError> {
+        if accessor.dimensions() != dims || !types.contains(&accessor.data_type()) {
+            return Err(self.malformed(format!(
+                "{what} (accessor {}) is {:?} {:?}; expected {dims:?} of {types:?}",
+                accessor.index(),
+                accessor.dimensions(),
+                accessor.data_type()
+            )));
+        }
+        if accessor.count() == 0 {
+            return Err(self.malformed(format!(
+                "{what} (accessor {}) has count 0",
+                accessor.index()
+            )));
+        }
+        let check_view =
+            |view: gltf::buffer::View, offset: usize, count: usize, size: usize, label: &str| {
+                let stride = view.stride().unwrap_or(size);
+                if stride < size {
+                    return Err(self.malformed(format!(
+                        "{label}: byteStride {stride} is smaller than an element ({size} bytes)"
+                    )));
+                }
+                let needed_in_view =
+                    offset as u64 + stride as u64 * (count as u64 - 1) + size as u64;
+                if needed_in_view > view.length() as u64 {
+                    return Err(SceneError::BufferTooShort {
+                        path: self.path.to_owned(),
+                        what: format!("{label} (in buffer view {})", view.index()),
+                        needed: needed_in_view,
+                        available: view.length() as u64,
+                    });
+                }
+                let available = self.buffers[view.buffer().index()].len() as u64;
+                let needed = view.offset() as u64 + view.length() as u64;
+                if needed > available {
+                    return Err(SceneError::BufferTooShort {
+                        path: self.path.to_owned(),
+                        what: format!("buffer view {} of {label}", view.index()),
+                        needed,
+                        available,
+                    });
+                }
+                Ok(())
+            };
+        let label = format!("{what} (accessor {})", accessor.index());
+        if let Some(view) = accessor.view() {
+            check_view(
+                view,
+                accessor.offset(),
+                accessor.count(),
+                accessor.size(),
+                &label,
+            )?;
+        } else if accessor.sparse().is_none() {
+            return Err(
+                self.malformed(format!("{label} has neither a buffer view nor sparse data"))
+            );
+        }
+        if let Some(sparse) = accessor.sparse() {
+            let n = sparse.count();
+            if n > 0 {
+                let idx = sparse.indices();
+                check_view(
+                    idx.view(),
+                    idx.offset(),
+                    n,
+                    idx.index_type().size(),
+                    &format!("{label} sparse indices"),
+                )?;
+                let val = sparse.values();
+                check_view(
+                    val.view(),
+                    val.offset(),
+                    n,
+                    accessor.size(),
+                    &format!("{label} sparse values"),
+                )?;
+            }
+        }
+        Ok(())
+    }
+
+    fn add_mesh(&mut self, mesh: &gltf::Mesh, world: Mat4) -> Result<(), SceneError> {
+        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+        let det = Mat3::from_mat4(world).determinant();
+        let flip = det < 0.0;
+        for primitive in mesh.primitives() {
+            let label = format!("mesh {} primitive {}", mesh.index(), primitive.index());
+            let mode = primitive.mode();
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                self.warn(format!(
+                    "{label} has mode {mode:?}; only triangles are rendered, skipped"
+                ));
+                continue;
+            }
+            let Some(pos_acc) = primitive.get(&gltf::Semantic::Positions) else {
+                self.warn(format!("{label} has no POSITION attribute; skipped"));
+                continue;
+            };
+            self.check_accessor(
+                &pos_acc,
+                &format!("{label} POSITION"),
+                Dimensions::Vec3,
+                &[DataType::F32],
+            )?;
+            let normal_acc = primitive.get(&gltf::Semantic::Normals);
+            if let Some(a) = &normal_acc {
+                self.check_accessor(
+                    a,
+                    &format!("{label} NORMAL"),
+                    Dimensions::Vec3,
+                    &[DataType::F32],
+                )?;
+            }
+            let uv_acc = primitive.get(&gltf::Semantic::TexCoords(0));
+            if let Some(a) = &uv_acc {
+                self.check_accessor(
+                    a,
+                    &format!("{label} TEXCOORD_0"),
+                    Dimensions::Vec2,
+                    &[DataType::F32, DataType::U8, DataType::U16],
+                )?;
+            }
+            if let Some(a) = primitive.indices() {
+                self.check_accessor(
+                    &a,
+                    &format!("{label} indices"),
+                    Dimensions::Scalar,
+                    &[DataType::U8, DataType::U16, DataType::U32],
+                )?;
+            }
+
+            let buffers = self.buffers;
+            let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+            let short = |what: &str| SceneError::BufferTooShort {
+                path: self.path.to_owned(),
+                what: format!("{label} {what}"),
+                needed: 0,
+                available: 0,
+            };
+            let positions: Vec<[f32; 3]> = reader
+                .read_positions()
+                .ok_or_else(|| short("POSITION"))?
+                .collect();
+            let vertex_count = positions.len();
+            let base = self.scene.positions.len();
+            if base + vertex_count > u32::MAX as usize {
+                return Err(self.malformed("more than 2^32 vertices".to_owned()));
+            }
+            self.scene.positions.extend(
+                positions
+                    .iter()
+                    .map(|&p| world.transform_point3(Vec3::from(p)).to_array()),
+            );
+
+            let mut normals_added = false;
+            if normal_acc.is_some() {
+                let normals: Vec<[f32; 3]> = reader
+                    .read_normals()
+                    .ok_or_else(|| short("NORMAL"))?
+                    .collect();
+                if normals.len() == vertex_count {
+                    self.scene.normals.extend(normals.iter().map(|&n| {
+                        let n = normal_matrix * Vec3::from(n);
+                        n.normalize_or_zero().to_array()
+                    }));
+                    normals_added = true;
+                    self.any_normals = true;
+                } else {
+                    self.warn(format!(
+                        "{label}: {} normals for {vertex_count} positions; normals ignored",
+                        normals.len()
+                    ));
+                }
+            }
+            if !normals_added {
+                self.scene.normals.resize(base + vertex_count, [0.0; 3]);
+            }
+            let mut uvs_added = false;
+            if uv_acc.is_some() {
+                let uvs: Vec<[f32; 2]> = reader
+                    .read_tex_coords(0)
+                    .ok_or_else(|| short("TEXCOORD_0"))?
+                    .into_f32()
+                    .collect();
+                if uvs.len() == vertex_count {
+                    self.scene.uvs.extend(uvs);
+                    uvs_added = true;
+                    self.any_uvs = true;
+                } else {
+                    self.warn(format!(
+                        "{label}: {} texture coordinates for {vertex_count} positions; ignored",
+                        uvs.len()
+                    ));
+                }
+            }
+            if !uvs_added {
+                self.scene.uvs.resize(base + vertex_count, [0.0; 2]);
+            }
+
+            let indices: Vec<u32> = match reader.read_indices() {
+                Some(r) => r.into_u32().collect(),
+                None if primitive.indices().is_some() => return Err(short("indices")),
+                None => (0..vertex_count as u32).collect(),
+            };
+            if let Some(&bad) = indices.iter().find(|&&i| i as usize >= vertex_count) {
+                return Err(SceneError::FaceIndexOutOfRange {
+                    path: self.path.to_owned(),
+                    message: format!(
+                        "{label} uses vertex {bad} but has only {vertex_count} vertices"
+                    ),
+                });
+            }
+            let material = self.material_slot(&primitive.material())?;
+            let before = self.scene.triangles.len();
+            let b = base as u32;
+            let mut push = |t: [u32; 3]| {
+                let t = if flip { [t[0], t[2], t[1]] } else { t };
+                self.scene.triangles.push([t[0] + b, t[1] + b, t[2] + b]);
+            };
+            match mode {
+                Mode::Triangles => {
+                    if !indices.chunks_exact(3).remainder().is_empty() {
+                        self.scene.warnings.push(format!(
+                            "{}: {label} has {} indices, not a multiple of 3; the rest is ignored",
+                            self.path.display(),
+                            indices.len()
+                        ));
+                    }
+                    for t in indices.chunks_exact(3) {
+                        push([t[0], t[1], t[2]]);
+                    }
+                }
+                Mode::TriangleStrip => {
+                    for i in 0..indices.len().saturating_sub(2) {
+                        if i % 2 == 0 {
+                            push([indices[i], indices[i + 1], indices[i + 2]]);
+                        } else {
+                            push([indices[i + 1], indices[i], indices[i + 2]]);
+                        }
+                    }
+                }
+                _ => {
+                    for i in 1..indices.len().saturating_sub(1) {
+                        push([indices[0], indices[i], indices[i + 1]]);
+                    }
+                }
+            }
+            let added = self.scene.triangles.len() - before;
+            self.scene
+                .triangle_materials
+                .resize(before + added, material);
+        }
+        Ok(())
+    }
+
+    /// The `scene.materials` index of a glTF material, converting it on first use.
+    fn material_slot(&mut self, m: &gltf::Material) -> Result<u32, SceneError> {
+        if let Some(&slot) = self.material_slots.get(&m.index()) {
+            return Ok(slot);
+        }
+        let label = match (m.index(), m.name()) {
+            (Some(i), Some(n)) => format!("material {i} ({n})"),
+            (Some(i), None) => format!("material {i}"),
+            (None, _) => "the default material".to_owned(),
+        };
+        let pbr = m.pbr_metallic_roughness();
+        let mut out = Material {
+            base_color: pbr.base_color_factor(),
+            metallic: pbr.metallic_factor(),
+            roughness: pbr.roughness_factor(),
+            specular: 0.5,
+            ..Material::default()
+        };
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let e = Vec3::from(m.emissive_factor()) * strength;
+        out.emission = [e.x, e.y, e.z, 0.0];
+        match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => {}
+            gltf::material::AlphaMode::Mask => {
+                out.flags |= MATERIAL_ALPHA_CUTOUT;
+                out.alpha_cutoff = m.alpha_cutoff().unwrap_or(0.5);
+            }
+            gltf::material::AlphaMode::Blend => {
+                out.flags |= MATERIAL_ALPHA_CUTOUT;
+                out.alpha_cutoff = 0.5;
+                self.warn(format!(
+                    "{label} uses alpha BLEND; approximated by a cut-out at 0.5"
+                ));
+            }
+        }
+        if m.double_sided() {
+            out.flags |= MATERIAL_DOUBLE_SIDED_EMISSION;
+        }
+        if let Some(info) = pbr.base_color_texture() {
+            out.base_color_texture = self.texture_slot(
+                &label,
+                "baseColorTexture",
+                &info.texture(),
+                info.tex_coord(),
+                true,
+            )?;
+        }
+        if let Some(info) = pbr.metallic_roughness_texture() {
+            out.metallic_roughness_texture = self.texture_slot(
+                &label,
+                "metallicRoughnessTexture",
+                &info.texture(),
+                info.tex_coord(),
+                false,
+            )?;
+        }
+        if let Some(info) = m.normal_texture() {
+            out.normal_texture = self.texture_slot(
+                &label,
+                "normalTexture",
+                &info.texture(),
+                info.tex_coord(),
+                false,
+            )?;
+            out.normal_scale = info.scale();
+        }
+        if let Some(info) = m.emissive_texture() {
+            out.emission_texture = self.texture_slot(
+                &label,
+                "emissiveTexture",
+                &info.texture(),
+                info.tex_coord(),
+                true,
+            )?;
+        }
+        let slot = self.scene.materials.len() as u32;
+        self.scene.materials.push(out);
+        self.scene.material_names.push(match (m.index(), m.name()) {
+            (_, Some(n)) => n.to_owned(),
+            (Some(i), None) => format!("material {i}"),
+            (None, None) => "default".to_owned(),
+        });
+        self.material_slots.insert(m.index(), slot);
+        Ok(slot)
+    }
+
+    /// The `scene.textures` index of a texture's image decoded with `srgb`, or `INVALID_INDEX` if its
+    /// file is missing (with a warning).
+    fn texture_slot(
+        &mut self,
+        material: &str,
+        role: &str,
+        texture: &gltf::Texture,
+        tex_coord: u32,
+        srgb: bool,
+    ) -> Result<u32, SceneError> {
+        if tex_coord != 0 {
+            self.warn(format!(
+                "{material} {role} uses TEXCOORD_{tex_coord}; only TEXCOORD_0 is supported and used instead"
+            ));
+        }
+        let image = texture.source();
+        let key = (image.index(), srgb);
+        if let Some(&slot) = self.texture_slots.get(&key) {
+            return Ok(slot);
+        }
+        let embedded_name = match image.name() {
+            Some(n) => format!("{}#image{} ({n})", self.path.display(), image.index()),
+            None => format!("{}#image{}", self.path.display(), image.index()),
+        };
+        let decoded = match image.source() {
+            gltf::image::Source::View { view, .. } => {
+                let data = &self.buffers[view.buffer().index()];
+                let end = view.offset() as u64 + view.length() as u64;
+                if end > data.len() as u64 {
+                    return Err(SceneError::BufferTooShort {
+                        path: self.path.to_owned(),
+                        what: format!("image {} (buffer view {})", image.index(), view.index()),
+                        needed: end,
+                        available: data.len() as u64,
+                    });
+                }
+                Some(decode_texture_bytes(
+                    &data[view.offset()..end as usize],
+                    &embedded_name,
+                    srgb,
+                    &self.limits,
+                )?)
+            }
+            gltf::image::Source::Uri { uri, .. } if is_data_uri(uri) => {
+                let bytes = read_uri(self.path, &self.base, uri)?;
+                Some(decode_texture_bytes(
+                    &bytes,
+                    &embedded_name,
+                    srgb,
+                    &self.limits,
+                )?)
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                let file = uri_path(&self.base, uri);
+                match load_texture_file(&file, srgb, &self.limits) {
+                    Ok(t) => Some(t),
+                    Err(SceneError::MissingFile { path }) => {
+                        self.warn(format!(
+                            "{material} {role}: image file {} not found; using the factor only",
+                            path.display()
+                        ));
+                        None
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+        };
+        let slot = match decoded {
+            Some(t) => {
+                self.scene.textures.push(t);
+                (self.scene.textures.len() - 1) as u32
+            }
+            None => INVALID_INDEX,
+        };
+        self.texture_slots.insert(key, slot);
+        Ok(slot)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::load_scene;
+
+    fn scenes() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes")
+    }
+
+    fn load(rel: &str) -> LoadedScene {
+        load_scene(&scenes().join(rel), &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("fovea_gltf_test_{}_{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn cornell_box_gltf() {
+        let s = load("cornell_box_gltf/cornell_box.gltf");
+        assert_eq!(s.triangle_count(), 36);
+        assert_eq!(s.normals.len(), s.positions.len());
+        let emissive: Vec<&Material> = s.materials.iter().filter(|m| m.is_emissive()).collect();
+        assert_eq!(emissive.len(), 1);
+        let e = emissive[0].emission;
+        assert!(
+            (e[0] - 17.0).abs() < 0.05 && (e[1] - 12.0).abs() < 0.05 && (e[2] - 4.0).abs() < 0.05,
+            "{e:?}"
+        );
+        assert_eq!(s.emissive_triangle_count(), 2);
+        // The file has no camera node.
+        let json =
+            std::fs::read_to_string(scenes().join("cornell_box_gltf/cornell_box.gltf")).unwrap();
+        assert_eq!(s.camera.is_some(), json.contains("\"cameras\""));
+        // The light quad faces down (-Y) with counter-clockwise winding.
+        let light_tri = s
+            .triangles
+            .iter()
+            .zip(&s.triangle_materials)
+            .find(|(_, &m)| s.materials[m as usize].is_emissive())
+            .unwrap()
+            .0;
+        let p = light_tri.map(|v| Vec3::from(s.positions[v as usize]));
+        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+        assert!(n.y < 0.0, "{n}");
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        assert!(s.punctual_lights.is_empty());
+    }
+
+    #[test]
+    fn cornell_stiff_gltf_materials() {
+        let s = load("cornell_stiff/cornell_stiff.gltf");
+        assert_eq!(s.triangle_count(), 36);
+        let light = s.materials.iter().find(|m| m.is_emissive()).unwrap();
+        assert!(
+            (light.emission[0] - 1700.0).abs() < 1.0,
+            "{:?}",
+            light.emission
+        );
+        let metals: Vec<&Material> = s.materials.iter().filter(|m| m.metallic == 1.0).collect();
+        assert_eq!(metals.len(), 2);
+        assert!(metals
+            .iter()
+            .all(|m| m.roughness < 0.05 && m.specular == 0.5));
+    }
+
+    #[test]
+    fn glb_files() {
+        let s = load("dark_cornell_pema99/DarkCornell.glb");
+        assert_eq!(s.triangle_count(), 184);
+        assert_eq!(s.emissive_triangle_count(), 2);
+        let s = load("emissive_triangle_kajiya/triangle.glb");
+        assert_eq!(s.triangle_count(), 1);
+        assert_eq!(s.emissive_triangle_count(), 1);
+    }
+
+    #[test]
+    fn veach_mis_applies_node_scale() {
+        let s = load("veach_mis_pema99/VeachMIS.glb");
+        assert_eq!(s.triangle_count(), 2932);
+        assert!(s.camera.is_none() && s.punctual_lights.is_empty());
+        // The three emissive spheres share one material and are 960 consecutive triangles each; measure
+        // each sphere's radius from its vertices.
+        let emissive: Vec<[u32; 3]> = s
+            .triangles
+            .iter()
+            .zip(&s.triangle_materials)
+            .filter(|(_, &m)| s.materials[m as usize].is_emissive())
+            .map(|(t, _)| *t)
+            .collect();
+        assert_eq!(emissive.len(), 3 * 960);
+        let groups: Vec<Vec<u32>> = emissive
+            .chunks(960)
+            .map(|c| c.iter().flatten().copied().collect())
+            .collect();
+        let mut radii: Vec<f32> = groups
+            .iter()
+            .map(|g| {
+                let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+                for &v in g {
+                    let p = Vec3::from(s.positions[v as usize]);
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                }
+                (hi - lo).max_element() * 0.5
+            })
+            .collect();
+        radii.sort_by(f32::total_cmp);
+        assert!((radii[0] - 0.05).abs() < 0.01, "{radii:?}");
+        assert!((radii[1] - 0.5).abs() < 0.05, "{radii:?}");
+        assert!((radii[2] - 1.0).abs() < 0.1, "{radii:?}");
+        // Normals were transformed and are unit length.
+        let n = Vec3::from(s.normals[s.triangles[0][0] as usize]);
+        assert!((n.length() - 1.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn roughness_scale_textures() {
+        let s = load("roughness_scale_kajiya/scene.gltf");
+        assert_eq!(s.triangle_count(), 51_200);
+        assert_eq!(s.textures.len(), 5);
+        assert!(s
+            .textures
+            .iter()
+            .all(|t| t.width == 1 && t.height == 1 && t.texels.len() == 1));
+        assert!(!s.uvs.is_empty());
+        let textured = s
+            .materials
+            .iter()
+            .filter(|m| {
+                m.metallic_roughness_texture != INVALID_INDEX
+                    || m.base_color_texture != INVALID_INDEX
+            })
+            .count();
+        assert!(textured >= 5);
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    }
+
+    /// A minimal glTF with one triangle in a base64 buffer, optionally with a texture at `image_uri`.
+    fn triangle_gltf(
+        positions: [[f32; 3]; 3],
+        image_uri: Option<&str>,
+        node_extra: &str,
+    ) -> String {
+        let mut bytes = Vec::new();
+        for p in positions {
+            for c in p {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        let b64 = base64_encode(&bytes);
+        let (images, textures, mat_tex) = match image_uri {
+            Some(uri) => (
+                format!(r#","images":[{{"uri":"{uri}"}}]"#),
+                r#","textures":[{"source":0}]"#.to_owned(),
+                r#","baseColorTexture":{"index":0}"#.to_owned(),
+            ),
+            None => (String::new(), String::new(), String::new()),
+        };
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+            "nodes":[{{"mesh":0{node_extra}}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"material":0}}]}}],
+            "materials":[{{"pbrMetallicRoughness":{{"baseColorFactor":[1,0.5,0.25,1]{mat_tex}}},"emissiveFactor":[1,1,1]}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}],
+            "bufferViews":[{{"buffer":0,"byteLength":36}}],
+            "buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{b64}"}}]{images}{textures}}}"#
+        )
+    }
+
+    fn base64_encode(data: &[u8]) -> String {
+        const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let mut out = String::new();
+        for c in data.chunks(3) {
+            let n = (u32::from(c[0]) << 16)
+                | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
+                | u32::from(*c.get(2).unwrap_or(&0));
+            out.push(T[(n >> 18) as usize & 63] as char);
+            out.push(T[(n >> 12) as usize & 63] as char);
+            out.push(if c.len() > 1 {
+                T[(n >> 6) as usize & 63] as char
+            } else {
+                '='
+            });
+            out.push(if c.len() > 2 {
+                T[n as usize & 63] as char
+            } else {
+                '='
+            });
+        }
+        out
+    }
+
+    const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+    #[test]
+    fn minimal_gltf_with_mirror_transform_flips_winding() {
+        let dir = temp_dir("mirror");
+        let file = dir.join("t.gltf");
+        std::fs::write(&file, triangle_gltf(TRI, None, r#","scale":[-1,1,1]"#)).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        assert_eq!(s.triangle_count(), 1);
+        let p = s.triangles[0].map(|v| Vec3::from(s.positions[v as usize]));
+        // Mirrored in x: the original normal +Z must be kept by flipping the winding.
+        assert!((p[1] - p[0]).cross(p[2] - p[0]).z > 0.0);
+        assert!(s.positions.iter().any(|p| p[0] == -1.0));
+        assert_eq!(s.materials[0].base_color, [1.0, 0.5, 0.25, 1.0]);
+        assert!(s.normals.is_empty() && s.uvs.is_empty());
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn camera_and_punctual_lights_follow_node_transforms() {
+        let dir = temp_dir("camlight");
+        let file = dir.join("t.gltf");
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        let json = triangle_gltf(TRI, None, "")
+            .replace(
+                r#""nodes":[{"mesh":0}]"#,
+                &format!(
+                    r#""nodes":[{{"mesh":0,"children":[1,2,3]}},
+                    {{"camera":0,"translation":[1,2,3],"rotation":[0,{h},0,{h}]}},
+                    {{"translation":[0,5,0],"rotation":[-{h},0,0,{h}],
+                      "extensions":{{"KHR_lights_punctual":{{"light":0}}}}}},
+                    {{"translation":[7,0,0],"scale":[2,2,2],"extensions":{{"KHR_lights_punctual":{{"light":1}}}}}}],
+                    "cameras":[{{"type":"perspective","perspective":{{"yfov":0.7,"aspectRatio":1.5,"znear":0.1}}}}],
+                    "extensionsUsed":["KHR_lights_punctual"],
+                    "extensions":{{"KHR_lights_punctual":{{"lights":[
+                      {{"type":"spot","color":[1,0.5,0.25],"intensity":10,"spot":{{"innerConeAngle":0.1,"outerConeAngle":0.5}}}},
+                      {{"type":"point","intensity":3}}]}}}}"#
+                ),
+            );
+        std::fs::write(&file, json).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        let cam = s.camera.expect("camera");
+        let close = |a: [f32; 3], b: [f32; 3]| (Vec3::from(a) - Vec3::from(b)).length() < 1e-5;
+        assert!(close(cam.position, [1.0, 2.0, 3.0]), "{cam:?}");
+        assert!(close(cam.forward, [-1.0, 0.0, 0.0]), "{cam:?}");
+        assert!(close(cam.up, [0.0, 1.0, 0.0]), "{cam:?}");
+        assert_eq!((cam.yfov_radians, cam.aspect_ratio), (0.7, Some(1.5)));
+        assert_eq!(s.punctual_lights.len(), 2);
+        let spot = &s.punctual_lights[0];
+        assert_eq!(spot.kind, LIGHT_SPOT);
+        assert!(close(
+            [spot.position[0], spot.position[1], spot.position[2]],
+            [0.0, 5.0, 0.0]
+        ));
+        assert!(close(
+            [spot.direction[0], spot.direction[1], spot.direction[2]],
+            [0.0, -1.0, 0.0]
+        ));
+        assert_eq!(&spot.intensity[..3], &[10.0, 5.0, 2.5]);
+        assert!((spot.position[3] - 0.1f32.cos()).abs() < 1e-6);
+        assert!((spot.intensity[3] - 0.5f32.cos()).abs() < 1e-6);
+        assert_eq!(spot.pmf, 0.0);
+        let point = &s.punctual_lights[1];
+        assert_eq!(point.kind, LIGHT_POINT);
+        assert!(close(
+            [point.position[0], point.position[1], point.position[2]],
+            [7.0, 0.0, 0.0]
+        ));
+        assert_eq!(&point.intensity[..3], &[3.0, 3.0, 3.0]);
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn missing_texture_is_a_warning() {
+        let dir = temp_dir("missingtex");
+        let file = dir.join("t.gltf");
+        std::fs::write(&file, triangle_gltf(TRI, Some("no%20such.png"), "")).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        assert_eq!(s.triangle_count(), 1);
+        assert!(s.textures.is_empty());
+        assert_eq!(s.materials[0].base_color_texture, INVALID_INDEX);
+        assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+        assert!(s.warnings[0].contains("no such.png") && s.warnings[0].contains("t.gltf"));
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn nan_vertex_is_skipped_and_counted() {
+        let dir = temp_dir("nan");
+        let file = dir.join("t.gltf");
+        // Two triangles: the second primitive has a NaN vertex. Use one file with the NaN triangle only
+        // and expect Empty; the OBJ test covers the mixed case.
+        std::fs::write(
+            &file,
+            triangle_gltf(
+                [[f32::NAN, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                None,
+                "",
+            ),
+        )
+        .unwrap();
+        let e = load_scene(&file, &LoadOptions::default()).unwrap_err();
+        assert!(matches!(e, SceneError::Empty { .. }), "{e}");
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn malformed_gltf_errors() {
+        let dir = temp_dir("malformed");
+        let file = dir.join("bad.gltf");
+        std::fs::write(
+            &file,
+            r#"{"asset":{"version":"2.0"}, "nodes": [ {"mesh": 0 "#,
+        )
+        .unwrap();
+        let e = load_scene(&file, &LoadOptions::default()).unwrap_err();
+        assert!(matches!(e, SceneError::Gltf { .. }), "{e}");
+        assert!(e.to_string().contains("bad.gltf"), "{e}");
+
+        // The buffer's data is shorter than its byteLength.
+        let full: Vec<u8> = TRI.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+        let good = triangle_gltf(TRI, None, "");
+        assert!(good.contains(&base64_encode(&full)));
+        std::fs::write(
+            &file,
+            good.replace(&base64_encode(&full), &base64_encode(&full[..24])),
+        )
+        .unwrap();
+        let e = load_scene(&file, &LoadOptions::default()).unwrap_err();
+        assert!(matches!(e, SceneError::BufferTooShort { .. }), "{e}");
+        assert!(e.to_string().contains("bad.gltf"), "{e}");
+        // A consistent but too short buffer: the accessor reaches past the end of buffer and view.
+        let short = good
+            .replace(&base64_encode(&full), &base64_encode(&full[..24]))
+            .replace(r#""byteLength":36"#, r#""byteLength":24"#);
+        std::fs::write(&file, short).unwrap();
+        let e = load_scene(&file, &LoadOptions::default()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                SceneError::BufferTooShort { .. } | SceneError::Gltf { .. }
+            ),
+            "{e}"
+        );
+        assert!(e.to_string().contains("bad.gltf"), "{e}");
+
+        let e = load_scene(&dir.join("absent.glb"), &LoadOptions::default()).unwrap_err();
+        assert!(matches!(e, SceneError::MissingFile { .. }), "{e}");
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn percent_decoding() {
+        assert_eq!(percent_decode("a%20b.png"), "a b.png");
+        assert_eq!(percent_decode("100%"), "100%");
+        assert_eq!(percent_decode("x%4"), "x%4");
+    }
+}

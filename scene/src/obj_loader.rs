@@ -1,1 +1,719 @@
 //! OBJ/MTL loading.
+//!
+//! Geometry comes from tobj with `triangulate` (polygons become fans) and `single_index` (one index per
+//! vertex for position, normal and UV). OBJ has no node hierarchy, cameras or punctual lights; positions
+//! are taken as world space. Texture coordinates are converted to the glTF convention (v' = 1 - v, so that
+//! (0, 0) is the top-left of the image).
+//!
+//! Materials come from the MTL file(s) the OBJ names with `mtllib`, or only from
+//! [`LoadOptions::mtl_override`] when that is set (e.g. Lost Empire's torch-emissive variant). Mapping
+//! onto the Disney parameters of `fovea_core::scene::Material`:
+//!
+//! | MTL | fovea |
+//! |---|---|
+//! | `Kd` | `base_color` (linear RGB; default 0.8 grey) |
+//! | `Ke` | `emission` (radiance) |
+//! | `map_Kd` | `base_color_texture` (sRGB); the texture *replaces* `Kd` (factor 1), because exporters (e.g. the McGuire archive's Lost Empire) write the texture's average colour into `Kd` and multiplying would square it. If the file is missing, `Kd` is used |
+//! | `map_d` | `alpha_texture` (opacity from the image's alpha channel, else, or if that alpha is 255 everywhere, its luminance; stored in A) with `MATERIAL_ALPHA_CUTOUT`, cutoff 0.5 |
+//! | `d` < 1 without `map_d` | warning (no transparency support), kept opaque |
+//! | `Pr` | `roughness` |
+//! | no `Pr` | from the Phong exponent by the Beckmann-Phong correspondence (Walter et al. 2007): α = √(2 / (Ns + 2)), roughness = √α (GGX α = roughness²), clamped to [0, 1]; no `Ns`: 1 |
+//! | `Pm` | `metallic` |
+//! | no `Pm` | heuristic: metallic = lum(Ks) / (lum(Ks) + lum(Kd)) if lum(Ks) > 0, else 0; base colour = lerp(Kd, Ks, metallic). A mirror with Ks .95, Kd 0 becomes a metal of base colour .95 |
+//! | `Ps`, `Pc`, `Pcr`, `aniso` | `sheen`, `clearcoat`, `clearcoat_gloss` = 1 - Pcr, `anisotropic` |
+//! | `map_Bump`, `bump`, `norm` | ignored with a warning (no bump-to-normal conversion) |
+//! | `map_Ka`, `Ka`, `Ni`, `illum`, `Tf`, `Tr` | ignored |
+//!
+//! `specular` is 0.5 and `specular_tint` 0 for every material. Faces without a (known) material get a
+//! default grey diffuse material named `default`. Texture paths are relative to the MTL file; MTL texture
+//! options (`-bm 1 file.png`) are skipped by taking the last token. Emission is single-sided (front face),
+//! as OBJ has no double-sided flag.
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::io::{BufReader, Cursor, Read};
+use std::path::{Path, PathBuf};
+
+use fovea_core::scene::{Material, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::error::SceneError;
+use crate::mesh::{LoadOptions, LoadedScene};
+use crate::texture::{load_texture_file_as, Texture, TextureRole};
+
+/// Rec. 709 luminance.
+#[inline]
+#[must_use]
+fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// Perceptual roughness from a Phong exponent: α = √(2 / (Ns + 2)) (Beckmann-Phong correspondence,
+/// Walter et al. 2007, eq. 30), roughness = √α, clamped to [0, 1].
+#[inline]
+#[must_use]
+pub fn roughness_from_phong_exponent(ns: f32) -> f32 {
+    let alpha = (2.0 / (ns.max(0.0) + 2.0)).sqrt();
+    alpha.sqrt().clamp(0.0, 1.0)
+}
+
+/// The material loader's bookkeeping: where each successfully read MTL lives and how many materials it
+/// contributed (materials are appended in load order), plus warnings and the first parse error.
+#[derive(Default)]
+struct MtlLog {
+    loaded: Vec<(PathBuf, usize)>,
+    warnings: Vec<String>,
+    error: Option<SceneError>,
+    calls: usize,
+}
+
+/// Reads one MTL file for tobj, logging what happened.
+fn read_mtl(file: &Path, log: &RefCell<MtlLog>) -> tobj::MTLLoadResult {
+    let result = match std::fs::File::open(file) {
+        Ok(f) => tobj::load_mtl_buf(&mut BufReader::new(f)),
+        Err(e) => {
+            log.borrow_mut().warnings.push(format!(
+                "{}: material library not found or unreadable ({e}); default materials used",
+                file.display()
+            ));
+            return Err(tobj::LoadError::OpenFileFailed);
+        }
+    };
+    let mut log = log.borrow_mut();
+    match &result {
+        Ok((materials, _)) => log.loaded.push((file.to_owned(), materials.len())),
+        Err(e) => {
+            if log.error.is_none() {
+                log.error = Some(SceneError::Mtl {
+                    path: file.to_owned(),
+                    message: e.to_string(),
+                });
+            }
+        }
+    }
+    result
+}
+
+/// Loads an `.obj` file and its materials.
+pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    let file = std::fs::File::open(path).map_err(|e| SceneError::from_io(path, e))?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    // `..Default::default()` keeps this compiling when tobj's optional `merging`/`reordering` features
+    // (more fields) are enabled by another crate.
+    #[allow(clippy::needless_update)]
+    let load_options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let log = RefCell::new(MtlLog::default());
+    let mut obj_reader = BufReader::with_capacity(1 << 20, file);
+    let result = match &options.mtl_override {
+        Some(mtl) => {
+            // Load the override exactly once, as if the OBJ began with `mtllib <override>`, and ignore the
+            // OBJ's own `mtllib` lines.
+            let mut reader = Cursor::new(&b"mtllib fovea-mtl-override\n"[..]).chain(obj_reader);
+            tobj::load_obj_buf(&mut reader, &load_options, |_| {
+                let first = {
+                    let mut l = log.borrow_mut();
+                    l.calls += 1;
+                    l.calls == 1
+                };
+                if first {
+                    read_mtl(mtl, &log)
+                } else {
+                    Ok((Vec::new(), Default::default()))
+                }
+            })
+        }
+        None => tobj::load_obj_buf(&mut obj_reader, &load_options, |name| {
+            let name = PathBuf::from(name.to_string_lossy().replace('\\', "/"));
+            read_mtl(&dir.join(name), &log)
+        }),
+    };
+    let log = log.into_inner();
+    let (models, materials) = result.map_err(|e| match e {
+        tobj::LoadError::FaceVertexOutOfBounds
+        | tobj::LoadError::FaceNormalOutOfBounds
+        | tobj::LoadError::FaceTexCoordOutOfBounds
+        | tobj::LoadError::FaceColorOutOfBounds => SceneError::FaceIndexOutOfRange {
+            path: path.to_owned(),
+            message: e.to_string(),
+        },
+        tobj::LoadError::ReadError => SceneError::Io {
+            path: path.to_owned(),
+            message: e.to_string(),
+        },
+        _ => SceneError::Obj {
+            path: path.to_owned(),
+            message: e.to_string(),
+        },
+    })?;
+    if let Some(e) = log.error {
+        return Err(e);
+    }
+    let mut scene = LoadedScene {
+        warnings: log.warnings,
+        ..LoadedScene::default()
+    };
+    // tobj reports a failed library only when no material at all was loaded; the log has it already.
+    let materials = materials.unwrap_or_default();
+
+    // Which MTL file each material came from (for messages and relative texture paths).
+    let mut material_files: Vec<PathBuf> = Vec::with_capacity(materials.len());
+    for (file, count) in &log.loaded {
+        material_files.extend(std::iter::repeat_n(file.clone(), *count));
+    }
+    material_files.resize(materials.len(), path.to_owned());
+
+    convert_materials(&materials, &material_files, options, &mut scene)?;
+    let default_material = scene.materials.len() as u32;
+    let mut default_triangles = 0usize;
+
+    // Geometry.
+    let total_vertices: usize = models.iter().map(|m| m.mesh.positions.len() / 3).sum();
+    let total_triangles: usize = models.iter().map(|m| m.mesh.indices.len() / 3).sum();
+    if total_vertices > u32::MAX as usize {
+        return Err(SceneError::Obj {
+            path: path.to_owned(),
+            message: "more than 2^32 vertices".to_owned(),
+        });
+    }
+    let any_normals = models.iter().any(|m| !m.mesh.normals.is_empty());
+    let any_uvs = models.iter().any(|m| !m.mesh.texcoords.is_empty());
+    scene.positions.reserve_exact(total_vertices);
+    scene.triangles.reserve_exact(total_triangles);
+    scene.triangle_materials.reserve_exact(total_triangles);
+    if any_normals {
+        scene.normals.reserve_exact(total_vertices);
+    }
+    if any_uvs {
+        scene.uvs.reserve_exact(total_vertices);
+    }
+    let mut mismatched_normals = 0usize;
+    let mut mismatched_uvs = 0usize;
+    for model in &models {
+        let mesh = &model.mesh;
+        let base = scene.positions.len() as u32;
+        let n = mesh.positions.len() / 3;
+        scene
+            .positions
+            .extend(mesh.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
+        if any_normals {
+            if mesh.normals.len() == 3 * n {
+                scene
+                    .normals
+                    .extend(mesh.normals.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
+            } else {
+                if !mesh.normals.is_empty() {
+                    mismatched_normals += 1;
+                }
+                scene.normals.resize(scene.positions.len(), [0.0; 3]);
+            }
+        }
+        if any_uvs {
+            if mesh.texcoords.len() == 2 * n {
+                scene
+                    .uvs
+                    .extend(mesh.texcoords.chunks_exact(2).map(|t| [t[0], 1.0 - t[1]]));
+            } else {
+                if !mesh.texcoords.is_empty() {
+                    mismatched_uvs += 1;
+                }
+                scene.uvs.resize(scene.positions.len(), [0.0; 2]);
+            }
+        }
+        let material = match mesh.material_id {
+            Some(id) if id < materials.len() => id as u32,
+            _ => {
+                default_triangles += mesh.indices.len() / 3;
+                default_material
+            }
+        };
+        for t in mesh.indices.chunks_exact(3) {
+            if let Some(&bad) = t.iter().find(|&&i| i as usize >= n) {
+                return Err(SceneError::FaceIndexOutOfRange {
+                    path: path.to_owned(),
+                    message: format!("object {:?} uses vertex {bad} of {n}", model.name),
+                });
+            }
+            scene
+                .triangles
+                .push([base + t[0], base + t[1], base + t[2]]);
+        }
+        scene
+            .triangle_materials
+            .resize(scene.triangles.len(), material);
+    }
+    if mismatched_normals > 0 {
+        scene.warnings.push(format!(
+            "{}: {mismatched_normals} objects have normals on only some faces; their normals are ignored",
+            path.display()
+        ));
+    }
+    if mismatched_uvs > 0 {
+        scene.warnings.push(format!(
+            "{}: {mismatched_uvs} objects have texture coordinates on only some faces; they are ignored",
+            path.display()
+        ));
+    }
+    if default_triangles > 0 {
+        scene.warnings.push(format!(
+            "{}: {default_triangles} triangles have no material or an unknown one; default grey used",
+            path.display()
+        ));
+        scene.materials.push(Material {
+            base_color: [0.8, 0.8, 0.8, 1.0],
+            roughness: 1.0,
+            ..Material::default()
+        });
+        scene.material_names.push("default".to_owned());
+    }
+    scene.validate(path)?;
+    Ok(scene)
+}
+
+/// Parses a numeric PBR-extension key (tobj keeps unknown keys as strings).
+fn param(m: &tobj::Material, key: &str, warnings: &mut Vec<String>, mtl: &Path) -> Option<f32> {
+    let text = m.unknown_param.get(key)?;
+    match text
+        .split_whitespace()
+        .next()
+        .and_then(|t| t.parse::<f32>().ok())
+    {
+        Some(v) if v.is_finite() => Some(v),
+        _ => {
+            warnings.push(format!(
+                "{}: material {:?}: cannot parse {key} {text:?}; ignored",
+                mtl.display(),
+                m.name
+            ));
+            None
+        }
+    }
+}
+
+/// The file an MTL texture statement names: options (`-bm 1 x.png`) are skipped by taking the last token;
+/// backslashes become slashes; relative paths are relative to the MTL file's directory.
+fn texture_path(dir: &Path, statement: &str) -> PathBuf {
+    let s = statement.trim();
+    let name = if s.starts_with('-') {
+        s.split_whitespace().last().unwrap_or(s)
+    } else {
+        s
+    };
+    dir.join(name.replace('\\', "/"))
+}
+
+/// Converts tobj materials (see the module table), decoding their textures in parallel.
+fn convert_materials(
+    materials: &[tobj::Material],
+    mtl_files: &[PathBuf],
+    options: &LoadOptions,
+    scene: &mut LoadedScene,
+) -> Result<(), SceneError> {
+    // Unique texture requests first, so that shared atlases are decoded once and in parallel.
+    let mut requests: Vec<(PathBuf, TextureRole)> = Vec::new();
+    let mut request_index: HashMap<(PathBuf, TextureRole), usize> = HashMap::new();
+    let mut request = |path: PathBuf, role: TextureRole| -> usize {
+        *request_index
+            .entry((path.clone(), role))
+            .or_insert_with(|| {
+                requests.push((path, role));
+                requests.len() - 1
+            })
+    };
+    let mut per_material: Vec<(Option<usize>, Option<usize>)> = Vec::with_capacity(materials.len());
+    for (m, mtl) in materials.iter().zip(mtl_files) {
+        let dir = mtl.parent().unwrap_or(Path::new(""));
+        let kd = m
+            .diffuse_texture
+            .as_deref()
+            .map(|t| request(texture_path(dir, t), TextureRole::Color { srgb: true }));
+        let d = m
+            .dissolve_texture
+            .as_deref()
+            .map(|t| request(texture_path(dir, t), TextureRole::Opacity));
+        per_material.push((kd, d));
+    }
+    let limits = options.texture_limits();
+    let decoded: Vec<Result<Texture, SceneError>> = requests
+        .par_iter()
+        .map(|(path, role)| load_texture_file_as(path, *role, &limits))
+        .collect();
+    let mut slots: Vec<u32> = Vec::with_capacity(decoded.len());
+    for (result, (path, _)) in decoded.into_iter().zip(&requests) {
+        match result {
+            Ok(t) => {
+                scene.textures.push(t);
+                slots.push((scene.textures.len() - 1) as u32);
+            }
+            Err(SceneError::MissingFile { .. }) => {
+                scene.warnings.push(format!(
+                    "{}: texture file not found; its materials fall back",
+                    path.display()
+                ));
+                slots.push(INVALID_INDEX);
+            }
+            Err(e) => return Err(e),
+        }
+    }
+
+    for ((m, mtl), (kd_tex, d_tex)) in materials.iter().zip(mtl_files).zip(per_material) {
+        let mtl_name = mtl.display();
+        let mut warnings = Vec::new();
+        let kd = m.diffuse.unwrap_or([0.8; 3]);
+        let ks = m.specular.unwrap_or([0.0; 3]);
+        let base_texture = kd_tex.map_or(INVALID_INDEX, |i| slots[i]);
+        let alpha_texture = d_tex.map_or(INVALID_INDEX, |i| slots[i]);
+        let pm = param(m, "Pm", &mut warnings, mtl);
+        let (metallic, base) = match pm {
+            Some(pm) => (pm.clamp(0.0, 1.0), Vec3::from(kd)),
+            None => {
+                let (ls, ld) = (luminance(ks), luminance(kd));
+                let metallic = if ls > 0.0 {
+                    ls / (ls + ld.max(0.0))
+                } else {
+                    0.0
+                };
+                (metallic, Vec3::from(kd).lerp(Vec3::from(ks), metallic))
+            }
+        };
+        let base = if base_texture != INVALID_INDEX {
+            Vec3::ONE
+        } else {
+            base
+        };
+        let roughness = match param(m, "Pr", &mut warnings, mtl) {
+            Some(r) => r.clamp(0.0, 1.0),
+            None => m.shininess.map_or(1.0, roughness_from_phong_exponent),
+        };
+        let e = m.emissive.unwrap_or([0.0; 3]);
+        let mut out = Material {
+            base_color: [base.x, base.y, base.z, 1.0],
+            emission: [e[0].max(0.0), e[1].max(0.0), e[2].max(0.0), 0.0],
+            metallic,
+            roughness,
+            specular: 0.5,
+            base_color_texture: base_texture,
+            ..Material::default()
+        };
+        if let Some(v) = param(m, "Ps", &mut warnings, mtl) {
+            out.sheen = v.clamp(0.0, 1.0);
+        }
+        if let Some(v) = param(m, "Pc", &mut warnings, mtl) {
+            out.clearcoat = v.clamp(0.0, 1.0);
+        }
+        if let Some(v) = param(m, "Pcr", &mut warnings, mtl) {
+            out.clearcoat_gloss = (1.0 - v).clamp(0.0, 1.0);
+        }
+        if let Some(v) = param(m, "aniso", &mut warnings, mtl) {
+            out.anisotropic = v.clamp(0.0, 1.0);
+        }
+        let dissolve = m.dissolve.unwrap_or(1.0);
+        if alpha_texture != INVALID_INDEX {
+            out.flags |= MATERIAL_ALPHA_CUTOUT;
+            out.alpha_cutoff = 0.5;
+            out.alpha_texture = alpha_texture;
+            out.base_color[3] = if dissolve > 0.0 {
+                dissolve.min(1.0)
+            } else {
+                1.0
+            };
+        } else if m.dissolve_texture.is_some() {
+            warnings.push(format!(
+                "{mtl_name}: material {:?}: map_d texture missing; kept opaque",
+                m.name
+            ));
+        } else if dissolve < 1.0 {
+            warnings.push(format!(
+                "{mtl_name}: material {:?} has d {dissolve} (transparency is not supported); kept opaque",
+                m.name
+            ));
+        }
+        if m.normal_texture.is_some() || m.unknown_param.contains_key("norm") {
+            warnings.push(format!(
+                "{mtl_name}: material {:?}: bump/normal map ignored (not supported for OBJ)",
+                m.name
+            ));
+        }
+        scene.warnings.extend(warnings);
+        scene.materials.push(out);
+        scene.material_names.push(m.name.clone());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::load_scene;
+    use fovea_core::scene::MATERIAL_DOUBLE_SIDED_EMISSION;
+
+    fn scenes() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes")
+    }
+
+    fn load_with(rel: &str, options: &LoadOptions) -> LoadedScene {
+        load_scene(&scenes().join(rel), options).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn load(rel: &str) -> LoadedScene {
+        load_with(rel, &LoadOptions::default())
+    }
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("fovea_obj_test_{}_{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn material<'a>(s: &'a LoadedScene, name: &str) -> &'a Material {
+        let i = s
+            .material_names
+            .iter()
+            .position(|n| n == name)
+            .unwrap_or_else(|| panic!("no {name}"));
+        &s.materials[i]
+    }
+
+    #[test]
+    fn phong_roughness() {
+        assert_eq!(roughness_from_phong_exponent(0.0), 1.0);
+        let r = roughness_from_phong_exponent(1000.0);
+        assert!((r * r - (2.0f32 / 1002.0).sqrt()).abs() < 1e-6);
+        assert!(roughness_from_phong_exponent(1e9) < 0.01);
+    }
+
+    #[test]
+    fn cornell_box_original_obj() {
+        let s = load("cornell_box_mcguire/CornellBox-Original.obj");
+        assert_eq!(s.triangle_count(), 36);
+        let light = material(&s, "light");
+        assert_eq!(&light.emission[..3], &[17.0, 12.0, 4.0]);
+        assert_eq!(light.flags & MATERIAL_DOUBLE_SIDED_EMISSION, 0);
+        assert_eq!(s.emissive_triangle_count(), 2);
+        // The light quad faces down with counter-clockwise winding.
+        let (t, _) = s
+            .triangles
+            .iter()
+            .zip(&s.triangle_materials)
+            .find(|(_, &m)| s.materials[m as usize].is_emissive())
+            .unwrap();
+        let p = t.map(|v| Vec3::from(s.positions[v as usize]));
+        assert!((p[1] - p[0]).cross(p[2] - p[0]).y < 0.0);
+        assert!(s.camera.is_none() && s.punctual_lights.is_empty());
+        assert_eq!(s.materials.len(), s.material_names.len());
+        assert!(!s.material_names.iter().any(|n| n == "default"));
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        let (lo, hi) = s.bounds();
+        assert!(lo[1] >= -0.01 && hi[1] <= 2.0);
+    }
+
+    #[test]
+    fn cornell_stiff_obj_mirror_heuristic() {
+        let s = load("cornell_stiff/cornell_stiff.obj");
+        assert_eq!(s.triangle_count(), 36);
+        let light = s.materials.iter().find(|m| m.is_emissive()).unwrap();
+        assert_eq!(&light.emission[..3], &[1700.0, 1200.0, 400.0]);
+        // Mirror: Ks .95, Kd .01 -> metallic .95 / .96, base colour ~ .95; Ns 10000 -> very smooth.
+        let mirror = material(&s, "tallBox");
+        assert!(
+            (mirror.metallic - 0.95 / 0.96).abs() < 1e-3,
+            "{}",
+            mirror.metallic
+        );
+        let expected = 0.01 + (0.95 - 0.01) * mirror.metallic;
+        assert!(
+            (mirror.base_color[0] - expected).abs() < 1e-5,
+            "{:?}",
+            mirror.base_color
+        );
+        assert!(mirror.base_color[0] > 0.93);
+        assert!((mirror.roughness - roughness_from_phong_exponent(10000.0)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn lost_empire() {
+        let start = std::time::Instant::now();
+        let s = load("lost_empire/lost_empire.obj");
+        let elapsed = start.elapsed();
+        eprintln!("lost_empire loaded in {elapsed:?}");
+        assert_eq!(s.triangle_count(), 224_998);
+        assert_eq!(s.positions.len(), 449_992);
+        assert_eq!(s.uvs.len(), s.positions.len());
+        // Three distinct atlases: RGB and RGBA colour, and the Alpha opacity mask.
+        assert_eq!(s.textures.len(), 3);
+        assert!(s
+            .textures
+            .iter()
+            .all(|t| t.width == 2048 && t.height == 2048 && t.texels.len() == 2048 * 2048));
+        assert_eq!(s.textures.iter().filter(|t| t.srgb).count(), 2);
+        let cutouts: Vec<&Material> = s
+            .materials
+            .iter()
+            .filter(|m| m.flags & MATERIAL_ALPHA_CUTOUT != 0)
+            .collect();
+        assert_eq!(cutouts.len(), 14);
+        for m in &cutouts {
+            assert_ne!(m.alpha_texture, INVALID_INDEX);
+            assert_eq!(m.alpha_cutoff, 0.5);
+            let t = &s.textures[m.alpha_texture as usize];
+            assert!(!t.srgb);
+            // The opacity mask has both holes and solid texels.
+            assert!(
+                t.texels.iter().any(|&x| x >> 24 == 0) && t.texels.iter().any(|&x| x >> 24 == 255)
+            );
+        }
+        assert!(s
+            .materials
+            .iter()
+            .all(|m| m.base_color_texture != INVALID_INDEX));
+        assert_eq!(material(&s, "Stone").base_color, [1.0, 1.0, 1.0, 1.0]);
+        assert_eq!(s.emissive_triangle_count(), 162);
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        // Release builds take well under a second; keep a generous bound for loaded test machines.
+        assert!(elapsed.as_secs_f32() < 10.0, "{elapsed:?}");
+
+        let torch = load_with(
+            "lost_empire/lost_empire.obj",
+            &LoadOptions {
+                mtl_override: Some(scenes().join("lost_empire/lost_empire_torch_emissive.mtl")),
+                ..LoadOptions::default()
+            },
+        );
+        assert_eq!(torch.triangle_count(), 224_998);
+        assert_eq!(torch.emissive_triangle_count(), 1636 + 162);
+        assert_eq!(&material(&torch, "Torch").emission[..3], &[0.9, 0.9, 0.6]);
+        assert_eq!(torch.textures.len(), 3);
+    }
+
+    #[test]
+    fn conference_untextured() {
+        let s = load("conference/conference.obj");
+        assert_eq!(s.triangle_count(), 331_179);
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        assert!(s.textures.is_empty());
+        assert_eq!(s.emissive_triangle_count(), 0);
+    }
+
+    #[test]
+    fn bad_obj_inputs() {
+        let dir = temp_dir("bad");
+        // Missing file.
+        let e = load_scene(&dir.join("missing.obj"), &LoadOptions::default()).unwrap_err();
+        assert!(matches!(e, SceneError::MissingFile { .. }), "{e}");
+        assert!(e.to_string().contains("missing.obj"));
+        // Unknown extension.
+        std::fs::write(dir.join("scene.stl"), "solid").unwrap();
+        let e = load_scene(&dir.join("scene.stl"), &LoadOptions::default()).unwrap_err();
+        assert!(matches!(e, SceneError::UnknownExtension { .. }), "{e}");
+        assert!(e.to_string().contains("scene.stl"));
+        // Truncated file: a face refers to a vertex that was cut off.
+        let file = dir.join("truncated.obj");
+        std::fs::write(&file, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n").unwrap();
+        let e = load_scene(&file, &LoadOptions::default()).unwrap_err();
+        assert!(matches!(e, SceneError::FaceIndexOutOfRange { .. }), "{e}");
+        assert!(e.to_string().contains("truncated.obj"));
+        // Garbage in a face.
+        let file = dir.join("garbage.obj");
+        std::fs::write(&file, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 x 3\n").unwrap();
+        let e = load_scene(&file, &LoadOptions::default()).unwrap_err();
+        assert!(matches!(e, SceneError::Obj { .. }), "{e}");
+        // No faces at all.
+        let file = dir.join("empty.obj");
+        std::fs::write(&file, "v 0 0 0\n").unwrap();
+        let e = load_scene(&file, &LoadOptions::default()).unwrap_err();
+        assert!(matches!(e, SceneError::Empty { .. }), "{e}");
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn nan_vertex_missing_mtl_and_texture() {
+        let dir = temp_dir("nan");
+        std::fs::write(
+            dir.join("m.mtl"),
+            "newmtl tex\nKd 0.5 0.5 0.5\nmap_Kd missing.png\nmap_d alpha_missing.png\nd 0.5\n\
+             newmtl glass\nKd 1 1 1\nd 0.3\nNs 100\nPr 0.25\nPm 0.5\nPc 1\nPcr 0.2\nmap_Bump b.png\n",
+        )
+        .unwrap();
+        std::fs::write(
+            dir.join("a.obj"),
+            "mtllib m.mtl\nmtllib nothere.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 0 0\nvt 0 0.25\n\
+             usemtl tex\nf 1/1 2/1 3/1\nf 1/1 2/1 4/1\nusemtl glass\nf 3/1 2/1 1/1\nusemtl unknown\nf 2/1 3/1 1/1\n",
+        )
+        .unwrap();
+        let s = load_scene(&dir.join("a.obj"), &LoadOptions::default()).unwrap();
+        assert_eq!(s.triangle_count(), 3, "the NaN triangle is skipped");
+        let all = s.warnings.join("\n");
+        assert!(all.contains("1 triangles using them skipped"), "{all}");
+        assert!(all.contains("nothere.mtl"), "{all}");
+        assert!(
+            all.contains("missing.png") && all.contains("alpha_missing.png"),
+            "{all}"
+        );
+        assert!(all.contains("bump"), "{all}");
+        assert!(all.contains("d 0.3"), "{all}");
+        assert!(all.contains("1 triangles have no material"), "{all}");
+        // Missing base colour texture: falls back to Kd; missing map_d: opaque.
+        let tex = material(&s, "tex");
+        assert_eq!(tex.base_color_texture, INVALID_INDEX);
+        assert_eq!(&tex.base_color[..3], &[0.5, 0.5, 0.5]);
+        assert_eq!(tex.flags & MATERIAL_ALPHA_CUTOUT, 0);
+        let glass = material(&s, "glass");
+        assert_eq!(
+            (glass.roughness, glass.metallic, glass.clearcoat),
+            (0.25, 0.5, 1.0)
+        );
+        assert!((glass.clearcoat_gloss - 0.8).abs() < 1e-6);
+        assert_eq!(glass.flags & MATERIAL_ALPHA_CUTOUT, 0);
+        // The face with an unknown material gets the default grey one.
+        assert_eq!(s.material_names.last().unwrap(), "default");
+        assert_eq!(
+            *s.triangle_materials.last().unwrap() as usize,
+            s.materials.len() - 1
+        );
+        // UVs are flipped to the glTF convention.
+        assert_eq!(s.uvs[0], [0.0, 0.75]);
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn map_d_from_luminance_and_override_without_mtllib() {
+        let dir = temp_dir("mapd");
+        let mut img = image::GrayImage::new(2, 1);
+        img.put_pixel(0, 0, image::Luma([0]));
+        img.put_pixel(1, 0, image::Luma([255]));
+        img.save(dir.join("mask.png")).unwrap();
+        std::fs::write(
+            dir.join("o.mtl"),
+            "newmtl leaf\nKd 0.2 0.6 0.2\nmap_d -clamp on mask.png\nKe 0 0 0\n",
+        )
+        .unwrap();
+        std::fs::write(
+            dir.join("b.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl leaf\nf 1 2 3\n",
+        )
+        .unwrap();
+        let options = LoadOptions {
+            mtl_override: Some(dir.join("o.mtl")),
+            ..LoadOptions::default()
+        };
+        let s = load_scene(&dir.join("b.obj"), &options).unwrap();
+        let leaf = material(&s, "leaf");
+        assert_ne!(leaf.flags & MATERIAL_ALPHA_CUTOUT, 0);
+        let t = &s.textures[leaf.alpha_texture as usize];
+        assert_eq!((t.texel(0, 0)[3], t.texel(1, 0)[3]), (0, 255));
+        assert!(s.uvs.is_empty() && s.normals.is_empty());
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        // A malformed MTL is an error naming it.
+        std::fs::write(dir.join("o.mtl"), "newmtl leaf\nKd 0.2 zz\n").unwrap();
+        let e = load_scene(&dir.join("b.obj"), &options).unwrap_err();
+        assert!(matches!(e, SceneError::Mtl { .. }), "{e}");
+        assert!(e.to_string().contains("o.mtl"));
+        std::fs::remove_dir_all(dir).ok();
+    }
+}

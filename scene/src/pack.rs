@@ -1,1 +1,372 @@
-//! Packing a loaded scene into core layout arrays.
+//! Packing a [`LoadedScene`] into the flat arrays of `fovea_core::scene::layout`: BVH-ordered triangles,
+//! materials, textures, the light list with its selection table and the environment tables. A
+//! [`PackedScene`] is exactly what the GPU receives; the CPU host reads it through [`PackedScene::view`].
+use std::time::Instant;
+
+use fovea_core::lights::power;
+use fovea_core::scene::{
+    BvhNode, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleInfo,
+    TrianglePositions, ENVIRONMENT_CONSTANT, ENVIRONMENT_MAP, ENVIRONMENT_NONE, INVALID_INDEX,
+    LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
+    MATERIAL_DOUBLE_SIDED_EMISSION, TEXTURE_SRGB,
+};
+use glam::Vec3;
+
+use crate::bvh::{build_bvh, BvhBuildOptions, BvhStats};
+use crate::environment::{build_cdf, Environment, EnvironmentTables};
+use crate::mesh::LoadedScene;
+
+/// Figures about a packed scene, for `--stats` and `--verbose`.
+#[derive(Clone, Debug, Default)]
+pub struct PackStats {
+    pub triangle_count: usize,
+    pub emissive_triangle_count: usize,
+    pub light_count: usize,
+    pub texture_count: usize,
+    pub bvh: BvhStats,
+    /// Time to pack everything except the BVH build.
+    pub pack_ms: f64,
+    /// Bytes of all packed arrays (what the GPU would hold).
+    pub memory_bytes: usize,
+}
+
+/// The packed scene: owned arrays in the GPU layout.
+#[derive(Clone, Debug, Default)]
+pub struct PackedScene {
+    pub globals: SceneGlobals,
+    pub nodes: Vec<BvhNode>,
+    pub triangles: Vec<TrianglePositions>,
+    pub triangle_info: Vec<TriangleInfo>,
+    pub normals: Vec<[f32; 4]>,
+    pub uvs: Vec<[f32; 2]>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<TextureInfo>,
+    pub texels: Vec<u32>,
+    pub lights: Vec<Light>,
+    pub light_cdf: Vec<f32>,
+    pub triangle_light: Vec<u32>,
+    pub environment_texels: Vec<[f32; 4]>,
+    pub environment_marginal_cdf: Vec<f32>,
+    pub environment_conditional_cdf: Vec<f32>,
+    /// World-space bounds of all triangles.
+    pub bounds_min: Vec3,
+    pub bounds_max: Vec3,
+    pub stats: PackStats,
+}
+
+impl PackedScene {
+    /// The borrowed view every core function takes.
+    pub fn view(&self) -> SceneView<'_> {
+        SceneView {
+            globals: self.globals,
+            nodes: &self.nodes,
+            triangles: &self.triangles,
+            triangle_info: &self.triangle_info,
+            normals: &self.normals,
+            uvs: &self.uvs,
+            materials: &self.materials,
+            textures: &self.textures,
+            texels: &self.texels,
+            lights: &self.lights,
+            light_cdf: &self.light_cdf,
+            triangle_light: &self.triangle_light,
+            environment_texels: &self.environment_texels,
+            environment_marginal_cdf: &self.environment_marginal_cdf,
+            environment_conditional_cdf: &self.environment_conditional_cdf,
+        }
+    }
+
+    /// Bytes held by the packed arrays.
+    pub fn memory_bytes(&self) -> usize {
+        fn bytes<T>(v: &[T]) -> usize {
+            std::mem::size_of_val(v)
+        }
+        bytes(&self.nodes)
+            + bytes(&self.triangles)
+            + bytes(&self.triangle_info)
+            + bytes(&self.normals)
+            + bytes(&self.uvs)
+            + bytes(&self.materials)
+            + bytes(&self.textures)
+            + bytes(&self.texels)
+            + bytes(&self.lights)
+            + bytes(&self.light_cdf)
+            + bytes(&self.triangle_light)
+            + bytes(&self.environment_texels)
+            + bytes(&self.environment_marginal_cdf)
+            + bytes(&self.environment_conditional_cdf)
+    }
+
+    /// Radius of the bounding sphere of the geometry.
+    pub fn bounding_radius(&self) -> f32 {
+        0.5 * (self.bounds_max - self.bounds_min).length()
+    }
+}
+
+/// Packs `scene` lit additionally by `environment`, building the BVH with `bvh_options`.
+pub fn pack_scene(
+    scene: LoadedScene,
+    environment: &Environment,
+    bvh_options: &BvhBuildOptions,
+) -> PackedScene {
+    let start = Instant::now();
+    let LoadedScene {
+        positions,
+        normals,
+        uvs,
+        triangles,
+        triangle_materials,
+        materials,
+        textures,
+        punctual_lights,
+        ..
+    } = scene;
+
+    let position = |i: u32| -> [f32; 4] {
+        let p = positions[i as usize];
+        [p[0], p[1], p[2], 0.0]
+    };
+    let input_triangles: Vec<TrianglePositions> = triangles
+        .iter()
+        .map(|t| TrianglePositions {
+            v0: position(t[0]),
+            v1: position(t[1]),
+            v2: position(t[2]),
+        })
+        .collect();
+    let mut bounds_min = Vec3::splat(f32::MAX);
+    let mut bounds_max = Vec3::splat(f32::MIN);
+    for p in &positions {
+        bounds_min = bounds_min.min(Vec3::from(*p));
+        bounds_max = bounds_max.max(Vec3::from(*p));
+    }
+    if positions.is_empty() {
+        bounds_min = Vec3::ZERO;
+        bounds_max = Vec3::ZERO;
+    }
+
+    let bvh = build_bvh(&input_triangles, bvh_options);
+    let ordered_triangles: Vec<TrianglePositions> = bvh
+        .triangle_order
+        .iter()
+        .map(|&i| input_triangles[i as usize])
+        .collect();
+    drop(input_triangles);
+    let triangle_info: Vec<TriangleInfo> = bvh
+        .triangle_order
+        .iter()
+        .map(|&i| TriangleInfo {
+            vertices: triangles[i as usize],
+            material: triangle_materials[i as usize],
+        })
+        .collect();
+
+    // Per-vertex arrays only when something reads them.
+    let any_texture = materials.iter().any(|m| {
+        m.base_color_texture != INVALID_INDEX
+            || m.metallic_roughness_texture != INVALID_INDEX
+            || m.normal_texture != INVALID_INDEX
+            || m.emission_texture != INVALID_INDEX
+            || m.alpha_texture != INVALID_INDEX
+    });
+    let packed_uvs = if any_texture && !uvs.is_empty() {
+        uvs
+    } else {
+        Vec::new()
+    };
+    let any_normal = normals.iter().any(|n| *n != [0.0; 3]);
+    let packed_normals: Vec<[f32; 4]> = if any_normal {
+        normals.iter().map(|n| [n[0], n[1], n[2], 0.0]).collect()
+    } else {
+        Vec::new()
+    };
+
+    // Textures: one texel array, one info record each.
+    let mut texture_infos = Vec::with_capacity(textures.len());
+    let mut texels = Vec::with_capacity(textures.iter().map(|t| t.texels.len()).sum());
+    for t in &textures {
+        texture_infos.push(TextureInfo {
+            offset: texels.len() as u32,
+            width: t.width,
+            height: t.height,
+            flags: if t.srgb { TEXTURE_SRGB } else { 0 },
+        });
+        texels.extend_from_slice(&t.texels);
+    }
+
+    let radius = {
+        let r = 0.5 * (bounds_max - bounds_min).length();
+        if r > 0.0 && r.is_finite() {
+            r
+        } else {
+            1.0
+        }
+    };
+
+    // The light list and the power of each entry.
+    let mut lights: Vec<Light> = Vec::new();
+    let mut light_power: Vec<f64> = Vec::new();
+    let mut triangle_light = Vec::new();
+    let mut emissive_triangle_count = 0;
+    if materials.iter().any(|m| m.is_emissive()) {
+        triangle_light = vec![INVALID_INDEX; ordered_triangles.len()];
+        for (i, (t, info)) in ordered_triangles.iter().zip(&triangle_info).enumerate() {
+            let m = &materials[info.material as usize];
+            if !m.is_emissive() {
+                continue;
+            }
+            let (v0, v1, v2) = (
+                Vec3::from_slice(&t.v0),
+                Vec3::from_slice(&t.v1),
+                Vec3::from_slice(&t.v2),
+            );
+            let area = 0.5 * (v1 - v0).cross(v2 - v0).length();
+            if !(area > 0.0) || !area.is_finite() {
+                continue;
+            }
+            let mut radiance = Vec3::from_slice(&m.emission);
+            if m.emission_texture != INVALID_INDEX {
+                radiance *= mean_texture_color(&textures[m.emission_texture as usize]);
+            }
+            let p = power::triangle_power(
+                radiance,
+                area,
+                m.flags & MATERIAL_DOUBLE_SIDED_EMISSION != 0,
+            );
+            if !(p > 0.0) {
+                continue;
+            }
+            triangle_light[i] = lights.len() as u32;
+            lights.push(Light {
+                kind: LIGHT_TRIANGLE,
+                index: i as u32,
+                ..Default::default()
+            });
+            light_power.push(p as f64);
+            emissive_triangle_count += 1;
+        }
+        if emissive_triangle_count == 0 {
+            triangle_light.clear();
+        }
+    }
+    for l in &punctual_lights {
+        let intensity = Vec3::from_slice(&l.intensity);
+        let p = match l.kind {
+            LIGHT_POINT => power::point_power(intensity),
+            LIGHT_SPOT => power::spot_power(intensity, l.position[3], l.intensity[3]),
+            LIGHT_DIRECTIONAL => power::directional_power(intensity, radius),
+            _ => 0.0,
+        };
+        if p > 0.0 && p.is_finite() {
+            lights.push(Light { pmf: 0.0, ..*l });
+            light_power.push(p as f64);
+        }
+    }
+
+    let mut globals = SceneGlobals {
+        environment_light: INVALID_INDEX,
+        ..Default::default()
+    };
+    let mut environment_texels = Vec::new();
+    let mut environment_marginal_cdf = Vec::new();
+    let mut environment_conditional_cdf = Vec::new();
+    let mean_env = environment.mean_radiance();
+    match environment {
+        Environment::None => globals.environment_kind = ENVIRONMENT_NONE,
+        Environment::Constant(c) => {
+            globals.environment_kind = ENVIRONMENT_CONSTANT;
+            globals.environment_radiance = [c[0], c[1], c[2], 0.0];
+        }
+        Environment::Map {
+            width,
+            height,
+            texels,
+            scale,
+        } => {
+            globals.environment_kind = ENVIRONMENT_MAP;
+            globals.environment_radiance = [scale[0], scale[1], scale[2], 0.0];
+            globals.environment_width = *width;
+            globals.environment_height = *height;
+            let tables = EnvironmentTables::build(*width, *height, texels);
+            globals.environment_integral = tables.integral;
+            environment_texels = texels.clone();
+            environment_marginal_cdf = tables.marginal_cdf;
+            environment_conditional_cdf = tables.conditional_cdf;
+        }
+    }
+    if globals.environment_kind != ENVIRONMENT_NONE {
+        let p = power::environment_power(mean_env, radius);
+        if p > 0.0 && p.is_finite() {
+            globals.environment_light = lights.len() as u32;
+            lights.push(Light {
+                kind: LIGHT_ENVIRONMENT,
+                index: 0,
+                ..Default::default()
+            });
+            light_power.push(p as f64);
+        }
+    }
+
+    let (light_cdf, _) = if lights.is_empty() {
+        (Vec::new(), 0.0)
+    } else {
+        build_cdf(&light_power)
+    };
+    for (i, l) in lights.iter_mut().enumerate() {
+        l.pmf = light_cdf[i + 1] - light_cdf[i];
+    }
+    globals.light_count = lights.len() as u32;
+
+    let mut packed = PackedScene {
+        globals,
+        nodes: bvh.nodes,
+        triangles: ordered_triangles,
+        triangle_info,
+        normals: packed_normals,
+        uvs: packed_uvs,
+        materials,
+        textures: texture_infos,
+        texels,
+        lights,
+        light_cdf,
+        triangle_light,
+        environment_texels,
+        environment_marginal_cdf,
+        environment_conditional_cdf,
+        bounds_min,
+        bounds_max,
+        stats: PackStats::default(),
+    };
+    packed.stats = PackStats {
+        triangle_count: packed.triangles.len(),
+        emissive_triangle_count,
+        light_count: packed.lights.len(),
+        texture_count: packed.textures.len(),
+        pack_ms: (start.elapsed().as_secs_f64() * 1e3 - bvh.stats.build_ms).max(0.0),
+        bvh: bvh.stats,
+        memory_bytes: packed.memory_bytes(),
+    };
+    packed
+}
+
+/// Mean linear colour of a texture (sRGB decoded when the texture is sRGB).
+fn mean_texture_color(t: &crate::texture::Texture) -> Vec3 {
+    if t.texels.is_empty() {
+        return Vec3::ONE;
+    }
+    let mut sum = glam::DVec3::ZERO;
+    for &texel in &t.texels {
+        let c = fovea_core::material::texture::unpack_rgba8(texel).truncate();
+        let c = if t.srgb {
+            Vec3::new(
+                fovea_core::math::color::srgb_to_linear(c.x),
+                fovea_core::math::color::srgb_to_linear(c.y),
+                fovea_core::math::color::srgb_to_linear(c.z),
+            )
+        } else {
+            c
+        };
+        sum += c.as_dvec3();
+    }
+    (sum / t.texels.len() as f64).as_vec3()
+}

@@ -1,1 +1,86 @@
 //! Shared helpers for the end-to-end tests in `tests/tests/`.
+use std::path::{Path, PathBuf};
+
+use fovea_core::camera::Camera;
+use fovea_core::foveation::regions::FoveationParams;
+use fovea_core::integrator::{FrameParams, IntegratorSettings};
+use fovea_cpu::{FrameImage, RenderStats};
+use fovea_scene::bvh::BvhBuildOptions;
+use fovea_scene::environment::Environment;
+use fovea_scene::mesh::{load_scene, LoadOptions};
+use fovea_scene::pack::{pack_scene, PackedScene};
+use glam::Vec3;
+
+/// The repository root.
+pub fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The shared scene folder next to the repository (`../shared/scenes`).
+pub fn shared_scenes() -> PathBuf {
+    repo_root().join("../shared/scenes")
+}
+
+/// The bundled Cornell box (CornellBox-Original, 36 triangles, ceiling light).
+pub fn cornell_box_path() -> PathBuf {
+    repo_root().join("assets/cornell_box/CornellBox-Original.obj")
+}
+
+/// Loads and packs a scene file.
+pub fn load_packed(path: &Path, environment: &Environment) -> PackedScene {
+    let loaded = load_scene(path, &LoadOptions::default())
+        .unwrap_or_else(|e| panic!("loading {}: {e}", path.display()));
+    pack_scene(loaded, environment, &BvhBuildOptions::default())
+}
+
+/// The camera that views McGuire's Cornell box from the front.
+pub fn cornell_camera(width: u32, height: u32) -> Camera {
+    Camera::look_at(
+        Vec3::new(0.0, 1.0, 3.9),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::Y,
+        38f32.to_radians(),
+        width as f32 / height as f32,
+    )
+}
+
+/// Frame parameters with default integrator settings.
+pub fn frame_params(
+    camera: Camera,
+    foveation: FoveationParams,
+    width: u32,
+    height: u32,
+    seed: u32,
+) -> FrameParams {
+    FrameParams {
+        camera,
+        foveation,
+        integrator: IntegratorSettings::default(),
+        width,
+        height,
+        frame_index: 0,
+        seed,
+    }
+}
+
+/// Renders on the CPU host with bilinear fill.
+pub fn render(scene: &PackedScene, frame: &FrameParams) -> (FrameImage, RenderStats) {
+    fovea_cpu::render_frame(
+        &scene.view(),
+        frame,
+        fovea_core::foveation::fill::FILL_BILINEAR,
+        &|_| {},
+    )
+}
+
+/// Mean of the RGB channels over a set of pixels.
+pub fn mean_rgb(image: &FrameImage, pixels: impl Iterator<Item = (u32, u32)>) -> Vec3 {
+    let mut sum = glam::DVec3::ZERO;
+    let mut n = 0u64;
+    for (x, y) in pixels {
+        let p = image.pixels[(y * image.width + x) as usize];
+        sum += glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+        n += 1;
+    }
+    (sum / n.max(1) as f64).as_vec3()
+}

@@ -5,4 +5,4 @@
 //! the cosine factor; `pdf` is a solid-angle density over `wi`.
 pub mod disney;
 
-pub use disney::{BsdfSample, DisneyParams};
+pub use disney::{BsdfSample, DisneyParams, ALPHA_MIN};

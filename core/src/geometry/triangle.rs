@@ -1,1 +1,594 @@
-//! Watertight ray-triangle intersection (Woop, Benthin, Wald 2013).
+//! Watertight ray-triangle intersection (Woop, Benthin, Wald 2013, "Watertight Ray/Triangle
+//! Intersection", JCGT 2(1)).
+//!
+//! The ray is transformed (translate, permute, shear, scale) so that it starts at the origin and runs along
+//! +z; the test then reduces to three 2D edge functions of the transformed vertices. Each transformed
+//! vertex is a deterministic function of the vertex and the ray only, and each edge function is computed by
+//! the same expression (with the operands swapped) in the two triangles sharing the edge, so neighbours
+//! always agree on which side of an edge the ray passes: rays cannot slip through shared edges or vertices.
+//!
+//! **Edge cases.** An edge function computed in single precision is either zero or has the exact sign of
+//! the true 2D determinant of the (rounded) transformed coordinates, because rounding is monotonic. The
+//! paper re-computes the edge functions in double precision when one of them is zero. Doubles are not
+//! available on the GPU, so we re-compute them with Kahan's FMA-based difference of products instead
+//! ([`difference_of_products`]), which is accurate to 1.5 ulp and so has the same (exact) sign as the
+//! paper's double-precision result, barring underflow. Zeros that remain are true zeros (the ray passes
+//! exactly through an edge or vertex in the transformed space) and count as inside, so such a ray hits
+//! both (all) adjoining triangles rather than none. Backface culling is off: both windings hit.
+use glam::Vec3;
+
+use super::ray::Ray;
+use crate::math::vec3_from;
+use crate::scene::TrianglePositions;
+
+/// The result of one ray-triangle test: `hit` is true if the ray meets the triangle at `0 < t < t_max`;
+/// `b1` and `b2` are then the barycentric coordinates of `v1` and `v2` (`v0`'s is `1 - b1 - b2`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleHit {
+    pub t: f32,
+    pub b1: f32,
+    pub b2: f32,
+    pub hit: bool,
+}
+
+impl TriangleHit {
+    /// No intersection.
+    #[inline]
+    #[must_use]
+    pub fn miss() -> Self {
+        Self {
+            t: f32::INFINITY,
+            b1: 0.0,
+            b2: 0.0,
+            hit: false,
+        }
+    }
+}
+
+/// Per-ray precomputation of the watertight test (Woop et al. 2013, Sec. 3.1): the axis permutation
+/// `kz` = dominant axis of the direction, `kx`, `ky` the other two (swapped if `direction[kz] < 0` to keep
+/// the winding), and the shear/scale `Sx = d[kx]/d[kz]`, `Sy = d[ky]/d[kz]`, `Sz = 1/d[kz]`.
+#[derive(Clone, Copy, Debug)]
+pub struct WatertightRay {
+    /// The ray origin, permuted to `(o[kx], o[ky], o[kz])`.
+    pub origin: Vec3,
+    pub kx: u32,
+    pub ky: u32,
+    pub kz: u32,
+    pub sx: f32,
+    pub sy: f32,
+    pub sz: f32,
+}
+
+/// `v[k]` for `k` in 0..3, with selects rather than dynamic indexing (cheap on both targets).
+#[inline]
+#[must_use]
+fn component(v: Vec3, k: u32) -> f32 {
+    if k == 0 {
+        v.x
+    } else if k == 1 {
+        v.y
+    } else {
+        v.z
+    }
+}
+
+/// `a * b - c * d` with Kahan's FMA algorithm: the error of `c * d` is recovered exactly by an FMA, so the
+/// result is within 1.5 ulp of the exact value and in particular has its exact sign (barring underflow).
+#[inline]
+#[must_use]
+pub fn difference_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
+    let cd = c * d;
+    let error = libm::fmaf(-c, d, cd);
+    let dop = libm::fmaf(a, b, -cd);
+    dop + error
+}
+
+impl WatertightRay {
+    /// Precomputes the permutation and shear for `ray`. A zero (or non-finite) direction never hits.
+    #[inline]
+    #[must_use]
+    pub fn new(ray: &Ray) -> Self {
+        let d = ray.direction;
+        let a = d.abs();
+        let kz: u32 = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = if kz == 2 { 0 } else { kz + 1 };
+        let mut ky = if kx == 2 { 0 } else { kx + 1 };
+        let dz = component(d, kz);
+        if dz < 0.0 {
+            core::mem::swap(&mut kx, &mut ky);
+        }
+        let (sx, sy, sz) = if dz != 0.0 {
+            (component(d, kx) / dz, component(d, ky) / dz, 1.0 / dz)
+        } else {
+            // Zero direction: Sz = 0 makes every scaled t zero, which the `t > 0` test rejects.
+            (0.0, 0.0, 0.0)
+        };
+        let o = ray.origin;
+        Self {
+            origin: Vec3::new(component(o, kx), component(o, ky), component(o, kz)),
+            kx,
+            ky,
+            kz,
+            sx,
+            sy,
+            sz,
+        }
+    }
+
+    /// `v - origin` in the permuted frame.
+    #[inline]
+    #[must_use]
+    fn relative(&self, v: Vec3) -> Vec3 {
+        Vec3::new(
+            component(v, self.kx),
+            component(v, self.ky),
+            component(v, self.kz),
+        ) - self.origin
+    }
+
+    /// Intersects the triangle (Woop et al. 2013, Fig. 4/5 without backface culling). A hit needs
+    /// `0 < t < t_max`; degenerate triangles (zero determinant) never hit.
+    #[inline]
+    #[must_use]
+    pub fn intersect(&self, tri: &TrianglePositions, t_max: f32) -> TriangleHit {
+        let a = self.relative(vec3_from(tri.v0));
+        let b = self.relative(vec3_from(tri.v1));
+        let c = self.relative(vec3_from(tri.v2));
+
+        // Shear the vertices into the ray's frame (the ray now runs along +z from the origin).
+        let ax = a.x - self.sx * a.z;
+        let ay = a.y - self.sy * a.z;
+        let bx = b.x - self.sx * b.z;
+        let by = b.y - self.sy * b.z;
+        let cx = c.x - self.sx * c.z;
+        let cy = c.y - self.sy * c.z;
+
+        // Scaled barycentrics: edge functions of the edges opposite v0, v1, v2.
+        let mut u = cx * by - cy * bx;
+        let mut v = ax * cy - ay * cx;
+        let mut w = bx * ay - by * ax;
+
+        // Fallback (paper: double precision) when an edge function rounded to zero.
+        if u == 0.0 || v == 0.0 || w == 0.0 {
+            u = difference_of_products(cx, by, cy, bx);
+            v = difference_of_products(ax, cy, ay, cx);
+            w = difference_of_products(bx, ay, by, ax);
+        }
+
+        // Outside if the signs differ (zero counts as inside, for either winding).
+        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+            return TriangleHit::miss();
+        }
+        let det = u + v + w;
+        if det == 0.0 {
+            return TriangleHit::miss();
+        }
+
+        // Scaled hit distance, range-checked against the scaled interval before dividing.
+        let az = self.sz * a.z;
+        let bz = self.sz * b.z;
+        let cz = self.sz * c.z;
+        let t_scaled = u * az + v * bz + w * cz;
+        let (t_scaled, det_abs) = if det < 0.0 {
+            (-t_scaled, -det)
+        } else {
+            (t_scaled, det)
+        };
+        // Written so that NaN fails the test too.
+        let in_range = t_scaled > 0.0 && t_scaled < t_max * det_abs;
+        if !in_range {
+            return TriangleHit::miss();
+        }
+
+        let inv_det = 1.0 / det;
+        let t = t_scaled / det_abs;
+        // The division may round onto the interval's ends; keep the open interval exact.
+        let in_range = t > 0.0 && t < t_max;
+        if !in_range {
+            return TriangleHit::miss();
+        }
+        TriangleHit {
+            t,
+            b1: v * inv_det,
+            b2: w * inv_det,
+            hit: true,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::math::pack_vec3;
+    use std::vec::Vec;
+
+    /// SplitMix64: a tiny deterministic generator for tests.
+    struct TestRng(u64);
+    impl TestRng {
+        fn next_u64(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+        fn uniform(&mut self) -> f32 {
+            (self.next_u64() >> 40) as f32 * (1.0 / 16_777_216.0)
+        }
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.uniform()
+        }
+        fn unit_vector(&mut self) -> Vec3 {
+            loop {
+                let v = Vec3::new(
+                    self.range(-1.0, 1.0),
+                    self.range(-1.0, 1.0),
+                    self.range(-1.0, 1.0),
+                );
+                let l = v.length_squared();
+                if l > 1e-4 && l <= 1.0 {
+                    return v / crate::math::float::sqrt(l);
+                }
+            }
+        }
+    }
+
+    fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
+        TrianglePositions {
+            v0: pack_vec3(a, 0.0),
+            v1: pack_vec3(b, 0.0),
+            v2: pack_vec3(c, 0.0),
+        }
+    }
+
+    /// Whether any triangle of `mesh` is hit by `ray`.
+    fn hits_any(mesh: &[TrianglePositions], ray: &Ray) -> bool {
+        let w = WatertightRay::new(ray);
+        mesh.iter().any(|t| w.intersect(t, f32::INFINITY).hit)
+    }
+
+    /// A closed unit cube `[-1, 1]^3`, two triangles per face, outward (counter-clockwise) winding.
+    fn cube(center: Vec3, half: f32) -> Vec<TrianglePositions> {
+        let p = |x: f32, y: f32, z: f32| center + Vec3::new(x, y, z) * half;
+        let corners = [
+            p(-1.0, -1.0, -1.0),
+            p(1.0, -1.0, -1.0),
+            p(1.0, 1.0, -1.0),
+            p(-1.0, 1.0, -1.0),
+            p(-1.0, -1.0, 1.0),
+            p(1.0, -1.0, 1.0),
+            p(1.0, 1.0, 1.0),
+            p(-1.0, 1.0, 1.0),
+        ];
+        let quads = [
+            [0, 3, 2, 1],
+            [4, 5, 6, 7],
+            [0, 1, 5, 4],
+            [2, 3, 7, 6],
+            [1, 2, 6, 5],
+            [0, 4, 7, 3],
+        ];
+        let mut out = Vec::new();
+        for q in quads {
+            out.push(tri(corners[q[0]], corners[q[1]], corners[q[2]]));
+            out.push(tri(corners[q[0]], corners[q[2]], corners[q[3]]));
+        }
+        out
+    }
+
+    fn octahedron(center: Vec3, r: f32) -> Vec<TrianglePositions> {
+        let axes = [Vec3::X, Vec3::Y, Vec3::Z];
+        let mut out = Vec::new();
+        for sx in [-1.0f32, 1.0] {
+            for sy in [-1.0f32, 1.0] {
+                for sz in [-1.0f32, 1.0] {
+                    let a = center + axes[0] * sx * r;
+                    let b = center + axes[1] * sy * r;
+                    let c = center + axes[2] * sz * r;
+                    if sx * sy * sz > 0.0 {
+                        out.push(tri(a, b, c));
+                    } else {
+                        out.push(tri(a, c, b));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Vertices and triangles of a bumpy `n x n` grid over `[0, 1]^2` (z random), alternating diagonals.
+    fn grid(n: usize, rng: &mut TestRng) -> (Vec<Vec3>, Vec<TrianglePositions>) {
+        let mut verts = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                verts.push(Vec3::new(
+                    i as f32 / n as f32 + rng.range(-0.2, 0.2) / n as f32,
+                    j as f32 / n as f32 + rng.range(-0.2, 0.2) / n as f32,
+                    rng.range(-0.1, 0.1) / n as f32,
+                ));
+            }
+        }
+        let idx = |i: usize, j: usize| j * (n + 1) + i;
+        let mut tris = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
+                if (i + j) % 2 == 0 {
+                    tris.push(tri(verts[a], verts[b], verts[c]));
+                    tris.push(tri(verts[a], verts[c], verts[d]));
+                } else {
+                    tris.push(tri(verts[a], verts[b], verts[d]));
+                    tris.push(tri(verts[b], verts[c], verts[d]));
+                }
+            }
+        }
+        (verts, tris)
+    }
+
+    /// Edge points and vertices of a mesh: every vertex, every edge midpoint and random points on edges.
+    fn targets(mesh: &[TrianglePositions], rng: &mut TestRng) -> Vec<Vec3> {
+        let mut out = Vec::new();
+        for t in mesh {
+            let v = [vec3_from(t.v0), vec3_from(t.v1), vec3_from(t.v2)];
+            for k in 0..3 {
+                let (a, b) = (v[k], v[(k + 1) % 3]);
+                out.push(a);
+                out.push((a + b) * 0.5);
+                for _ in 0..4 {
+                    out.push(a.lerp(b, rng.uniform()));
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn known_triangle_t_and_barycentrics() {
+        let t = tri(
+            Vec3::new(0.0, 0.0, 5.0),
+            Vec3::new(4.0, 0.0, 5.0),
+            Vec3::new(0.0, 2.0, 5.0),
+        );
+        let ray = Ray::new(Vec3::new(1.0, 0.5, 1.0), Vec3::Z);
+        let h = WatertightRay::new(&ray).intersect(&t, f32::INFINITY);
+        assert!(h.hit);
+        assert!((h.t - 4.0).abs() < 1e-6);
+        assert!((h.b1 - 0.25).abs() < 1e-6);
+        assert!((h.b2 - 0.25).abs() < 1e-6);
+
+        // An oblique, non-unit direction: t is in units of the direction's length.
+        let target = Vec3::new(0.0, 0.0, 5.0) * 0.2
+            + Vec3::new(4.0, 0.0, 5.0) * 0.3
+            + Vec3::new(0.0, 2.0, 5.0) * 0.5;
+        let origin = Vec3::new(-3.0, 7.0, -2.0);
+        let ray = Ray::new(origin, (target - origin) * 0.5);
+        let h = WatertightRay::new(&ray).intersect(&t, f32::INFINITY);
+        assert!(h.hit);
+        assert!((h.t - 2.0).abs() < 1e-5, "{}", h.t);
+        assert!((h.b1 - 0.3).abs() < 1e-5);
+        assert!((h.b2 - 0.5).abs() < 1e-5);
+
+        // Open interval (0, t_max).
+        let ray = Ray::new(Vec3::new(1.0, 0.5, 1.0), Vec3::Z);
+        let w = WatertightRay::new(&ray);
+        assert!(!w.intersect(&t, 4.0).hit);
+        assert!(w.intersect(&t, 4.0001).hit);
+        let behind = Ray::new(Vec3::new(1.0, 0.5, 9.0), Vec3::Z);
+        assert!(!WatertightRay::new(&behind).intersect(&t, f32::INFINITY).hit);
+        let outside = Ray::new(Vec3::new(3.0, 1.5, 1.0), Vec3::Z);
+        assert!(
+            !WatertightRay::new(&outside)
+                .intersect(&t, f32::INFINITY)
+                .hit
+        );
+    }
+
+    #[test]
+    fn both_windings_hit_with_consistent_barycentrics() {
+        let mut rng = TestRng(7);
+        for _ in 0..2000 {
+            let v0 = Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+            let v1 = Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+            let v2 = Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+            if (v1 - v0).cross(v2 - v0).length() < 1e-2 {
+                continue;
+            }
+            let (b1, b2) = (rng.range(0.05, 0.45), rng.range(0.05, 0.45));
+            let p = v0 * (1.0 - b1 - b2) + v1 * b1 + v2 * b2;
+            let n = (v1 - v0).cross(v2 - v0).normalize();
+            let dir = rng.unit_vector();
+            if dir.dot(n).abs() < 0.2 {
+                continue; // grazing rays are tested elsewhere; here t is compared to tight tolerances
+            }
+            let origin = p + dir * rng.range(0.5, 3.0);
+            let ray = Ray::new(origin, p - origin);
+            let w = WatertightRay::new(&ray);
+            let front = w.intersect(&tri(v0, v1, v2), f32::INFINITY);
+            let back = w.intersect(&tri(v0, v2, v1), f32::INFINITY);
+            assert!(front.hit && back.hit);
+            assert!(
+                (front.t - 1.0).abs() < 1e-4 && (back.t - front.t).abs() < 1e-6,
+                "{front:?} {back:?}"
+            );
+            assert!((front.b1 - b1).abs() < 1e-3 && (front.b2 - b2).abs() < 1e-3);
+            assert!((back.b1 - front.b2).abs() < 1e-6 && (back.b2 - front.b1).abs() < 1e-6);
+        }
+    }
+
+    /// Rays aimed exactly at vertices and edges of closed convex meshes always hit: rays that enter the
+    /// solid through the target (from outside, continuing to an interior point) and rays that leave through
+    /// it (from an interior point), including directions with one or two zero components.
+    #[test]
+    fn closed_meshes_have_no_cracks() {
+        let mut rng = TestRng(42);
+        // (mesh, centre, size, is a cube). Strictly inside, in units of the size: the cube's max norm or the
+        // octahedron's 1-norm below 1.
+        let inside = |q: Vec3, is_cube: bool| {
+            if is_cube {
+                q.abs().max_element() < 0.999
+            } else {
+                q.abs().element_sum() < 0.999
+            }
+        };
+        let meshes = [
+            (cube(Vec3::ZERO, 1.0), Vec3::ZERO, 1.0, true),
+            (
+                cube(Vec3::new(3.7, -1.3, 100.0), 0.37),
+                Vec3::new(3.7, -1.3, 100.0),
+                0.37,
+                true,
+            ),
+            (octahedron(Vec3::ZERO, 1.0), Vec3::ZERO, 1.0, false),
+            (
+                octahedron(Vec3::new(-0.3, 1e3, 7.0), 2.3),
+                Vec3::new(-0.3, 1e3, 7.0),
+                2.3,
+                false,
+            ),
+        ];
+        let mut rays = 0;
+        let mut axis_rays = 0;
+        for (mesh, centre, size, is_cube) in &meshes {
+            for target in targets(mesh, &mut rng) {
+                // Interior points: random ones, and the target with one or two coordinates moved to the
+                // centre's (which gives directions with zero components).
+                let mut interiors = Vec::new();
+                for _ in 0..6 {
+                    interiors.push(*centre + rng.unit_vector() * *size * rng.range(0.0, 0.5));
+                }
+                for mask in 1..7u32 {
+                    let mut q = target;
+                    for k in 0..3 {
+                        if mask & (1 << k) != 0 {
+                            q[k] = centre[k];
+                        }
+                    }
+                    if inside((q - *centre) / *size, *is_cube) {
+                        interiors.push(q);
+                        axis_rays += 1;
+                    }
+                }
+                for q in interiors {
+                    let d = q - target;
+                    let outside = target - d * rng.range(1.0, 20.0);
+                    assert!(
+                        hits_any(mesh, &Ray::new(outside, d)),
+                        "{outside:?} -> {target:?}"
+                    );
+                    assert!(hits_any(mesh, &Ray::new(q, -d)), "{q:?} -> {target:?}");
+                    rays += 2;
+                }
+            }
+        }
+        assert!(rays > 5000 && axis_rays > 100);
+    }
+
+    /// Rays through vertices and edges of a finely tessellated height field (no facet steeper than the
+    /// rays, so no ray merely grazes) always hit.
+    #[test]
+    fn tessellated_grid_has_no_cracks() {
+        let mut rng = TestRng(3);
+        let n = 24;
+        let (verts, mesh) = grid(n, &mut rng);
+        let m = n as f32;
+        let interior =
+            |p: Vec3| p.x > 0.5 / m && p.x < 1.0 - 0.5 / m && p.y > 0.5 / m && p.y < 1.0 - 0.5 / m;
+        let mut targets_inside = Vec::new();
+        for v in verts.iter().copied().filter(|v| interior(*v)) {
+            targets_inside.push(v);
+        }
+        for t in targets(&mesh, &mut rng) {
+            if interior(t) {
+                targets_inside.push(t);
+            }
+        }
+        assert!(targets_inside.len() > 1000);
+        for target in targets_inside {
+            for _ in 0..3 {
+                let mut dir = rng.unit_vector();
+                dir.z = dir.z.signum() * 4.0;
+                let dir = dir.normalize();
+                let origin = target - dir * rng.range(0.1, 10.0);
+                assert!(hits_any(&mesh, &Ray::new(origin, dir)));
+                assert!(hits_any(&mesh, &Ray::new(origin, target - origin)));
+            }
+            assert!(hits_any(&mesh, &Ray::new(target + Vec3::Z, -Vec3::Z)));
+            assert!(hits_any(&mesh, &Ray::new(target - Vec3::Z, Vec3::Z)));
+        }
+    }
+
+    #[test]
+    fn degenerate_inputs_give_no_nan() {
+        let p = Vec3::new(1.0, 2.0, 3.0);
+        let degenerate = [
+            tri(p, p, p),
+            tri(p, p + Vec3::X, p + 2.0 * Vec3::X),
+            tri(p, p + Vec3::X, p),
+            tri(Vec3::ZERO, Vec3::ZERO, Vec3::X),
+        ];
+        let rays = [
+            Ray::new(Vec3::new(1.0, 2.0, 0.0), Vec3::Z),
+            Ray::new(Vec3::new(1.5, 2.0, 0.0), Vec3::Z),
+            Ray::new(Vec3::new(0.0, 2.0, 3.0), Vec3::X),
+            Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::Z),
+            Ray::new(Vec3::new(1.0, 2.0, 0.0), Vec3::ZERO),
+        ];
+        for r in &rays {
+            let w = WatertightRay::new(r);
+            assert!(w.sx.is_finite() && w.sy.is_finite() && w.sz.is_finite());
+            for t in &degenerate {
+                let h = w.intersect(t, f32::INFINITY);
+                assert!(!h.t.is_nan() && !h.b1.is_nan() && !h.b2.is_nan());
+                assert!(!h.hit);
+            }
+        }
+        // Zero direction components still hit a proper triangle; a zero direction hits nothing.
+        let t = tri(
+            Vec3::new(-1.0, -1.0, 2.0),
+            Vec3::new(1.0, -1.0, 2.0),
+            Vec3::new(0.0, 1.0, 2.0),
+        );
+        for d in [Vec3::Z, -Vec3::Z] {
+            let origin = Vec3::new(0.0, 0.0, 2.0) - d * 3.0;
+            let h = WatertightRay::new(&Ray::new(origin, d)).intersect(&t, f32::INFINITY);
+            assert!(h.hit && (h.t - 3.0).abs() < 1e-6);
+        }
+        let h = WatertightRay::new(&Ray::new(Vec3::ZERO, Vec3::ZERO)).intersect(&t, f32::INFINITY);
+        assert!(!h.hit && !h.t.is_nan());
+        // A ray in the triangle's plane.
+        let h = WatertightRay::new(&Ray::new(Vec3::new(-5.0, 0.0, 2.0), Vec3::X))
+            .intersect(&t, f32::INFINITY);
+        assert!(!h.hit && !h.t.is_nan());
+    }
+
+    #[test]
+    fn difference_of_products_has_exact_sign() {
+        // a*b and c*d round to the same float but differ exactly.
+        let a = 1.0 + f32::EPSILON;
+        let b = 1.0 - f32::EPSILON;
+        assert_eq!(a * b - 1.0, 0.0);
+        assert!(difference_of_products(a, b, 1.0, 1.0) < 0.0);
+        assert!(difference_of_products(1.0, 1.0, a, b) > 0.0);
+        assert_eq!(difference_of_products(3.0, 5.0, 5.0, 3.0), 0.0);
+    }
+}

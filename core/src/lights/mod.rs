@@ -1,1 +1,118 @@
-//! TODO-doc
+//! Light sources and next-event estimation: picking a light in proportion to its power, sampling a point
+//! or direction on it, and the densities multiple importance sampling needs when a BSDF-sampled ray finds an
+//! emitter by itself.
+//!
+//! Kinds: emissive triangles ([`triangle`]), the environment, constant or an HDR map ([`environment`]), and
+//! KHR_lights_punctual point, spot and directional lights ([`punctual`]). [`power`] holds the power estimates
+//! the host uses to build the selection table.
+pub mod environment;
+pub mod power;
+pub mod punctual;
+pub mod triangle;
+
+use glam::{Vec2, Vec3};
+
+use crate::sampling::distribution::sample_cdf;
+use crate::scene::{
+    SceneView, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
+};
+
+/// Farthest distance a shadow ray towards an infinitely distant light travels.
+pub const INFINITE_DISTANCE: f32 = 3.0e38;
+
+/// A sampled light contribution towards a shading point.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// Unit direction from the shading point towards the light.
+    pub direction: Vec3,
+    /// For area lights, the point on the light, already offset off its surface towards the shading
+    /// point, so a shadow ray can stop exactly there; for infinitely distant lights unused.
+    pub target: Vec3,
+    /// Whether the light is infinitely far away (shadow rays go to [`INFINITE_DISTANCE`]).
+    pub is_infinite: bool,
+    /// Radiance (area and environment lights) or irradiance-like intensity (delta lights) arriving along
+    /// `-direction`, not yet divided by `pdf`.
+    pub radiance: Vec3,
+    /// Solid-angle density of the sample including the light-selection probability; for delta lights the
+    /// selection probability alone. 0 means no contribution.
+    pub pdf: f32,
+    /// Delta lights (point, spot, directional) cannot be hit by BSDF sampling: no MIS weight.
+    pub is_delta: bool,
+}
+
+impl LightSample {
+    /// A sample that contributes nothing.
+    #[inline]
+    #[must_use]
+    pub fn none() -> Self {
+        Self {
+            direction: Vec3::Z,
+            target: Vec3::ZERO,
+            is_infinite: true,
+            radiance: Vec3::ZERO,
+            pdf: 0.0,
+            is_delta: false,
+        }
+    }
+}
+
+/// Picks a light with probability proportional to its power (`u_select`) and samples it from the shading
+/// point `p` (`u`).
+#[must_use]
+pub fn sample_light(scene: &SceneView, p: Vec3, u_select: f32, u: Vec2) -> LightSample {
+    let count = scene.globals.light_count;
+    if count == 0 {
+        return LightSample::none();
+    }
+    let choice = sample_cdf(scene.light_cdf, 0, count, u_select);
+    let light = scene.lights[choice.index as usize];
+    let mut sample = if light.kind == LIGHT_TRIANGLE {
+        triangle::sample(scene, light.index, p, u)
+    } else if light.kind == LIGHT_ENVIRONMENT {
+        environment::sample(scene, u)
+    } else if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT {
+        punctual::sample_point_or_spot(&light, p)
+    } else if light.kind == LIGHT_DIRECTIONAL {
+        punctual::sample_directional(&light)
+    } else {
+        LightSample::none()
+    };
+    sample.pdf *= choice.pmf;
+    sample
+}
+
+/// Power heuristic with β = 2 (Veach 1997, eq. 9.13) for a sample drawn from the strategy with density
+/// `pdf_a`, combined with one sample of a strategy with density `pdf_b`.
+#[inline]
+#[must_use]
+pub fn power_heuristic(pdf_a: f32, pdf_b: f32) -> f32 {
+    let a = pdf_a * pdf_a;
+    let b = pdf_b * pdf_b;
+    if a + b > 0.0 && crate::math::float::is_finite(a + b) {
+        a / (a + b)
+    } else if crate::math::float::is_finite(a) {
+        // b overflowed (a near-delta strategy on the other side) or both are zero.
+        if b > 0.0 {
+            0.0
+        } else {
+            1.0
+        }
+    } else {
+        1.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn power_heuristic_weights_sum_to_one() {
+        for &(a, b) in &[(1.0f32, 1.0f32), (0.3, 7.0), (1e-20, 3.0), (5.0, 0.0)] {
+            let s = power_heuristic(a, b) + power_heuristic(b, a);
+            assert!((s - 1.0).abs() < 1e-6, "{a} {b}: {s}");
+        }
+        assert_eq!(power_heuristic(1.0, 0.0), 1.0);
+        assert_eq!(power_heuristic(1e30, 1e-30), 1.0);
+    }
+}

@@ -1,3 +1,6 @@
 //! From a hit to shading inputs: texture fetches, alpha cut-outs and the Disney parameters at a point.
 pub mod alpha;
+pub mod shading;
 pub mod texture;
+
+pub use shading::{surface_point, SurfacePoint};

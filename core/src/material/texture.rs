@@ -41,8 +41,16 @@ pub fn sample_texture(scene: &SceneView, texture: u32, uv: Vec2) -> Vec4 {
     let fx = uv.x * info.width as f32 - 0.5;
     let fy = uv.y * info.height as f32 - 0.5;
     // Keep coordinates in a range where f32 -> i32 cannot overflow (absurd or non-finite UVs).
-    let fx = if crate::math::float::is_finite(fx) { fx.clamp(-1.0e7, 1.0e7) } else { 0.0 };
-    let fy = if crate::math::float::is_finite(fy) { fy.clamp(-1.0e7, 1.0e7) } else { 0.0 };
+    let fx = if crate::math::float::is_finite(fx) {
+        fx.clamp(-1.0e7, 1.0e7)
+    } else {
+        0.0
+    };
+    let fy = if crate::math::float::is_finite(fy) {
+        fy.clamp(-1.0e7, 1.0e7)
+    } else {
+        0.0
+    };
     let x0 = floor(fx);
     let y0 = floor(fy);
     let tx = fx - x0;
@@ -56,7 +64,12 @@ pub fn sample_texture(scene: &SceneView, texture: u32, uv: Vec2) -> Vec4 {
     let bottom = c01 + (c11 - c01) * tx;
     let c = top + (bottom - top) * ty;
     if info.flags & TEXTURE_SRGB != 0 {
-        Vec4::new(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z), c.w)
+        Vec4::new(
+            srgb_to_linear(c.x),
+            srgb_to_linear(c.y),
+            srgb_to_linear(c.z),
+            c.w,
+        )
     } else {
         c
     }

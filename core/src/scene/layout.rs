@@ -199,5 +199,7 @@ pub struct SceneGlobals {
     pub light_count: u32,
     /// Integral of the environment map's sampling function over the unit square (normalises its pdf).
     pub environment_integral: f32,
-    pub _pad: [u32; 3],
+    /// Index of the environment in the light list, or [`INVALID_INDEX`] when there is none.
+    pub environment_light: u32,
+    pub _pad: [u32; 2],
 }

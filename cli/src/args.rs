@@ -1,0 +1,148 @@
+//! Command-line options of `fovea` (clap).
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+/// fovea: a foveated real-time path tracer (after Mohanto, Kluge and Staadt 2023).
+#[derive(Parser, Debug)]
+#[command(name = "fovea", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene (the bundled Lost Empire when no SCENE is given).
+    Render(RenderArgs),
+    /// List the devices fovea can render on.
+    Devices,
+}
+
+/// Which backend renders.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Backend {
+    /// Vulkan when available, else the CPU.
+    Auto,
+    Cpu,
+    Vulkan,
+}
+
+/// How pixels that a block leaves empty are filled.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Fill {
+    /// Bilinear interpolation between neighbouring block-sample centres (the paper's text).
+    Bilinear,
+    /// Every pixel of a block takes the block's value (the reference code).
+    Replicate,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct RenderArgs {
+    /// Scene file (.gltf, .glb or .obj). Default: the bundled Lost Empire.
+    pub scene: Option<PathBuf>,
+
+    /// Backend.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: Backend,
+    /// Image size WxH in pixels.
+    #[arg(long, default_value = "1920x1080", value_name = "WxH")]
+    pub resolution: String,
+    /// Fixation in pixels X,Y (default: the image centre). A gaze off the image is allowed.
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    pub gaze: Option<String>,
+    /// CSV gaze trace with lines `frame,x,y`; one output image per line.
+    #[arg(long, value_name = "FILE.csv")]
+    pub gaze_trace: Option<PathBuf>,
+    /// Render every pixel at the fovea's samples per pixel (the paper's baseline).
+    #[arg(long)]
+    pub uniform: bool,
+    /// Samples per pixel (fovea) and per block (intermediate, periphery).
+    #[arg(long, default_value = "32,16,8", value_name = "F,I,P")]
+    pub spp: String,
+    /// Block edge in pixels per region; each must divide the next.
+    #[arg(long, default_value = "1,2,4", value_name = "F,I,P")]
+    pub blocks: String,
+    /// Eccentricity angles in degrees bounding the fovea and the intermediate region.
+    #[arg(long, default_value = "5.2,17", value_name = "E1,E2")]
+    pub eccentricity: String,
+    /// Region radii in pixels (instead of eccentricity angles).
+    #[arg(long, value_name = "R1,R2")]
+    pub radii: Option<String>,
+    /// Physical display size in centimetres.
+    #[arg(long, default_value = "70.848x39.852", value_name = "WxH")]
+    pub display_cm: String,
+    /// Viewing distance in centimetres.
+    #[arg(long, default_value_t = 60.0, value_name = "D")]
+    pub distance_cm: f32,
+    /// Bounces per path (3: camera -> x1 -> x2 -> x3 -> light).
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub depth: u32,
+    /// Russian roulette from this bounce on (0: off).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub russian_roulette: u32,
+    /// Exposure compensation in EV (stops) before tone mapping.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "EV",
+        allow_hyphen_values = true
+    )]
+    pub exposure: f32,
+    /// Seed of all random numbers.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub seed: u32,
+    /// Frame index (part of the random-number key).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub frame: u32,
+    /// Camera position (with --target).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub eye: Option<String>,
+    /// Camera target point (with --eye).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub target: Option<String>,
+    /// Camera up vector.
+    #[arg(
+        long,
+        default_value = "0,1,0",
+        value_name = "X,Y,Z",
+        allow_hyphen_values = true
+    )]
+    pub up: String,
+    /// Vertical field of view in degrees.
+    #[arg(long, value_name = "DEG")]
+    pub fov: Option<f32>,
+    /// Constant environment ("sky") radiance.
+    #[arg(long, value_name = "R,G,B")]
+    pub sky: Option<String>,
+    /// Equirectangular HDR environment map (.hdr or .exr), importance-sampled.
+    #[arg(long, value_name = "FILE")]
+    pub env_map: Option<PathBuf>,
+    /// Scale of --env-map.
+    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    pub env_scale: f32,
+    /// MTL file to use instead of the one the OBJ names (e.g. Lost Empire's torch variant).
+    #[arg(long, value_name = "FILE.mtl")]
+    pub mtl: Option<PathBuf>,
+    /// How block pixels are filled.
+    #[arg(long, value_enum, default_value = "bilinear")]
+    pub fill: Fill,
+    /// Output image: .png (tone-mapped sRGB) or .exr (linear HDR).
+    #[arg(short, long, default_value = "fovea.png", value_name = "FILE")]
+    pub output: PathBuf,
+    /// Write an image of the regions and blocks over the render.
+    #[arg(long, value_name = "FILE.png")]
+    pub regions_overlay: Option<PathBuf>,
+    /// Write render statistics as JSON.
+    #[arg(long, value_name = "FILE.json")]
+    pub stats: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Print scene details and warnings.
+    #[arg(short, long)]
+    pub verbose: bool,
+    /// No progress bar and no summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+}

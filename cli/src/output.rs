@@ -1,0 +1,164 @@
+//! Writing images: PNG (tone-mapped sRGB) and EXR (linear HDR), always through a temporary file in the
+//! destination folder that is renamed into place, so a failed or interrupted run leaves nothing behind.
+use std::path::{Path, PathBuf};
+
+use fovea_core::foveation::blocks::owning_block;
+use fovea_core::foveation::regions::FoveationParams;
+use fovea_core::post::tonemap::tonemap_to_srgb8;
+use fovea_cpu::FrameImage;
+use glam::Vec3;
+
+use crate::error::{FoveaError, Result};
+
+/// Output formats, chosen by the file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    Png,
+    Exr,
+}
+
+/// Checks an output path before any rendering: a known extension and an existing folder.
+pub fn check_output_path(path: &Path, what: &'static str, allow_exr: bool) -> Result<ImageFormat> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let format = match ext.as_deref() {
+        Some("png") => ImageFormat::Png,
+        Some("exr") if allow_exr => ImageFormat::Exr,
+        Some(other) => {
+            let known = if allow_exr { ".png or .exr" } else { ".png" };
+            return Err(FoveaError::option(
+                what,
+                format!(
+                    "'{}': unknown image extension '.{other}' (use {known})",
+                    path.display()
+                ),
+            ));
+        }
+        None => {
+            return Err(FoveaError::option(
+                what,
+                format!(
+                    "'{}' has no extension (use .png{})",
+                    path.display(),
+                    if allow_exr { " or .exr" } else { "" }
+                ),
+            ))
+        }
+    };
+    let dir = parent_dir(path);
+    if !dir.is_dir() {
+        return Err(FoveaError::option(
+            what,
+            format!("the folder '{}' does not exist", dir.display()),
+        ));
+    }
+    Ok(format)
+}
+
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Writes `bytes_writer`'s output to `path` atomically: a temporary sibling file, then a rename.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+) -> Result<()> {
+    let dir = parent_dir(path);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.tmp-{}.{ext}", std::process::id()));
+    if let Err(message) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(FoveaError::file(path, message));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        FoveaError::file(path, e)
+    })
+}
+
+/// Tone-maps a frame to 8-bit sRGB RGB bytes.
+pub fn tonemapped_rgb8(image: &FrameImage, exposure_ev: f32) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(image.pixels.len() * 3);
+    for p in &image.pixels {
+        bytes.extend_from_slice(&tonemap_to_srgb8(Vec3::new(p[0], p[1], p[2]), exposure_ev));
+    }
+    bytes
+}
+
+/// Writes a frame as PNG (tone-mapped) or EXR (linear HDR).
+pub fn write_image(
+    path: &Path,
+    format: ImageFormat,
+    image: &FrameImage,
+    exposure_ev: f32,
+) -> Result<()> {
+    match format {
+        ImageFormat::Png => {
+            let rgb = tonemapped_rgb8(image, exposure_ev);
+            write_png(path, image.width, image.height, &rgb)
+        }
+        ImageFormat::Exr => write_atomically(path, |tmp| {
+            let (w, h) = (image.width as usize, image.height as usize);
+            exr::prelude::write_rgb_file(tmp, w, h, |x, y| {
+                let p = image.pixels[y * w + x];
+                (p[0], p[1], p[2])
+            })
+            .map_err(|e| e.to_string())
+        }),
+    }
+}
+
+/// Writes 8-bit RGB bytes as PNG.
+pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
+    write_atomically(path, |tmp| {
+        image::save_buffer_with_format(
+            tmp,
+            rgb,
+            width,
+            height,
+            image::ExtendedColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| e.to_string())
+    })
+}
+
+/// Colours of the regions in the overlay: fovea green, intermediate amber, periphery blue.
+const REGION_COLORS: [[f32; 3]; 3] = [[0.2, 0.85, 0.3], [1.0, 0.7, 0.1], [0.25, 0.45, 1.0]];
+
+/// The render with each pixel tinted by the region of its owning block and block edges darkened.
+pub fn regions_overlay(
+    image: &FrameImage,
+    exposure_ev: f32,
+    foveation: &FoveationParams,
+) -> Vec<u8> {
+    let base = tonemapped_rgb8(image, exposure_ev);
+    let mut out = Vec::with_capacity(base.len());
+    for y in 0..image.height {
+        for x in 0..image.width {
+            let block = owning_block(x, y, foveation);
+            let tint = REGION_COLORS[block.region.min(2) as usize];
+            let edge = block.size > 1 && (x == block.origin[0] || y == block.origin[1]);
+            let i = ((y * image.width + x) * 3) as usize;
+            for c in 0..3 {
+                let v = 0.5 * base[i + c] as f32 / 255.0 + 0.5 * tint[c];
+                let v = if edge { v * 0.6 } else { v };
+                out.push((v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,81 @@
+//! Parsing of the comma- and x-separated option values (`1920x1080`, `32,16,8`, `1.5,2,-3`).
+use crate::error::{FoveaError, Result};
+
+/// Splits `text` at `sep` into exactly `N` values parsed as `T`.
+pub fn list<T: std::str::FromStr + Copy + Default, const N: usize>(
+    option: &'static str,
+    text: &str,
+    sep: char,
+) -> Result<[T; N]> {
+    let parts: Vec<&str> = text.split(sep).map(str::trim).collect();
+    if parts.len() != N {
+        return Err(FoveaError::option(
+            option,
+            format!("expected {N} values separated by '{sep}', got '{text}'"),
+        ));
+    }
+    let mut out = [T::default(); N];
+    for (slot, part) in out.iter_mut().zip(&parts) {
+        *slot = part.parse().map_err(|_| {
+            FoveaError::option(
+                option,
+                format!("'{part}' is not a valid number in '{text}'"),
+            )
+        })?;
+    }
+    Ok(out)
+}
+
+/// Finite floats.
+pub fn floats<const N: usize>(option: &'static str, text: &str, sep: char) -> Result<[f32; N]> {
+    let v: [f32; N] = list(option, text, sep)?;
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(FoveaError::option(
+            option,
+            format!("'{text}' contains a non-finite value"),
+        ));
+    }
+    Ok(v)
+}
+
+/// The largest image edge fovea accepts.
+pub const MAX_IMAGE_EDGE: u32 = 32_768;
+/// The most samples per pixel or block fovea accepts.
+pub const MAX_SPP: u32 = 1 << 20;
+
+/// `WxH` with both in 1..=[`MAX_IMAGE_EDGE`].
+pub fn resolution(text: &str) -> Result<[u32; 2]> {
+    let lower = text.to_ascii_lowercase();
+    let [w, h]: [u32; 2] = list("--resolution", &lower, 'x')?;
+    if w == 0 || h == 0 || w > MAX_IMAGE_EDGE || h > MAX_IMAGE_EDGE {
+        return Err(FoveaError::option(
+            "--resolution",
+            format!("{w}x{h} is out of range (each edge 1 to {MAX_IMAGE_EDGE} pixels)"),
+        ));
+    }
+    Ok([w, h])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_and_rejects() {
+        assert_eq!(resolution("1920x1080").unwrap(), [1920, 1080]);
+        assert_eq!(resolution("64X32").unwrap(), [64, 32]);
+        assert!(resolution("0x10").is_err());
+        assert!(resolution("100000x10").is_err());
+        assert!(resolution("abc").is_err());
+        assert_eq!(
+            list::<u32, 3>("--spp", "32,16,8", ',').unwrap(),
+            [32, 16, 8]
+        );
+        assert!(list::<u32, 3>("--spp", "32,16", ',').is_err());
+        assert!(floats::<2>("--gaze", "1,nan", ',').is_err());
+        assert_eq!(
+            floats::<3>("--eye", "-1, 2.5,3", ',').unwrap(),
+            [-1.0, 2.5, 3.0]
+        );
+    }
+}

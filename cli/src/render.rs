@@ -1,0 +1,442 @@
+//! `fovea render`: parse and check every option, load the scene, render one frame (or one per gaze-trace
+//! line), write images and statistics.
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use fovea_core::foveation::blocks::count_samples;
+use fovea_core::foveation::display::{eccentricity_to_radius_px, DisplayGeometry};
+use fovea_core::foveation::fill::{FILL_BILINEAR, FILL_REPLICATE};
+use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
+use fovea_core::integrator::{FrameParams, IntegratorSettings};
+use fovea_scene::environment::Environment;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::args::{Backend, Fill, RenderArgs};
+use crate::error::{FoveaError, Result};
+use crate::output::{check_output_path, regions_overlay, write_image, write_png, ImageFormat};
+use crate::parse::{self, MAX_SPP};
+use crate::scene_setup::{choose_camera, prepare_scene, DEFAULT_SKY};
+use crate::stats::{cpu_device_name, FrameStats};
+use crate::trace::{read_gaze_trace, GazeSample};
+
+/// Everything `render` needs, parsed and checked before any work starts.
+struct Plan {
+    resolution: [u32; 2],
+    foveation_template: FoveationParams,
+    radii_px: [f32; 2],
+    gazes: Vec<GazeSample>,
+    output: PathBuf,
+    output_format: ImageFormat,
+    per_frame_outputs: bool,
+    fill_mode: u32,
+    environment: Environment,
+}
+
+fn plan(args: &RenderArgs) -> Result<Plan> {
+    let resolution = parse::resolution(&args.resolution)?;
+    let [w, h] = resolution;
+    let spp: [u32; 3] = parse::list("--spp", &args.spp, ',')?;
+    if spp.iter().any(|&s| s == 0 || s > MAX_SPP) {
+        return Err(FoveaError::option(
+            "--spp",
+            format!("each value must be 1 to {MAX_SPP}, got {}", args.spp),
+        ));
+    }
+    let blocks: [u32; 3] = parse::list("--blocks", &args.blocks, ',')?;
+    if blocks.iter().any(|&b| b == 0 || b > 64) {
+        return Err(FoveaError::option(
+            "--blocks",
+            format!("each block edge must be 1 to 64, got {}", args.blocks),
+        ));
+    }
+    if blocks[1] % blocks[0] != 0 || blocks[2] % blocks[1] != 0 {
+        return Err(FoveaError::option(
+            "--blocks",
+            format!(
+                "each block edge must divide the next (fovea | intermediate | periphery), got {}",
+                args.blocks
+            ),
+        ));
+    }
+    let display_cm: [f32; 2] =
+        parse::floats("--display-cm", &args.display_cm.to_ascii_lowercase(), 'x')?;
+    if display_cm.iter().any(|&v| v <= 0.0) {
+        return Err(FoveaError::option(
+            "--display-cm",
+            "both sizes must be positive",
+        ));
+    }
+    if !(args.distance_cm.is_finite() && args.distance_cm > 0.0) {
+        return Err(FoveaError::option(
+            "--distance-cm",
+            "the viewing distance must be positive",
+        ));
+    }
+    // The image fills the display, so pixels per centimetre come from the rendered width.
+    let display = DisplayGeometry {
+        width_cm: display_cm[0],
+        height_cm: display_cm[1],
+        distance_cm: args.distance_cm,
+        resolution,
+    };
+    let radii_px = match &args.radii {
+        Some(text) => {
+            let r: [f32; 2] = parse::floats("--radii", text, ',')?;
+            if r[0] < 0.0 || r[1] < r[0] {
+                return Err(FoveaError::option("--radii", "need 0 <= R1 <= R2"));
+            }
+            r
+        }
+        None => {
+            let e: [f32; 2] = parse::floats("--eccentricity", &args.eccentricity, ',')?;
+            if e[0] < 0.0 || e[1] < e[0] || e[1] >= 180.0 {
+                return Err(FoveaError::option(
+                    "--eccentricity",
+                    "need 0 <= E1 <= E2 < 180 degrees",
+                ));
+            }
+            [
+                eccentricity_to_radius_px(e[0], &display),
+                eccentricity_to_radius_px(e[1], &display),
+            ]
+        }
+    };
+
+    let mut foveation_template = if args.uniform {
+        FoveationParams::uniform(spp[0])
+    } else {
+        FoveationParams {
+            gaze: [0.5 * w as f32, 0.5 * h as f32],
+            radius_fovea: radii_px[0],
+            radius_intermediate: radii_px[1],
+            spp: [spp[0], spp[1], spp[2], 0],
+            block_size: [blocks[0], blocks[1], blocks[2], 0],
+        }
+    };
+    let gazes = match (&args.gaze_trace, &args.gaze) {
+        (Some(_), Some(_)) => {
+            return Err(FoveaError::option(
+                "--gaze-trace",
+                "give either --gaze or --gaze-trace, not both",
+            ))
+        }
+        (Some(path), None) => read_gaze_trace(path)?,
+        (None, Some(text)) => {
+            let g: [f32; 2] = parse::floats("--gaze", text, ',')?;
+            vec![GazeSample {
+                frame: args.frame,
+                gaze: g,
+            }]
+        }
+        (None, None) => vec![GazeSample {
+            frame: args.frame,
+            gaze: [0.5 * w as f32, 0.5 * h as f32],
+        }],
+    };
+    for g in &gazes {
+        if g.gaze.iter().any(|v| v.abs() > 1.0e6) {
+            return Err(FoveaError::option(
+                "--gaze",
+                format!("{:?} is absurdly far off the image", g.gaze),
+            ));
+        }
+    }
+    foveation_template.gaze = gazes[0].gaze;
+    if foveation_template.validate() != FOVEATION_OK {
+        return Err(FoveaError::option(
+            "--spp/--blocks/--radii",
+            "the foveation settings are inconsistent",
+        ));
+    }
+
+    let output_format = check_output_path(&args.output, "--output", true)?;
+    if let Some(p) = &args.regions_overlay {
+        check_output_path(p, "--regions-overlay", false)?;
+    }
+    if let Some(p) = &args.stats {
+        let ext = p
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        if ext.as_deref() != Some("json") {
+            return Err(FoveaError::option(
+                "--stats",
+                format!("'{}' must end in .json", p.display()),
+            ));
+        }
+        let dir = p
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        if !dir.is_dir() {
+            return Err(FoveaError::option(
+                "--stats",
+                format!("the folder '{}' does not exist", dir.display()),
+            ));
+        }
+    }
+    if args.depth > 64 {
+        return Err(FoveaError::option(
+            "--depth",
+            format!("{} bounces is more than the 64 fovea allows", args.depth),
+        ));
+    }
+    if !args.exposure.is_finite() || args.exposure.abs() > 64.0 {
+        return Err(FoveaError::option(
+            "--exposure",
+            "must be a finite EV between -64 and 64",
+        ));
+    }
+
+    let environment = match (&args.sky, &args.env_map) {
+        (Some(_), Some(_)) => {
+            return Err(FoveaError::option(
+                "--sky",
+                "give either --sky or --env-map",
+            ))
+        }
+        (Some(text), None) => {
+            let c: [f32; 3] = parse::floats("--sky", text, ',')?;
+            if c.iter().any(|&v| v < 0.0) {
+                return Err(FoveaError::option("--sky", "radiance must not be negative"));
+            }
+            Environment::Constant(c)
+        }
+        (None, Some(path)) => {
+            if !(args.env_scale.is_finite() && args.env_scale >= 0.0) {
+                return Err(FoveaError::option(
+                    "--env-scale",
+                    "must be a finite, non-negative number",
+                ));
+            }
+            Environment::load_map(path, [args.env_scale; 3])?
+        }
+        (None, None) if args.scene.is_none() => Environment::Constant(DEFAULT_SKY),
+        (None, None) => Environment::None,
+    };
+
+    Ok(Plan {
+        resolution,
+        foveation_template,
+        radii_px,
+        per_frame_outputs: args.gaze_trace.is_some(),
+        gazes,
+        output: args.output.clone(),
+        output_format,
+        fill_mode: match args.fill {
+            Fill::Bilinear => FILL_BILINEAR,
+            Fill::Replicate => FILL_REPLICATE,
+        },
+        environment,
+    })
+}
+
+/// `out.png` → `out_00012.png` for frame 12 of a gaze trace.
+fn frame_path(path: &Path, frame: u32) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!("{stem}_{frame:05}.{ext}"))
+}
+
+/// Runs `fovea render`.
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let wall = Instant::now();
+    let plan = plan(args)?;
+    let backend_name =
+        match args.backend {
+            Backend::Vulkan => return Err(FoveaError::Backend(
+                "the Vulkan backend is not available in this build of fovea yet; use --backend cpu"
+                    .into(),
+            )),
+            Backend::Auto => {
+                if args.verbose {
+                    eprintln!(
+                        "note: --backend auto uses the CPU (this build has no Vulkan backend yet)"
+                    );
+                }
+                "cpu"
+            }
+            Backend::Cpu => "cpu",
+        };
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = args.threads {
+        if n == 0 || n > 1024 {
+            return Err(FoveaError::option("--threads", "must be 1 to 1024"));
+        }
+        pool = pool.num_threads(n);
+    }
+    let pool = pool
+        .build()
+        .map_err(|e| FoveaError::Backend(format!("cannot start worker threads: {e}")))?;
+
+    let eye = args
+        .eye
+        .as_deref()
+        .map(|t| parse::floats::<3>("--eye", t, ','))
+        .transpose()?;
+    let target = args
+        .target
+        .as_deref()
+        .map(|t| parse::floats::<3>("--target", t, ','))
+        .transpose()?;
+    let up = parse::floats::<3>("--up", &args.up, ',')?;
+
+    let scene = prepare_scene(
+        args.scene.as_deref(),
+        args.mtl.as_deref(),
+        &plan.environment,
+    )?;
+    if args.verbose {
+        for w in &scene.warnings {
+            eprintln!("warning: {w}");
+        }
+        let s = &scene.packed.stats;
+        eprintln!(
+            "scene: {} triangles, {} materials, {} textures, {} lights ({} emissive triangles); BVH {} nodes, depth {}; {:.1} MiB packed",
+            s.triangle_count,
+            scene.packed.materials.len(),
+            s.texture_count,
+            s.light_count,
+            s.emissive_triangle_count,
+            s.bvh.node_count,
+            s.bvh.max_depth,
+            s.memory_bytes as f64 / (1024.0 * 1024.0)
+        );
+    } else if !scene.warnings.is_empty() && !args.quiet {
+        eprintln!(
+            "{} warning(s) while loading the scene (--verbose lists them)",
+            scene.warnings.len()
+        );
+    }
+    if scene.packed.lights.is_empty() {
+        eprintln!(
+            "warning: the scene has no light and no sky: the image will be black (add --sky R,G,B)"
+        );
+    }
+
+    let [w, h] = plan.resolution;
+    let camera = choose_camera(&scene, eye, target, up, args.fov, w as f32 / h as f32)?;
+    let view = scene.packed.view();
+    let integrator = IntegratorSettings {
+        max_bounces: args.depth,
+        russian_roulette_start: args.russian_roulette,
+        ..Default::default()
+    };
+
+    let mut frames = Vec::new();
+    for g in &plan.gazes {
+        let mut foveation = plan.foveation_template;
+        if !args.uniform {
+            foveation.gaze = g.gaze;
+        }
+        let frame = FrameParams {
+            camera,
+            foveation,
+            integrator,
+            width: w,
+            height: h,
+            frame_index: g.frame,
+            seed: args.seed,
+        };
+        let total: u64 = count_samples(w, h, &foveation).iter().sum();
+        let bar = if args.quiet || total < 2_000_000 {
+            ProgressBar::hidden()
+        } else {
+            let bar = ProgressBar::new(total);
+            bar.set_style(
+                ProgressStyle::with_template(
+                    "{spinner} [{elapsed_precise}] {bar:40} {percent}% samples ({eta} left)",
+                )
+                .expect("static progress template is valid"),
+            );
+            bar
+        };
+        let (image, stats) = pool
+            .install(|| fovea_cpu::render_frame(&view, &frame, plan.fill_mode, &|n| bar.inc(n)));
+        bar.finish_and_clear();
+
+        let output = if plan.per_frame_outputs {
+            frame_path(&plan.output, g.frame)
+        } else {
+            plan.output.clone()
+        };
+        write_image(&output, plan.output_format, &image, args.exposure)?;
+        if let Some(p) = &args.regions_overlay {
+            let p = if plan.per_frame_outputs {
+                frame_path(p, g.frame)
+            } else {
+                p.clone()
+            };
+            write_png(
+                &p,
+                w,
+                h,
+                &regions_overlay(&image, args.exposure, &foveation),
+            )?;
+        }
+        frames.push(FrameStats {
+            frame: g.frame,
+            gaze: foveation.gaze,
+            output,
+            render: stats,
+        });
+    }
+
+    let wall_ms = wall.elapsed().as_secs_f64() * 1e3;
+    let report = crate::stats::build_report(
+        backend_name,
+        &cpu_device_name(pool.current_num_threads()),
+        &plan.foveation_template,
+        args.uniform,
+        plan.radii_px,
+        plan.resolution,
+        &scene,
+        &frames,
+        wall_ms,
+    );
+    if let Some(p) = &args.stats {
+        crate::stats::write_json(p, &report)?;
+    }
+    if !args.quiet {
+        let last = frames.last().expect("at least one frame");
+        let render_ms: f64 =
+            frames.iter().map(|f| f.render.render_ms).sum::<f64>() / frames.len() as f64;
+        let samples: u64 = last.render.primary_samples;
+        println!(
+            "fovea: {} {}x{} {} on {} in {:.0} ms ({:.2} M samples, {:.2} M paths/s) -> {}",
+            if args.uniform { "uniform" } else { "foveated" },
+            w,
+            h,
+            if frames.len() > 1 {
+                format!("{} frames", frames.len())
+            } else {
+                "1 frame".into()
+            },
+            backend_name,
+            render_ms,
+            samples as f64 / 1e6,
+            samples as f64 / render_ms / 1e3,
+            last.output.display()
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_paths_number_the_frames() {
+        assert_eq!(
+            frame_path(Path::new("out/a.png"), 12),
+            PathBuf::from("out/a_00012.png")
+        );
+    }
+}

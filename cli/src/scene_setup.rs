@@ -1,0 +1,154 @@
+//! Finding, loading and packing the scene, and choosing its camera and sky.
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use fovea_core::camera::Camera;
+use fovea_scene::bvh::BvhBuildOptions;
+use fovea_scene::environment::Environment;
+use fovea_scene::mesh::{LoadOptions, LoadedScene};
+use fovea_scene::pack::{pack_scene, PackedScene};
+use glam::Vec3;
+
+use crate::error::{FoveaError, Result};
+
+/// The bundled default scene: the paper's Lost Empire (CC BY 3.0, see assets/lost_empire/SOURCE.md).
+pub fn default_scene_path() -> PathBuf {
+    if let Some(dir) = std::env::var_os("FOVEA_ASSETS") {
+        return PathBuf::from(dir).join("lost_empire/lost_empire.obj");
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/lost_empire/lost_empire.obj")
+}
+
+/// The view of the bundled Lost Empire: over the lava lake towards the temple.
+pub const LOST_EMPIRE_EYE: [f32; 3] = [-10.0, 25.0, 42.0];
+pub const LOST_EMPIRE_TARGET: [f32; 3] = [8.0, 10.0, -12.0];
+pub const LOST_EMPIRE_FOV_DEG: f32 = 60.0;
+/// The sky that lights the bundled scene (the paper's code used a constant probe).
+pub const DEFAULT_SKY: [f32; 3] = [1.0, 1.0, 1.0];
+
+/// A loaded and packed scene with its timings.
+pub struct PreparedScene {
+    pub packed: PackedScene,
+    pub camera_desc: Option<fovea_scene::mesh::CameraDesc>,
+    pub warnings: Vec<String>,
+    pub load_ms: f64,
+    pub bvh_ms: f64,
+    pub pack_ms: f64,
+    pub triangle_count: usize,
+    pub is_default: bool,
+}
+
+/// Loads `path` (or the default scene), adds `environment` and packs it.
+pub fn prepare_scene(
+    path: Option<&Path>,
+    mtl_override: Option<&Path>,
+    environment: &Environment,
+) -> Result<PreparedScene> {
+    let is_default = path.is_none();
+    let path = path
+        .map(Path::to_path_buf)
+        .unwrap_or_else(default_scene_path);
+    let options = LoadOptions {
+        mtl_override: mtl_override.map(Path::to_path_buf),
+        ..Default::default()
+    };
+    let start = Instant::now();
+    let loaded: LoadedScene = fovea_scene::mesh::load_scene(&path, &options)?;
+    let load_ms = start.elapsed().as_secs_f64() * 1e3;
+    let camera_desc = loaded.camera.clone();
+    let warnings = loaded.warnings.clone();
+    let triangle_count = loaded.triangles.len();
+    let packed = pack_scene(loaded, environment, &BvhBuildOptions::default());
+    Ok(PreparedScene {
+        bvh_ms: packed.stats.bvh.build_ms,
+        pack_ms: packed.stats.pack_ms,
+        packed,
+        camera_desc,
+        warnings,
+        load_ms,
+        triangle_count,
+        is_default,
+    })
+}
+
+/// The camera: explicit `--eye/--target` first, then the scene's own camera, then the bundled view of
+/// the default scene, then a view that frames the scene's bounds.
+pub fn choose_camera(
+    scene: &PreparedScene,
+    eye: Option<[f32; 3]>,
+    target: Option<[f32; 3]>,
+    up: [f32; 3],
+    fov_deg: Option<f32>,
+    aspect: f32,
+) -> Result<Camera> {
+    let up = Vec3::from(up);
+    if up.length_squared() == 0.0 {
+        return Err(FoveaError::option("--up", "the up vector must not be zero"));
+    }
+    let fov = |default_deg: f32| fov_deg.unwrap_or(default_deg).to_radians();
+    if let Some(f) = fov_deg {
+        if !(f > 0.0 && f < 180.0) {
+            return Err(FoveaError::option(
+                "--fov",
+                format!("{f} is not in (0, 180) degrees"),
+            ));
+        }
+    }
+    match (eye, target) {
+        (Some(e), Some(t)) => {
+            if e == t {
+                return Err(FoveaError::option(
+                    "--eye/--target",
+                    "eye and target are the same point",
+                ));
+            }
+            return Ok(Camera::look_at(
+                Vec3::from(e),
+                Vec3::from(t),
+                up,
+                fov(45.0),
+                aspect,
+            ));
+        }
+        (Some(_), None) | (None, Some(_)) => {
+            return Err(FoveaError::option(
+                "--eye/--target",
+                "give both --eye and --target",
+            ));
+        }
+        (None, None) => {}
+    }
+    if let Some(c) = &scene.camera_desc {
+        let yfov = fov_deg.map(f32::to_radians).unwrap_or(c.yfov_radians);
+        return Ok(Camera::from_forward(
+            Vec3::from(c.position),
+            Vec3::from(c.forward),
+            Vec3::from(c.up),
+            yfov,
+            aspect,
+        ));
+    }
+    if scene.is_default {
+        return Ok(Camera::look_at(
+            Vec3::from(LOST_EMPIRE_EYE),
+            Vec3::from(LOST_EMPIRE_TARGET),
+            up,
+            fov(LOST_EMPIRE_FOV_DEG),
+            aspect,
+        ));
+    }
+    // Frame the bounding sphere from the +z side, slightly above.
+    let (lo, hi) = (scene.packed.bounds_min, scene.packed.bounds_max);
+    let centre = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-3);
+    let fov_rad = fov(45.0);
+    let distance = radius / (0.5 * fov_rad).tan().max(1e-3) * 1.05;
+    let dir = Vec3::new(0.0, 0.15, 1.0).normalize();
+    Ok(Camera::look_at(
+        centre + dir * distance,
+        centre,
+        up,
+        fov_rad,
+        aspect,
+    ))
+}

@@ -1,0 +1,102 @@
+//! `--stats`: the JSON record of a run.
+use std::path::{Path, PathBuf};
+
+use fovea_core::foveation::regions::FoveationParams;
+use fovea_cpu::RenderStats;
+use serde_json::{json, Value};
+
+use crate::error::Result;
+use crate::output::write_atomically;
+use crate::scene_setup::PreparedScene;
+
+/// One rendered frame.
+pub struct FrameStats {
+    pub frame: u32,
+    pub gaze: [f32; 2],
+    pub output: PathBuf,
+    pub render: RenderStats,
+}
+
+/// "AMD EPYC ... (2 threads)" from /proc/cpuinfo where available.
+pub fn cpu_device_name(threads: usize) -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    format!("{model} ({threads} threads)")
+}
+
+/// The stats document (one frame: top-level fields; a gaze trace adds `frames`).
+#[allow(clippy::too_many_arguments)]
+pub fn build_report(
+    backend: &str,
+    device: &str,
+    foveation: &FoveationParams,
+    uniform: bool,
+    radii_px: [f32; 2],
+    resolution: [u32; 2],
+    scene: &PreparedScene,
+    frames: &[FrameStats],
+    wall_ms: f64,
+) -> Value {
+    let first = &frames[0];
+    let render_ms = first.render.render_ms;
+    let frame_list: Vec<Value> = frames
+        .iter()
+        .map(|f| {
+            json!({
+                "frame": f.frame,
+                "gaze": f.gaze,
+                "output": f.output,
+                "render_ms": f.render.render_ms,
+                "primary_samples": f.render.primary_samples,
+                "samples_per_region": region_object(f.render.samples_per_region),
+            })
+        })
+        .collect();
+    let uniform_samples = resolution[0] as u64 * resolution[1] as u64 * foveation.spp[0] as u64;
+    json!({
+        "backend": backend,
+        "device": device,
+        "mode": if uniform { "uniform" } else { "foveated" },
+        "resolution": resolution,
+        "gaze": first.gaze,
+        "radii_px": if uniform { json!(null) } else { json!(radii_px) },
+        "spp": &foveation.spp[..3],
+        "blocks": &foveation.block_size[..3],
+        "primary_samples": first.render.primary_samples,
+        "samples_per_region": region_object(first.render.samples_per_region),
+        "blocks_per_region": region_object(first.render.blocks_per_region),
+        "ideal_speedup": uniform_samples as f64 / first.render.primary_samples.max(1) as f64,
+        "triangles": scene.triangle_count,
+        "lights": scene.packed.lights.len(),
+        "load_ms": scene.load_ms,
+        "bvh_ms": scene.bvh_ms,
+        "pack_ms": scene.pack_ms,
+        "bvh_nodes": scene.packed.stats.bvh.node_count,
+        "bvh_max_depth": scene.packed.stats.bvh.max_depth,
+        "scene_bytes": scene.packed.stats.memory_bytes,
+        "render_ms": render_ms,
+        "wall_ms": wall_ms,
+        "paths_per_second": first.render.primary_samples as f64 / (render_ms / 1e3).max(1e-9),
+        "frames": frame_list,
+        "warnings": scene.warnings,
+    })
+}
+
+fn region_object(v: [u64; 3]) -> Value {
+    json!({ "fovea": v[0], "intermediate": v[1], "periphery": v[2] })
+}
+
+/// Writes the report (atomically).
+pub fn write_json(path: &Path, report: &Value) -> Result<()> {
+    let text = serde_json::to_string_pretty(report).expect("JSON values always serialise");
+    write_atomically(path, |tmp| {
+        std::fs::write(tmp, text.as_bytes()).map_err(|e| e.to_string())
+    })
+}

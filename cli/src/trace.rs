@@ -1,0 +1,96 @@
+//! Gaze traces: CSV files with one `frame,x,y` line per frame (a header line and `#` comments are
+//! allowed).
+use std::path::Path;
+
+use crate::error::{FoveaError, Result};
+
+/// One line of a gaze trace.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GazeSample {
+    pub frame: u32,
+    pub gaze: [f32; 2],
+}
+
+/// The most frames a trace may hold.
+pub const MAX_TRACE_FRAMES: usize = 1_000_000;
+
+/// Parses a gaze trace; errors name the file and the line.
+pub fn parse_gaze_trace(path: &Path, text: &str) -> Result<Vec<GazeSample>> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line_no = i + 1;
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if out.is_empty() && fields.first().is_some_and(|f| f.parse::<f64>().is_err()) && i == 0 {
+            continue; // a header such as "frame,x,y"
+        }
+        let bad = |what: String| {
+            FoveaError::file(path, format!("line {line_no}: {what} (expected frame,x,y)"))
+        };
+        if fields.len() != 3 {
+            return Err(bad(format!("{} fields in '{line}'", fields.len())));
+        }
+        let frame: u32 = fields[0]
+            .parse()
+            .map_err(|_| bad(format!("'{}' is not a frame number", fields[0])))?;
+        let x: f32 = fields[1]
+            .parse()
+            .map_err(|_| bad(format!("'{}' is not a number", fields[1])))?;
+        let y: f32 = fields[2]
+            .parse()
+            .map_err(|_| bad(format!("'{}' is not a number", fields[2])))?;
+        if !x.is_finite() || !y.is_finite() {
+            return Err(bad(format!("non-finite gaze '{line}'")));
+        }
+        out.push(GazeSample {
+            frame,
+            gaze: [x, y],
+        });
+        if out.len() > MAX_TRACE_FRAMES {
+            return Err(FoveaError::file(
+                path,
+                format!("more than {MAX_TRACE_FRAMES} frames"),
+            ));
+        }
+    }
+    if out.is_empty() {
+        return Err(FoveaError::file(path, "the gaze trace has no frame lines"));
+    }
+    Ok(out)
+}
+
+/// Reads and parses a gaze-trace file.
+pub fn read_gaze_trace(path: &Path) -> Result<Vec<GazeSample>> {
+    let text = std::fs::read_to_string(path).map_err(|e| FoveaError::file(path, e))?;
+    parse_gaze_trace(path, &text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_lines_and_names_bad_ones() {
+        let p = Path::new("t.csv");
+        let ok = parse_gaze_trace(p, "frame,x,y\n0, 10, 20\n# c\n1,11.5,-3\n").unwrap();
+        assert_eq!(ok.len(), 2);
+        assert_eq!(
+            ok[1],
+            GazeSample {
+                frame: 1,
+                gaze: [11.5, -3.0]
+            }
+        );
+        let err = parse_gaze_trace(p, "0,1,2\n1,abc,2\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("line 2") && err.contains("abc"), "{err}");
+        let err = parse_gaze_trace(p, "0,1\n").unwrap_err().to_string();
+        assert!(err.contains("line 1"), "{err}");
+        assert!(parse_gaze_trace(p, "").is_err());
+        assert!(parse_gaze_trace(p, "0,nan,1").is_err());
+    }
+}

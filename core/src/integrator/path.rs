@@ -1,0 +1,212 @@
+//! The per-sample path integrator (Kajiya 1986) with next-event estimation and BSDF sampling combined by
+//! multiple importance sampling (Veach 1997, power heuristic).
+//!
+//! **What counts as a bounce.** A bounce is one scattering event at a surface. With `max_bounces = N`
+//! a path has at most `N + 1` segments after the camera: camera → x₁ → … → x_{N+1}, where x_{N+1} only
+//! contributes its emission (found by the BSDF-sampled ray from x_N, or by the light sample taken at x_N).
+//! `max_bounces = 0` shows only emitters seen directly; the paper's "depth 3" is `max_bounces = 3`, the
+//! same as Mitsuba's `max_depth = 4`. With Russian roulette off (the default) depth is exact.
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use crate::bvh::traverse::{any_hit, closest_hit};
+use crate::geometry::offset::offset_ray_origin;
+use crate::geometry::Ray;
+use crate::lights::{
+    environment, power_heuristic, sample_light, triangle::emitted_radiance,
+    triangle::solid_angle_pdf, INFINITE_DISTANCE,
+};
+use crate::material::surface_point;
+use crate::math::color::is_finite3;
+use crate::rng::SampleRng;
+use crate::scene::{SceneView, INVALID_INDEX};
+
+/// [`IntegratorSettings::strategy`]: next-event estimation and BSDF sampling combined by MIS.
+pub const STRATEGY_MIS: u32 = 0;
+/// [`IntegratorSettings::strategy`]: next-event estimation alone (emitters hit by BSDF rays after the
+/// first segment are ignored).
+pub const STRATEGY_LIGHT_ONLY: u32 = 1;
+/// [`IntegratorSettings::strategy`]: BSDF sampling alone (no shadow rays; delta lights are never found).
+pub const STRATEGY_BSDF_ONLY: u32 = 2;
+
+/// Integrator settings (16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct IntegratorSettings {
+    /// Maximum number of bounces (see the module documentation); the paper uses 3.
+    pub max_bounces: u32,
+    /// Russian roulette starts at this bounce; 0 turns it off (the default).
+    pub russian_roulette_start: u32,
+    /// `STRATEGY_*`.
+    pub strategy: u32,
+    pub _pad: u32,
+}
+
+impl Default for IntegratorSettings {
+    fn default() -> Self {
+        Self {
+            max_bounces: 3,
+            russian_roulette_start: 0,
+            strategy: STRATEGY_MIS,
+            _pad: 0,
+        }
+    }
+}
+
+/// Largest radiance a single sample may return, a guard against overflow (not a clamp of fireflies:
+/// real estimates stay far below it).
+const RADIANCE_LIMIT: f32 = 1.0e30;
+
+/// Traces one camera path and returns its radiance estimate.
+#[must_use]
+pub fn trace_path(
+    scene: &SceneView,
+    camera_ray: Ray,
+    rng: &mut SampleRng,
+    settings: &IntegratorSettings,
+) -> Vec3 {
+    let mis = settings.strategy == STRATEGY_MIS;
+    let use_nee = settings.strategy != STRATEGY_BSDF_ONLY;
+    let use_bsdf_hits = settings.strategy != STRATEGY_LIGHT_ONLY;
+
+    let mut radiance = Vec3::ZERO;
+    let mut throughput = Vec3::ONE;
+    let mut ray = camera_ray;
+    // Solid-angle pdf of the BSDF sample that produced `ray` (unused for the camera ray).
+    let mut bsdf_pdf = 0.0f32;
+    let mut bounce = 0u32;
+    loop {
+        let hit = closest_hit(scene, &ray, INFINITE_DISTANCE);
+        if !hit.is_hit() {
+            let le = environment::radiance(scene, ray.direction);
+            if bounce == 0 {
+                radiance += throughput * le;
+            } else if use_bsdf_hits && le != Vec3::ZERO {
+                let mut weight = 1.0;
+                if mis && scene.globals.environment_light != INVALID_INDEX {
+                    let light_pdf = scene.lights[scene.globals.environment_light as usize].pmf
+                        * environment::pdf(scene, ray.direction);
+                    weight = power_heuristic(bsdf_pdf, light_pdf);
+                }
+                radiance += throughput * le * weight;
+            }
+            break;
+        }
+
+        let surface = surface_point(scene, &hit);
+        let wo_world = -ray.direction;
+
+        // Emission found by this ray.
+        let le = emitted_radiance(
+            scene,
+            hit.triangle,
+            hit.b1,
+            hit.b2,
+            wo_world,
+            surface.geometric_normal,
+        );
+        if le != Vec3::ZERO {
+            if bounce == 0 {
+                radiance += throughput * le;
+            } else if use_bsdf_hits {
+                let mut weight = 1.0;
+                if mis && !scene.triangle_light.is_empty() {
+                    let light = scene.triangle_light[hit.triangle as usize];
+                    if light != INVALID_INDEX {
+                        let light_pdf = scene.lights[light as usize].pmf
+                            * solid_angle_pdf(scene, hit.triangle, ray.origin, surface.position);
+                        weight = power_heuristic(bsdf_pdf, light_pdf);
+                    }
+                }
+                radiance += throughput * le * weight;
+            }
+        }
+
+        if bounce >= settings.max_bounces {
+            break;
+        }
+
+        // Two-sided shading: put both normals on the side the path arrives from.
+        let mut frame = surface.frame;
+        let mut ng = surface.geometric_normal;
+        if ng.dot(wo_world) < 0.0 {
+            ng = -ng;
+            frame.x = -frame.x;
+            frame.z = -frame.z;
+        }
+        let wo = frame.to_local(wo_world);
+        if !(wo.z > 0.0) {
+            // The shading normal faces away from the viewer although the geometric one does not.
+            break;
+        }
+        let bsdf = surface.params;
+        let origin = offset_ray_origin(surface.position, ng);
+
+        // Next-event estimation.
+        if use_nee {
+            let u_select = rng.next_1d();
+            let u_light = rng.next_2d();
+            let ls = sample_light(scene, surface.position, u_select, u_light);
+            if ls.pdf > 0.0 && ls.direction.dot(ng) > 0.0 {
+                let wi = frame.to_local(ls.direction);
+                let (f, pdf_b) = bsdf.eval_and_pdf(wo, wi);
+                if wi.z > 0.0 && f != Vec3::ZERO {
+                    let shadow = if ls.is_infinite {
+                        Ray::new(origin, ls.direction)
+                    } else {
+                        Ray::new(origin, ls.target - origin)
+                    };
+                    let t_max = if ls.is_infinite {
+                        INFINITE_DISTANCE
+                    } else {
+                        1.0
+                    };
+                    if !any_hit(scene, &shadow, t_max) {
+                        let weight = if ls.is_delta || !mis {
+                            1.0
+                        } else {
+                            power_heuristic(ls.pdf, pdf_b)
+                        };
+                        radiance += throughput * f * ls.radiance * (wi.z * weight / ls.pdf);
+                    }
+                }
+            }
+        } else {
+            // Keep the random-number layout identical across strategies.
+            let _ = rng.next_u32x4();
+            let _ = rng.next_u32x4();
+        }
+
+        // BSDF sampling for the next segment.
+        let s = bsdf.sample(wo, rng.next_3d());
+        if !(s.pdf > 0.0) {
+            break;
+        }
+        let wi_world = frame.to_world(s.wi);
+        if wi_world.dot(ng) <= 0.0 {
+            // Below the geometric surface although above the shading one: the sample would leak.
+            break;
+        }
+        throughput *= s.f * (s.wi.z / s.pdf);
+        if !is_finite3(throughput) || throughput == Vec3::ZERO {
+            break;
+        }
+        bsdf_pdf = s.pdf;
+
+        if settings.russian_roulette_start > 0 && bounce + 1 >= settings.russian_roulette_start {
+            let survive = throughput.max_element().min(0.95);
+            if rng.next_1d() >= survive {
+                break;
+            }
+            throughput /= survive;
+        }
+
+        ray = Ray::new(origin, wi_world);
+        bounce += 1;
+    }
+    if is_finite3(radiance) {
+        radiance.min(Vec3::splat(RADIANCE_LIMIT))
+    } else {
+        Vec3::ZERO
+    }
+}

@@ -1,0 +1,132 @@
+//! Rendering one foveated frame on the CPU.
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use fovea_core::foveation::blocks::{owning_block, samples_in_block};
+use fovea_core::foveation::fill::{cell_buffer_len, cell_mean_at, fill_pixel};
+use fovea_core::foveation::regions::REGION_COUNT;
+use fovea_core::integrator::{render_block_sample, FrameParams};
+use fovea_core::scene::SceneView;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// A rendered frame in linear HDR (`[r, g, b, 1]` per pixel, row-major, top row first).
+#[derive(Clone, Debug)]
+pub struct FrameImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 4]>,
+}
+
+/// What rendering a frame cost.
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    /// Time for the three passes (samples, cell means, fill).
+    pub render_ms: f64,
+    /// Camera samples traced, in total and per region.
+    pub primary_samples: u64,
+    pub samples_per_region: [u64; 3],
+    /// Blocks rendered per region.
+    pub blocks_per_region: [u64; 3],
+}
+
+/// Renders one frame of `scene`. `fill_mode` is `FILL_BILINEAR` or `FILL_REPLICATE`. `progress` is called
+/// from worker threads with the number of camera samples just finished.
+pub fn render_frame(
+    scene: &SceneView,
+    frame: &FrameParams,
+    fill_mode: u32,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (FrameImage, RenderStats) {
+    let start = Instant::now();
+    let (width, height) = (frame.width, frame.height);
+    let foveation = &frame.foveation;
+    let band = foveation.block_size[2].max(1);
+    let mut replicated = vec![[0.0f32; 4]; width as usize * height as usize];
+    let counters: [AtomicU64; 6] = Default::default();
+
+    // Pass 1: samples, band by band.
+    replicated
+        .par_chunks_mut(width as usize * band as usize)
+        .enumerate()
+        .for_each(|(band_index, rows)| {
+            let y0 = band_index as u32 * band;
+            let rows_in_band = (rows.len() / width as usize) as u32;
+            let mut local = [0u64; 6];
+            for dy in 0..rows_in_band {
+                let y = y0 + dy;
+                for x in 0..width {
+                    let block = owning_block(x, y, foveation);
+                    if block.origin != [x, y] {
+                        continue;
+                    }
+                    let spp = samples_in_block(&block, foveation);
+                    let mut sum = Vec3::ZERO;
+                    for s in 0..spp {
+                        sum += render_block_sample(scene, frame, &block, s);
+                    }
+                    let mean = sum / spp.max(1) as f32;
+                    let value = [mean.x, mean.y, mean.z, 1.0];
+                    let x_end = (block.origin[0] + block.size).min(width);
+                    let y_end = (block.origin[1] + block.size).min(height);
+                    for by in block.origin[1]..y_end {
+                        let row = ((by - y0) * width) as usize;
+                        for bx in block.origin[0]..x_end {
+                            rows[row + bx as usize] = value;
+                        }
+                    }
+                    let region = block.region.min(REGION_COUNT - 1) as usize;
+                    local[region] += spp as u64;
+                    local[3 + region] += 1;
+                    progress(spp as u64);
+                }
+            }
+            for (c, v) in counters.iter().zip(local) {
+                c.fetch_add(v, Ordering::Relaxed);
+            }
+        });
+
+    // Pass 2: the cell-mean grids of every block size above 1, in one buffer.
+    let cell_count = cell_buffer_len(width, height, foveation);
+    let cell_means: Vec<[f32; 4]> = (0..cell_count)
+        .into_par_iter()
+        .map(|i| cell_mean_at(&replicated, width, height, foveation, i).to_array())
+        .collect();
+
+    // Pass 3: fill.
+    let mut pixels = vec![[0.0f32; 4]; replicated.len()];
+    pixels
+        .par_chunks_mut(width as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, out) in row.iter_mut().enumerate() {
+                let v = fill_pixel(
+                    &replicated,
+                    &cell_means,
+                    width,
+                    height,
+                    foveation,
+                    x as u32,
+                    y as u32,
+                    fill_mode,
+                );
+                *out = [v.x, v.y, v.z, 1.0];
+            }
+        });
+
+    let loaded: Vec<u64> = counters.iter().map(|c| c.load(Ordering::Relaxed)).collect();
+    let stats = RenderStats {
+        render_ms: start.elapsed().as_secs_f64() * 1e3,
+        primary_samples: loaded[0] + loaded[1] + loaded[2],
+        samples_per_region: [loaded[0], loaded[1], loaded[2]],
+        blocks_per_region: [loaded[3], loaded[4], loaded[5]],
+    };
+    (
+        FrameImage {
+            width,
+            height,
+            pixels,
+        },
+        stats,
+    )
+}
