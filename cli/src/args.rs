@@ -14,7 +14,7 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Render a scene (the bundled Lost Empire when no SCENE is given).
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// List the devices fovea can render on.
     Devices,
 }

@@ -49,7 +49,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
             format!("each block edge must be 1 to 64, got {}", args.blocks),
         ));
     }
-    if blocks[1] % blocks[0] != 0 || blocks[2] % blocks[1] != 0 {
+    if !blocks[1].is_multiple_of(blocks[0]) || !blocks[2].is_multiple_of(blocks[1]) {
         return Err(FoveaError::option(
             "--blocks",
             format!(

@@ -19,9 +19,9 @@ pub fn default_scene_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/lost_empire/lost_empire.obj")
 }
 
-/// The view of the bundled Lost Empire: over the lava lake towards the temple.
-pub const LOST_EMPIRE_EYE: [f32; 3] = [-10.0, 25.0, 42.0];
-pub const LOST_EMPIRE_TARGET: [f32; 3] = [8.0, 10.0, -12.0];
+/// The view of the bundled Lost Empire: down the hillside towards the waterfall.
+pub const LOST_EMPIRE_EYE: [f32; 3] = [-20.0, 30.0, 60.0];
+pub const LOST_EMPIRE_TARGET: [f32; 3] = [5.0, 15.0, 20.0];
 pub const LOST_EMPIRE_FOV_DEG: f32 = 60.0;
 /// The sky that lights the bundled scene (the paper's code used a constant probe).
 pub const DEFAULT_SKY: [f32; 3] = [1.0, 1.0, 1.0];
@@ -55,7 +55,7 @@ pub fn prepare_scene(
     let start = Instant::now();
     let loaded: LoadedScene = fovea_scene::mesh::load_scene(&path, &options)?;
     let load_ms = start.elapsed().as_secs_f64() * 1e3;
-    let camera_desc = loaded.camera.clone();
+    let camera_desc = loaded.camera;
     let warnings = loaded.warnings.clone();
     let triangle_count = loaded.triangles.len();
     let packed = pack_scene(loaded, environment, &BvhBuildOptions::default());

@@ -15,6 +15,9 @@
 #![no_std]
 #![deny(unsafe_code)]
 #![allow(clippy::too_many_arguments)]
+// `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it is also true for NaN, so it guards
+// inputs against NaN as well as against zero and negative values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod bsdf;
 pub mod bvh;

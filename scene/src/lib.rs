@@ -4,6 +4,9 @@
 //! [`obj_loader`]) into a [`mesh::LoadedScene`], decode textures ([`texture`]), build the BVH ([`bvh`]) and
 //! pack everything into the flat arrays of `fovea_core::scene::layout` ([`pack`]) that the CPU host reads
 //! directly and the Vulkan host uploads unchanged.
+// `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it is also true for NaN, so it guards
+// inputs against NaN as well as against zero and negative values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 pub mod bvh;
 pub mod environment;
 pub mod error;
