@@ -10,7 +10,7 @@
 //! builder are themselves a few ulps larger than their triangles. Zero direction components are handled
 //! without infinities or NaNs: their inverse is clamped to `±f32::MAX`, so `(bound - origin) * inv` is a
 //! huge (or infinite) finite-signed number, and never `0 * ∞`.
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
@@ -72,19 +72,42 @@ fn safe_inverse(d: f32) -> f32 {
     }
 }
 
+#[inline]
+fn max3(a: f32, b: f32, c: f32, d: f32) -> f32 {
+    let ab = if a > b { a } else { b };
+    let cd = if c > d { c } else { d };
+    if ab > cd {
+        ab
+    } else {
+        cd
+    }
+}
+
+#[inline]
+fn min3(a: f32, b: f32, c: f32, d: f32) -> f32 {
+    let ab = if a < b { a } else { b };
+    let cd = if c < d { c } else { d };
+    if ab < cd {
+        ab
+    } else {
+        cd
+    }
+}
+
 /// The per-ray part of the slab test.
 #[derive(Clone, Copy)]
 struct RayBox {
-    origin: Vec3,
-    inv_dir: Vec3,
+    // `Vec3A` is SIMD on the CPU and a plain vector in SPIR-V.
+    origin: Vec3A,
+    inv_dir: Vec3A,
 }
 
 impl RayBox {
     #[inline]
     fn new(ray: &Ray) -> Self {
         Self {
-            origin: ray.origin,
-            inv_dir: Vec3::new(
+            origin: Vec3A::from(ray.origin),
+            inv_dir: Vec3A::new(
                 safe_inverse(ray.direction.x),
                 safe_inverse(ray.direction.y),
                 safe_inverse(ray.direction.z),
@@ -96,10 +119,14 @@ impl RayBox {
     /// if it misses the box in that interval.
     #[inline]
     fn entry(&self, node: &BvhNode, t_max: f32) -> f32 {
-        let t0 = (Vec3::from(node.bounds_min) - self.origin) * self.inv_dir;
-        let t1 = (Vec3::from(node.bounds_max) - self.origin) * self.inv_dir;
-        let near = t0.min(t1).max_element().max(0.0) * ROUND_DOWN;
-        let far = t0.max(t1).min_element().min(t_max) * ROUND_UP;
+        let t0 = (Vec3A::from(node.bounds_min) - self.origin) * self.inv_dir;
+        let t1 = (Vec3A::from(node.bounds_max) - self.origin) * self.inv_dir;
+        // No NaN can arise (finite bounds, inverse clamped to ±f32::MAX), so the plain comparisons
+        // below need none of `f32::min`'s NaN handling.
+        let lo = Vec3A::select(t0.cmplt(t1), t0, t1);
+        let hi = Vec3A::select(t0.cmplt(t1), t1, t0);
+        let near = max3(lo.x, lo.y, lo.z, 0.0) * ROUND_DOWN;
+        let far = min3(hi.x, hi.y, hi.z, t_max) * ROUND_UP;
         if near <= far {
             near
         } else {
@@ -393,3 +420,4 @@ mod tests {
         }
     }
 }
+
