@@ -10,7 +10,7 @@
 //! builder are themselves a few ulps larger than their triangles. Zero direction components are handled
 //! without infinities or NaNs: their inverse is clamped to `±f32::MAX`, so `(bound - origin) * inv` is a
 //! huge (or infinite) finite-signed number, and never `0 * ∞`.
-use glam::{Vec3, Vec3A};
+use glam::Vec3A;
 
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
@@ -238,6 +238,7 @@ pub fn any_hit(scene: &SceneView, ray: &Ray, t_max: f32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
     use crate::math::pack_vec3;
     use crate::scene::{Material, SceneGlobals, TriangleInfo, TrianglePositions};
 
