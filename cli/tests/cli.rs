@@ -1,0 +1,222 @@
+//! The `fovea` binary end to end: a small render with every output, and bad input that must fail with a
+//! clear message, a non-zero exit code and no output file.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn fovea() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_fovea"))
+}
+
+fn cornell() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/cornell_box/CornellBox-Original.obj")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("fovea-cli-test-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const CAMERA: [&str; 6] = ["--eye", "0,1,3.9", "--target", "0,1,0", "--fov", "38"];
+
+#[test]
+fn renders_with_stats_overlay_and_exr() {
+    let dir = temp_dir("render");
+    let png = dir.join("c.png");
+    let exr = dir.join("c.exr");
+    let stats = dir.join("c.json");
+    let overlay = dir.join("regions.png");
+    let out = fovea()
+        .arg("render")
+        .arg(cornell())
+        .args(CAMERA)
+        .args([
+            "--resolution",
+            "64x48",
+            "--spp",
+            "4,2,1",
+            "--radii",
+            "8,16",
+            "-q",
+        ])
+        .arg("-o")
+        .arg(&png)
+        .arg("--stats")
+        .arg(&stats)
+        .arg("--regions-overlay")
+        .arg(&overlay)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(png.is_file() && overlay.is_file());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    for key in [
+        "backend",
+        "device",
+        "resolution",
+        "gaze",
+        "radii_px",
+        "spp",
+        "blocks",
+        "primary_samples",
+        "samples_per_region",
+        "triangles",
+        "load_ms",
+        "bvh_ms",
+        "render_ms",
+        "wall_ms",
+        "paths_per_second",
+    ] {
+        assert!(json.get(key).is_some(), "stats lack {key}: {json}");
+    }
+    assert_eq!(json["backend"], "cpu");
+    assert_eq!(json["triangles"], 36);
+    assert_eq!(json["resolution"], serde_json::json!([64, 48]));
+    let per_region = &json["samples_per_region"];
+    let sum = per_region["fovea"].as_u64().unwrap()
+        + per_region["intermediate"].as_u64().unwrap()
+        + per_region["periphery"].as_u64().unwrap();
+    assert_eq!(json["primary_samples"].as_u64().unwrap(), sum);
+    assert!(per_region["periphery"].as_u64().unwrap() > 0);
+
+    let out = fovea()
+        .arg("render")
+        .arg(cornell())
+        .args(CAMERA)
+        .args([
+            "--resolution",
+            "32x24",
+            "--uniform",
+            "--spp",
+            "2,1,1",
+            "-q",
+            "-o",
+        ])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(std::fs::metadata(&exr).unwrap().len() > 1000);
+    // No temporary files are left behind.
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp-"))
+        .collect();
+    assert!(leftovers.is_empty());
+}
+
+/// Runs `fovea render` with `args`, expects failure mentioning `needle`, and no file at `output`.
+fn expect_failure(args: &[&str], needle: &str, output: &Path) {
+    let out = fovea()
+        .arg("render")
+        .args(args)
+        .arg("-o")
+        .arg(output)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "expected failure for {args:?}");
+    assert!(
+        stderr.contains(needle),
+        "stderr for {args:?} lacks '{needle}': {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(!output.exists(), "no output may be written for {args:?}");
+}
+
+#[test]
+fn bad_input_fails_cleanly() {
+    let dir = temp_dir("bad");
+    let png = dir.join("x.png");
+    let scene = cornell();
+    let scene = scene.to_str().unwrap();
+    expect_failure(&["/nonexistent/scene.obj"], "scene.obj", &png);
+    expect_failure(&[scene, "--resolution", "0x10"], "--resolution", &png);
+    expect_failure(
+        &[scene, "--resolution", "100000x100000"],
+        "out of range",
+        &png,
+    );
+    expect_failure(&[scene, "--spp", "32,16"], "--spp", &png);
+    expect_failure(&[scene, "--blocks", "1,3,4"], "divide", &png);
+    expect_failure(&[scene, "--gaze", "1,nan"], "--gaze", &png);
+    expect_failure(&[scene, "--backend", "vulkan"], "Vulkan", &png);
+    let unknown = dir.join("x.bmp");
+    let out = fovea()
+        .args(["render", scene, "-o"])
+        .arg(&unknown)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown image extension"));
+    let missing_dir = dir.join("no/such/folder/x.png");
+    let out = fovea()
+        .args(["render", scene, "-o"])
+        .arg(&missing_dir)
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("does not exist"));
+    let trace = dir.join("trace.csv");
+    std::fs::write(&trace, "0,1,2\n1,x,2\n").unwrap();
+    let out = fovea()
+        .args(["render", scene, "--gaze-trace"])
+        .arg(&trace)
+        .arg("-o")
+        .arg(&png)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("line 2"),
+        "{stderr}"
+    );
+    let out = fovea()
+        .args(["render", scene, "--no-such-option"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--no-such-option"));
+}
+
+#[test]
+fn gaze_trace_writes_one_numbered_image_per_frame() {
+    let dir = temp_dir("trace");
+    let trace = dir.join("gaze.csv");
+    std::fs::write(&trace, "frame,x,y\n0,10,10\n1,40,30\n").unwrap();
+    let out = fovea()
+        .arg("render")
+        .arg(cornell())
+        .args(CAMERA)
+        .args([
+            "--resolution",
+            "48x32",
+            "--spp",
+            "2,1,1",
+            "--radii",
+            "6,12",
+            "-q",
+            "--gaze-trace",
+        ])
+        .arg(&trace)
+        .arg("-o")
+        .arg(dir.join("f.png"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(dir.join("f_00000.png").is_file() && dir.join("f_00001.png").is_file());
+}
