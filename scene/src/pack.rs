@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use fovea_core::lights::power;
 use fovea_core::scene::{
-    BvhNode, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleInfo,
+    Bvh4Node, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleInfo,
     TrianglePositions, ENVIRONMENT_CONSTANT, ENVIRONMENT_MAP, ENVIRONMENT_NONE, INVALID_INDEX,
     LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
     MATERIAL_DOUBLE_SIDED_EMISSION, TEXTURE_SRGB,
@@ -34,7 +34,7 @@ pub struct PackStats {
 #[derive(Clone, Debug, Default)]
 pub struct PackedScene {
     pub globals: SceneGlobals,
-    pub nodes: Vec<BvhNode>,
+    pub nodes: Vec<Bvh4Node>,
     pub triangles: Vec<TrianglePositions>,
     pub triangle_info: Vec<TriangleInfo>,
     pub normals: Vec<[f32; 4]>,

@@ -107,7 +107,9 @@ fn gltf_and_obj_cornell_boxes_agree() {
     let a = load_packed(&gltf, &Environment::None);
     let b = load_packed(&cornell_box_path(), &Environment::None);
     let frame = frame_params(cornell_camera(W, H), FoveationParams::uniform(16), W, H, 5);
-    let all = |img: &fovea_cpu::FrameImage| mean_rgb(img, (0..H).flat_map(|y| (0..W).map(move |x| (x, y))));
+    let all = |img: &fovea_cpu::FrameImage| {
+        mean_rgb(img, (0..H).flat_map(|y| (0..W).map(move |x| (x, y))))
+    };
     let (ma, mb) = (all(&render(&a, &frame).0), all(&render(&b, &frame).0));
     // Same geometry and emission (glTF: factor x KHR_materials_emissive_strength 17); the OBJ's Phong
     // exponent maps to a slightly different roughness, so allow 10 %.

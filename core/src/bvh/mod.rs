@@ -1,4 +1,4 @@
-//! BVH traversal over the flat node array of [`crate::scene::SceneView`].
+//! 4-wide BVH traversal over the flat node array of [`crate::scene::SceneView`].
 pub mod traverse;
 
-pub use traverse::{any_hit, closest_hit, Hit, TRAVERSAL_STACK_SIZE};
+pub use traverse::{any_hit, closest_hit, Hit, MAX_NODE_COUNT, TRAVERSAL_STACK_SIZE};

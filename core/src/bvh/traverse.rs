@@ -1,8 +1,17 @@
-//! Closest-hit and any-hit traversal with a fixed-size stack.
+//! Closest-hit and any-hit traversal of the 4-wide BVH ([`Bvh4Node`]) with a fixed-size stack.
 //!
-//! The node layout is [`BvhNode`]'s: children of an interior node are adjacent, so one index names both.
-//! Both children's boxes are tested together and the nearer one is visited first; the farther one is pushed
-//! with its entry distance and skipped when popped if a closer hit was found meanwhile.
+//! Each visited node slab-tests its four child boxes at once: the node stores its boxes
+//! structure-of-arrays, so every bound is one `Vec4` (SSE on the CPU, a plain `vec4` in SPIR-V) and the
+//! test is a dozen vector operations (Wald, Benthin, Boulos 2008, "Getting rid of packets"). The hit
+//! children are then visited near to far: all but the nearest are pushed with their entry distances, the
+//! farthest deepest, and a popped entry is skipped if a closer hit was found meanwhile. Leaves are stack
+//! entries like nodes, so they are tested in the same near-to-far order; a leaf entry names its parent
+//! node and slot (`LEAF_ENTRY | 4 * parent + slot`, so trees must have fewer than [`MAX_NODE_COUNT`]
+//! nodes), which keeps an entry at one `u32` plus its distance.
+//!
+//! The near and far planes of each axis are picked by the sign of the ray's (clamped) inverse direction,
+//! not by a per-box min/max of the two slab distances; an inverted box (the builder's empty slots) thus
+//! always gives `near > far` and is never entered.
 //!
 //! The slab test is made conservative so that it never culls a hit the watertight triangle test
 //! ([`WatertightRay`]) reports (Woop et al. 2013, Sec. 4, "conservative traversal"): the entry and exit
@@ -10,16 +19,22 @@
 //! builder are themselves a few ulps larger than their triangles. Zero direction components are handled
 //! without infinities or NaNs: their inverse is clamped to `±f32::MAX`, so `(bound - origin) * inv` is a
 //! huge (or infinite) finite-signed number, and never `0 * ∞`.
-use glam::Vec3A;
+use glam::{Vec3, Vec4};
 
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
 use crate::material::alpha::is_cut_out;
-use crate::scene::{BvhNode, SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
+use crate::scene::{Bvh4Node, SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
 
-/// Entries of the traversal stack. Traversal pushes at most one node per level, so trees must be shallower
-/// than this; `fovea_scene::bvh::build_bvh` guarantees it.
+/// Entries of the traversal stack. A node visit pushes its (up to four) hit children and pops the nearest,
+/// so while a node of depth `j` (root = 0) is visited the stack holds at most `3 j` entries, and at most
+/// `3 D + 4` ever for trees whose deepest node has depth `D`. `fovea_scene::bvh::build_bvh` keeps
+/// `D <= (TRAVERSAL_STACK_SIZE - 4) / 3 = 20`.
 pub const TRAVERSAL_STACK_SIZE: usize = 64;
+
+/// Trees must have fewer nodes than this: a leaf's stack entry stores `4 * parent + slot` below
+/// [`LEAF_ENTRY`]'s bit.
+pub const MAX_NODE_COUNT: usize = 1 << 29;
 
 /// γ₃ = 3u / (1 - 3u) with the unit roundoff u = 2⁻²⁴ (pbrt-v3 Sec. 3.9.1).
 const GAMMA3: f32 = 3.0 * (f32::EPSILON * 0.5) / (1.0 - 3.0 * (f32::EPSILON * 0.5));
@@ -72,66 +87,92 @@ fn safe_inverse(d: f32) -> f32 {
     }
 }
 
-#[inline]
-fn max3(a: f32, b: f32, c: f32, d: f32) -> f32 {
-    let ab = if a > b { a } else { b };
-    let cd = if c > d { c } else { d };
-    if ab > cd {
-        ab
-    } else {
-        cd
-    }
-}
-
-#[inline]
-fn min3(a: f32, b: f32, c: f32, d: f32) -> f32 {
-    let ab = if a < b { a } else { b };
-    let cd = if c < d { c } else { d };
-    if ab < cd {
-        ab
-    } else {
-        cd
-    }
-}
-
-/// The per-ray part of the slab test.
+/// The per-ray part of the 4-wide slab test: origin and inverse direction splatted per axis, and which
+/// bound of each axis is the near plane.
+///
+/// The rounding-error widening of Ize (2013) is folded into the inverse: entry distances use
+/// `inv * (1 - 2γ₃)` and exit distances `inv * (1 + 2γ₃)`. The computed `(b - o) * inv'` then carries
+/// at most four roundings (subtraction, division, scaling, product), so its relative error is
+/// within `(1 ± u)⁴`, which the `∓6u` scale more than covers: entries only shrink and exits only
+/// grow. (Signs are exact: a rounded difference or product has the sign of the exact one.)
 #[derive(Clone, Copy)]
-struct RayBox {
-    // `Vec3A` is SIMD on the CPU and a plain vector in SPIR-V.
-    origin: Vec3A,
-    inv_dir: Vec3A,
+struct RayBox4 {
+    origin_x: Vec4,
+    origin_y: Vec4,
+    origin_z: Vec4,
+    inv_near_x: Vec4,
+    inv_near_y: Vec4,
+    inv_near_z: Vec4,
+    inv_far_x: Vec4,
+    inv_far_y: Vec4,
+    inv_far_z: Vec4,
+    /// Whether the inverse direction is negative along x, y, z (the near plane is then `max`).
+    negative: [bool; 3],
 }
 
-impl RayBox {
+impl RayBox4 {
     #[inline]
     fn new(ray: &Ray) -> Self {
+        let inv = Vec3::new(
+            safe_inverse(ray.direction.x),
+            safe_inverse(ray.direction.y),
+            safe_inverse(ray.direction.z),
+        );
+        // Clamped so that an inverse of ±f32::MAX stays finite (and never turns `0 * ∞` into NaN).
+        let inv_far = (inv * ROUND_UP).clamp(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
+        let inv_near = inv * ROUND_DOWN;
         Self {
-            origin: Vec3A::from(ray.origin),
-            inv_dir: Vec3A::new(
-                safe_inverse(ray.direction.x),
-                safe_inverse(ray.direction.y),
-                safe_inverse(ray.direction.z),
-            ),
+            origin_x: Vec4::splat(ray.origin.x),
+            origin_y: Vec4::splat(ray.origin.y),
+            origin_z: Vec4::splat(ray.origin.z),
+            inv_near_x: Vec4::splat(inv_near.x),
+            inv_near_y: Vec4::splat(inv_near.y),
+            inv_near_z: Vec4::splat(inv_near.z),
+            inv_far_x: Vec4::splat(inv_far.x),
+            inv_far_y: Vec4::splat(inv_far.y),
+            inv_far_z: Vec4::splat(inv_far.z),
+            negative: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
         }
     }
 
-    /// The (conservative) entry distance of the ray into `node`'s box within `[0, t_max]`, or infinity
-    /// if it misses the box in that interval.
-    #[inline]
-    fn entry(&self, node: &BvhNode, t_max: f32) -> f32 {
-        let t0 = (Vec3A::from(node.bounds_min) - self.origin) * self.inv_dir;
-        let t1 = (Vec3A::from(node.bounds_max) - self.origin) * self.inv_dir;
-        // No NaN can arise (finite bounds, inverse clamped to ±f32::MAX), so the plain comparisons
-        // below need none of `f32::min`'s NaN handling.
-        let lo = Vec3A::select(t0.cmplt(t1), t0, t1);
-        let hi = Vec3A::select(t0.cmplt(t1), t1, t0);
-        let near = max3(lo.x, lo.y, lo.z, 0.0) * ROUND_DOWN;
-        let far = min3(hi.x, hi.y, hi.z, t_max) * ROUND_UP;
-        if near <= far {
-            near
-        } else {
-            f32::INFINITY
-        }
+    /// The (conservative) entry distances of the ray into `node`'s four child boxes within
+    /// `[0, t_max]`, and a bit mask of the boxes it enters (bit `i` for slot `i`); distances of
+    /// missed boxes are meaningless.
+    #[inline(always)]
+    fn intersect(&self, node: &Bvh4Node, t_max: f32) -> (Vec4, u32) {
+        // Load the bounds as vectors first, then pick near and far planes per axis: the choice is
+        // per ray, so the branches are perfectly predicted (and the SPIR-V is plain selects).
+        let (near_x, far_x) = near_far(node.min_x, node.max_x, self.negative[0]);
+        let (near_y, far_y) = near_far(node.min_y, node.max_y, self.negative[1]);
+        let (near_z, far_z) = near_far(node.min_z, node.max_z, self.negative[2]);
+        // No NaN can arise: bounds are finite and the inverses are finite and non-zero.
+        let tn_x = (near_x - self.origin_x) * self.inv_near_x;
+        let tn_y = (near_y - self.origin_y) * self.inv_near_y;
+        let tn_z = (near_z - self.origin_z) * self.inv_near_z;
+        let tf_x = (far_x - self.origin_x) * self.inv_far_x;
+        let tf_y = (far_y - self.origin_y) * self.inv_far_y;
+        let tf_z = (far_z - self.origin_z) * self.inv_far_z;
+        let near = tn_x.max(tn_y).max(tn_z.max(Vec4::ZERO));
+        // `t_max` is clamped to a finite value so that an infinite entry distance (a ray parallel to
+        // and outside a slab) is always a miss.
+        let far = tf_x
+            .min(tf_y)
+            .min(tf_z)
+            .min(Vec4::splat(t_max.min(f32::MAX)));
+        (near, near.cmple(far).bitmask())
+    }
+}
+
+/// The near and far planes of one axis for four boxes: `(min, max)`, swapped when the ray runs towards
+/// `-axis`.
+#[inline(always)]
+fn near_far(min: [f32; 4], max: [f32; 4], negative: bool) -> (Vec4, Vec4) {
+    let min = Vec4::from_array(min);
+    let max = Vec4::from_array(max);
+    if negative {
+        (max, min)
+    } else {
+        (min, max)
     }
 }
 
@@ -144,30 +185,81 @@ fn hit_is_cut_out(scene: &SceneView, triangle: u32, b1: f32, b2: f32) -> bool {
         && is_cut_out(scene, triangle, b1, b2)
 }
 
-/// Shared traversal loop: the closest hit in `(0, t_max)`, or (with `any`) the first one found.
+/// The slot of the lowest set bit of a non-zero 4-bit mask (no intrinsics, for the GPU's sake).
 #[inline]
+#[must_use]
+fn lowest_slot(mask: u32) -> usize {
+    if mask & 1 != 0 {
+        0
+    } else if mask & 2 != 0 {
+        1
+    } else if mask & 4 != 0 {
+        2
+    } else {
+        3
+    }
+}
+
+/// Shared traversal loop (inlined into both callers, so each gets a copy specialised for `any`): the closest hit in `(0, t_max)`, or (with `any`) the first one found.
+///
+/// The current item is a node (`count == 0`, `item` its index) or a leaf (`count` triangles from
+/// `item`); stack entries are items with their entry distances.
+// Index loops over local arrays: rust-gpu does not compile iterators over them.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
 fn traverse(scene: &SceneView, ray: &Ray, t_max: f32, any: bool) -> Hit {
     let mut best = Hit::miss();
     if scene.nodes.is_empty() {
         return best;
     }
     let watertight = WatertightRay::new(ray);
-    let ray_box = RayBox::new(ray);
+    let ray_box = RayBox4::new(ray);
     let mut closest = t_max;
-    if ray_box.entry(&scene.nodes[0], closest) == f32::INFINITY {
-        return best;
-    }
 
-    let mut stack_node = [0u32; TRAVERSAL_STACK_SIZE];
+    // Entries are nodes (their index) or leaves (`LEAF_ENTRY | 4 * parent + slot`).
+    let mut stack_item = [0u32; TRAVERSAL_STACK_SIZE];
     let mut stack_t = [0.0f32; TRAVERSAL_STACK_SIZE];
     let mut stack_len = 0usize;
-    let mut node_index = 0u32;
+    let mut item = 0u32;
     loop {
-        let node = scene.nodes[node_index as usize];
-        let mut descend = false;
-        if node.is_leaf() {
-            let end = node.left_or_first + node.triangle_count;
-            let mut i = node.left_or_first;
+        let mut next = false;
+        if item & LEAF_ENTRY == 0 {
+            let node = &scene.nodes[item as usize];
+            let (entry, mask) = ray_box.intersect(node, closest);
+            if mask != 0 {
+                next = true;
+                if mask & (mask - 1) == 0 {
+                    // One child hit: continue with it, no stack traffic.
+                    let i = lowest_slot(mask);
+                    item = entry_of(node, item, i);
+                } else {
+                    // Insert the hit children into the top of the stack, sorted so that the nearest
+                    // ends on top, then continue with the nearest.
+                    let t = entry.to_array();
+                    let base = stack_len;
+                    for i in 0..4 {
+                        if mask & (1 << i) != 0 {
+                            let mut p = stack_len;
+                            while p > base && stack_t[p - 1] < t[i] {
+                                stack_item[p] = stack_item[p - 1];
+                                stack_t[p] = stack_t[p - 1];
+                                p -= 1;
+                            }
+                            stack_item[p] = entry_of(node, item, i);
+                            stack_t[p] = t[i];
+                            stack_len += 1;
+                        }
+                    }
+                    stack_len -= 1;
+                    item = stack_item[stack_len];
+                }
+            }
+        } else {
+            let parent = &scene.nodes[((item & !LEAF_ENTRY) >> 2) as usize];
+            let slot = (item & 3) as usize;
+            let first = parent.child[slot];
+            let end = first + parent.count[slot];
+            let mut i = first;
             while i < end {
                 let h = watertight.intersect(&scene.triangles[i as usize], closest);
                 if h.hit && !hit_is_cut_out(scene, i, h.b1, h.b2) {
@@ -184,33 +276,14 @@ fn traverse(scene: &SceneView, ray: &Ray, t_max: f32, any: bool) -> Hit {
                 }
                 i += 1;
             }
-        } else {
-            let left = node.left_or_first;
-            let t_left = ray_box.entry(&scene.nodes[left as usize], closest);
-            let t_right = ray_box.entry(&scene.nodes[left as usize + 1], closest);
-            let (near, t_near, far, t_far) = if t_left <= t_right {
-                (left, t_left, left + 1, t_right)
-            } else {
-                (left + 1, t_right, left, t_left)
-            };
-            if t_near != f32::INFINITY {
-                // The builder keeps trees shallower than the stack, so the guard never drops a node.
-                if t_far != f32::INFINITY && stack_len < TRAVERSAL_STACK_SIZE {
-                    stack_node[stack_len] = far;
-                    stack_t[stack_len] = t_far;
-                    stack_len += 1;
-                }
-                node_index = near;
-                descend = true;
-            }
         }
-        if !descend {
-            // Pop the next node that may still hold a closer hit.
+        if !next {
+            // Pop the next item that may still hold a closer hit.
             let mut found = false;
             while stack_len > 0 && !found {
                 stack_len -= 1;
                 if stack_t[stack_len] <= closest {
-                    node_index = stack_node[stack_len];
+                    item = stack_item[stack_len];
                     found = true;
                 }
             }
@@ -218,6 +291,19 @@ fn traverse(scene: &SceneView, ray: &Ray, t_max: f32, any: bool) -> Hit {
                 return best;
             }
         }
+    }
+}
+
+/// Marks a traversal stack entry as a leaf, named by its parent node and slot (`4 * parent + slot`).
+pub const LEAF_ENTRY: u32 = 1 << 31;
+
+/// The traversal entry of slot `i` of `node` (whose index is `index`).
+#[inline(always)]
+fn entry_of(node: &Bvh4Node, index: u32, i: usize) -> u32 {
+    if node.count[i] == 0 {
+        node.child[i]
+    } else {
+        LEAF_ENTRY | (index << 2) | i as u32
     }
 }
 
@@ -237,10 +323,12 @@ pub fn any_hit(scene: &SceneView, ray: &Ray, t_max: f32) -> bool {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
+
     use super::*;
-    use glam::Vec3;
     use crate::math::pack_vec3;
     use crate::scene::{Material, SceneGlobals, TriangleInfo, TrianglePositions};
+    use glam::Vec3;
 
     fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
         TrianglePositions {
@@ -251,7 +339,7 @@ mod tests {
     }
 
     fn view<'a>(
-        nodes: &'a [BvhNode],
+        nodes: &'a [Bvh4Node],
         triangles: &'a [TrianglePositions],
         info: &'a [TriangleInfo],
         materials: &'a [Material],
@@ -275,9 +363,18 @@ mod tests {
         }
     }
 
-    /// Two unit quads' worth of triangles at z = 1 (material 1) and z = 2 (material 0) under one root and
-    /// two leaves.
-    fn two_layers() -> ([BvhNode; 3], [TrianglePositions; 2], [TriangleInfo; 2]) {
+    /// Slot `slot` of `node` becomes a box around z-layer `z` (as the builder writes it, slightly larger
+    /// than its triangle) holding `count` items at `child`.
+    fn set_layer(node: &mut Bvh4Node, slot: usize, z: f32, child: u32, count: u32) {
+        node.set_slot_bounds(slot, [-1.001, -1.001, z - 0.001], [3.001, 3.001, z + 0.001]);
+        node.child[slot] = child;
+        node.count[slot] = count;
+    }
+
+    /// Two big triangles at z = 1 (material 1) and z = 2 (material 0). The root holds the far triangle as
+    /// a leaf in slot 3 and, in slot 1, an interior node whose slot 2 is the near triangle's leaf; the other
+    /// slots are empty. Near-first ordering must not depend on slot order.
+    fn two_layers() -> ([Bvh4Node; 2], [TrianglePositions; 2], [TriangleInfo; 2]) {
         let near = tri(
             Vec3::new(-1.0, -1.0, 1.0),
             Vec3::new(3.0, -1.0, 1.0),
@@ -288,24 +385,11 @@ mod tests {
             Vec3::new(-1.0, 3.0, 2.0),
             Vec3::new(3.0, -1.0, 2.0),
         );
-        // Boxes slightly larger than their triangles, as the builder writes them.
-        let leaf = |i: u32, z: f32| BvhNode {
-            bounds_min: [-1.001, -1.001, z - 0.001],
-            left_or_first: i,
-            bounds_max: [3.001, 3.001, z + 0.001],
-            triangle_count: 1,
-        };
-        // The far triangle is the left child, to check near-first ordering does not matter.
-        let nodes = [
-            BvhNode {
-                bounds_min: [-1.001, -1.001, 0.999],
-                left_or_first: 1,
-                bounds_max: [3.001, 3.001, 2.001],
-                triangle_count: 0,
-            },
-            leaf(0, 2.0),
-            leaf(1, 1.0),
-        ];
+        let mut root = Bvh4Node::EMPTY;
+        set_layer(&mut root, 3, 2.0, 0, 1);
+        set_layer(&mut root, 1, 1.0, 1, 0);
+        let mut inner = Bvh4Node::EMPTY;
+        set_layer(&mut inner, 2, 1.0, 1, 1);
         let info = [
             TriangleInfo {
                 vertices: [0, 1, 2],
@@ -316,7 +400,7 @@ mod tests {
                 material: 1,
             },
         ];
-        (nodes, [far, near], info)
+        ([root, inner], [far, near], info)
     }
 
     #[test]
@@ -359,6 +443,11 @@ mod tests {
         assert_eq!(closest_hit(&scene, &up, f32::INFINITY).triangle, 0);
         let down = Ray::new(Vec3::new(0.0, 0.0, 1.5), -Vec3::Z);
         assert_eq!(closest_hit(&scene, &down, f32::INFINITY).triangle, 1);
+        // From beyond both layers, looking back: the far layer is now the nearer one.
+        let back = Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z);
+        let h = closest_hit(&scene, &back, f32::INFINITY);
+        assert_eq!(h.triangle, 0);
+        assert!((h.t - 3.0).abs() < 1e-6);
         // Missing everything.
         let away = Ray::new(Vec3::new(5.0, 0.0, 0.0), Vec3::Z);
         assert!(!closest_hit(&scene, &away, f32::INFINITY).is_hit());
@@ -392,14 +481,18 @@ mod tests {
         assert_eq!(closest_hit(&scene, &ray, f32::INFINITY).triangle, 1);
     }
 
+    /// A node whose slot 1 is the unit cube and whose other slots are empty.
+    fn unit_cube_node() -> Bvh4Node {
+        let mut node = Bvh4Node::EMPTY;
+        node.set_slot_bounds(1, [0.0; 3], [1.0; 3]);
+        node.child[1] = 0;
+        node.count[1] = 1;
+        node
+    }
+
     #[test]
     fn slab_test_has_no_nan_for_zero_directions() {
-        let node = BvhNode {
-            bounds_min: [0.0, 0.0, 0.0],
-            left_or_first: 0,
-            bounds_max: [1.0, 1.0, 1.0],
-            triangle_count: 1,
-        };
+        let node = unit_cube_node();
         let cases = [
             (Vec3::new(0.0, 0.5, 0.5), Vec3::X, true),
             (Vec3::new(-1.0, 0.0, 0.0), Vec3::X, true),
@@ -411,14 +504,122 @@ mod tests {
             (Vec3::new(2.0, 0.5, 0.5), Vec3::ZERO, false),
             (Vec3::new(2.0, 0.5, 0.5), Vec3::new(-0.0, 0.0, -1.0), false),
             (Vec3::new(0.5, 0.5, 2.0), Vec3::new(-0.0, 0.0, -1.0), true),
+            (Vec3::new(0.5, 2.0, 0.5), Vec3::new(0.0, -1.0, 0.0), true),
+            (Vec3::new(0.5, 2.0, 0.5), Vec3::new(0.0, 1.0, 0.0), false),
+            (Vec3::new(-1.0, -1.0, -1.0), Vec3::ONE, true),
+            (Vec3::new(2.0, 2.0, 2.0), -Vec3::ONE, true),
+            (Vec3::new(2.0, 2.0, 2.0), Vec3::ONE, false),
         ];
         for (origin, dir, expect) in cases {
-            let rb = RayBox::new(&Ray::new(origin, dir));
-            assert!(rb.inv_dir.is_finite());
-            let t = rb.entry(&node, f32::INFINITY);
-            assert!(!t.is_nan());
-            assert_eq!(t != f32::INFINITY, expect, "{origin:?} {dir:?}");
+            let rb = RayBox4::new(&Ray::new(origin, dir));
+            assert!(
+                rb.inv_near_x.is_finite() && rb.inv_near_y.is_finite() && rb.inv_near_z.is_finite()
+            );
+            assert!(
+                rb.inv_far_x.is_finite() && rb.inv_far_y.is_finite() && rb.inv_far_z.is_finite()
+            );
+            for t_max in [f32::INFINITY, 100.0] {
+                let (t, mask) = rb.intersect(&node, t_max);
+                assert!(!t.is_nan_mask().any());
+                assert_eq!(mask, if expect { 2 } else { 0 }, "{origin:?} {dir:?}");
+            }
+        }
+        // Entry distances are conservative (slightly below the true ones) and zero from inside.
+        let rb = RayBox4::new(&Ray::new(Vec3::new(0.5, 0.5, -2.0), Vec3::Z));
+        let (t, mask) = rb.intersect(&node, f32::INFINITY);
+        assert_eq!(mask, 2);
+        assert!(t.y <= 2.0 && t.y > 2.0 - 1e-5);
+        let (_, mask) = rb.intersect(&node, 1.9);
+        assert_eq!(mask, 0, "box beyond t_max");
+        let rb = RayBox4::new(&Ray::new(Vec3::splat(0.5), Vec3::Y));
+        assert_eq!(rb.intersect(&node, f32::INFINITY).0.y, 0.0);
+    }
+
+    /// Empty slots (inverted boxes) are missed by every ray, including rays with zero, negative-zero and
+    /// huge or tiny direction components and rays starting at extreme coordinates.
+    #[test]
+    fn empty_slots_are_never_entered() {
+        let node = Bvh4Node::EMPTY;
+        let components = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            1e-30,
+            -1e-30,
+            1e-40,
+            -1e-40,
+            1e30,
+            -1e30,
+            f32::MAX,
+            -f32::MAX,
+        ];
+        let origins = [
+            Vec3::ZERO,
+            Vec3::splat(f32::MAX),
+            Vec3::splat(-f32::MAX),
+            Vec3::new(f32::MAX, -f32::MAX, 0.0),
+            Vec3::new(1e30, -3.0, 7.0),
+        ];
+        for origin in origins {
+            for &x in &components {
+                for &y in &components {
+                    for &z in &components {
+                        let rb = RayBox4::new(&Ray::new(origin, Vec3::new(x, y, z)));
+                        for t_max in [f32::INFINITY, f32::MAX, 1.0, 0.0] {
+                            let (_, mask) = rb.intersect(&node, t_max);
+                            assert_eq!(mask, 0, "{origin:?} {x} {y} {z} {t_max}");
+                        }
+                    }
+                }
+            }
         }
     }
-}
 
+    /// A deep chain of nodes, each with four hit children (three leaves pushed per level), exercises the
+    /// stack at its documented bound: depth `(TRAVERSAL_STACK_SIZE - 4) / 3`.
+    #[test]
+    fn stack_bound_holds_for_the_deepest_allowed_tree() {
+        let depth = (TRAVERSAL_STACK_SIZE - 4) / 3;
+        // Leaves with a triangle behind the ray's origin, so every box is entered but nothing is hit
+        // until the last level's far triangle.
+        let behind = tri(
+            Vec3::new(-1.0, -1.0, -1.0),
+            Vec3::new(3.0, -1.0, -1.0),
+            Vec3::new(-1.0, 3.0, -1.0),
+        );
+        let target = tri(
+            Vec3::new(-1.0, -1.0, 5.0),
+            Vec3::new(3.0, -1.0, 5.0),
+            Vec3::new(-1.0, 3.0, 5.0),
+        );
+        let triangles = [behind, target];
+        let info = [TriangleInfo::default(); 2];
+        let materials = [Material::default()];
+        let big = ([-2.0, -2.0, -2.0], [4.0, 4.0, 6.0]);
+        let mut nodes = std::vec::Vec::new();
+        for level in 0..=depth {
+            let mut node = Bvh4Node::EMPTY;
+            for slot in 0..4 {
+                node.set_slot_bounds(slot, big.0, big.1);
+                node.child[slot] = 0;
+                node.count[slot] = 1;
+            }
+            if level < depth {
+                // All four boxes tie; the last slot inserted ends on top and is visited first, so the
+                // three leaves of every level stay on the stack until the chain's end.
+                node.child[3] = level as u32 + 1;
+                node.count[3] = 0;
+            } else {
+                node.child[0] = 1;
+            }
+            nodes.push(node);
+        }
+        let scene = view(&nodes, &triangles, &info, &materials);
+        let ray = Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::Z);
+        let h = closest_hit(&scene, &ray, f32::INFINITY);
+        assert_eq!(h.triangle, 1);
+        assert!((h.t - 5.0).abs() < 1e-6);
+        assert!(any_hit(&scene, &ray, f32::INFINITY));
+    }
+}

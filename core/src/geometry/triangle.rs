@@ -18,7 +18,6 @@
 use glam::Vec3;
 
 use super::ray::Ray;
-use crate::math::vec3_from;
 use crate::scene::TrianglePositions;
 
 /// The result of one ray-triangle test: `hit` is true if the ray meets the triangle at `0 < t < t_max`;
@@ -122,14 +121,15 @@ impl WatertightRay {
         }
     }
 
-    /// `v - origin` in the permuted frame.
+    /// `v - origin` in the permuted frame. The permutation indexes the packed vertex directly (one load
+    /// per component, no branches; `& 3` lets the compiler drop the bounds checks).
     #[inline]
     #[must_use]
-    fn relative(&self, v: Vec3) -> Vec3 {
+    fn relative(&self, v: &[f32; 4]) -> Vec3 {
         Vec3::new(
-            component(v, self.kx),
-            component(v, self.ky),
-            component(v, self.kz),
+            v[(self.kx & 3) as usize],
+            v[(self.ky & 3) as usize],
+            v[(self.kz & 3) as usize],
         ) - self.origin
     }
 
@@ -138,9 +138,9 @@ impl WatertightRay {
     #[inline]
     #[must_use]
     pub fn intersect(&self, tri: &TrianglePositions, t_max: f32) -> TriangleHit {
-        let a = self.relative(vec3_from(tri.v0));
-        let b = self.relative(vec3_from(tri.v1));
-        let c = self.relative(vec3_from(tri.v2));
+        let a = self.relative(&tri.v0);
+        let b = self.relative(&tri.v1);
+        let c = self.relative(&tri.v2);
 
         // Shear the vertices into the ray's frame (the ray now runs along +z from the origin).
         let ax = a.x - self.sx * a.z;
@@ -207,7 +207,7 @@ impl WatertightRay {
 mod tests {
     extern crate std;
     use super::*;
-    use crate::math::pack_vec3;
+    use crate::math::{pack_vec3, vec3_from};
     use std::vec::Vec;
 
     /// SplitMix64: a tiny deterministic generator for tests.

@@ -9,7 +9,8 @@ use bytemuck::{Pod, Zeroable};
 /// Marks an absent index (no texture, no light, no triangle hit).
 pub const INVALID_INDEX: u32 = u32::MAX;
 
-/// A node of the binary bounding-volume hierarchy (32 bytes), in depth-first order with node 0 the root.
+/// A node of a binary bounding-volume hierarchy (32 bytes): the builder's intermediate form, which
+/// `fovea_scene::bvh` collapses into [`Bvh4Node`]s. Traversal never sees it.
 ///
 /// Interior nodes (`triangle_count == 0`) keep their two children next to each other at `left_or_first`
 /// and `left_or_first + 1`. Leaves hold triangles `left_or_first .. left_or_first + triangle_count` of the
@@ -29,6 +30,95 @@ impl BvhNode {
     #[must_use]
     pub fn is_leaf(&self) -> bool {
         self.triangle_count != 0
+    }
+}
+
+/// A node of the 4-wide BVH that both backends traverse (128 bytes), node 0 the root.
+///
+/// The boxes of the four children are stored structure-of-arrays, so one `[f32; 4]` holds one bound of all
+/// four and a single SIMD slab test (`Vec4`) checks the four boxes at once (Wald, Benthin, Boulos 2008,
+/// "Getting rid of packets"; Dammertz et al. 2008, "Shallow bounding volume hierarchies"). Child slot `i`
+/// is
+/// - an interior node, `nodes[child[i]]`, when `count[i] == 0` and `child[i] != INVALID_INDEX`;
+/// - a leaf with triangles `child[i] .. child[i] + count[i]` of the (BVH-ordered) triangle arrays when
+///   `count[i] > 0`;
+/// - empty when `child[i] == INVALID_INDEX` (and `count[i] == 0`). An empty slot's box is inverted
+///   (`min = f32::MAX`, `max = -f32::MAX`), which the slab test (with near and far planes chosen by the
+///   ray's direction signs) always misses, so it is never entered.
+///
+/// Boxes strictly contain their triangles (the builder widens them by a few ulps).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Bvh4Node {
+    pub min_x: [f32; 4],
+    pub max_x: [f32; 4],
+    pub min_y: [f32; 4],
+    pub max_y: [f32; 4],
+    pub min_z: [f32; 4],
+    pub max_z: [f32; 4],
+    pub child: [u32; 4],
+    pub count: [u32; 4],
+}
+
+impl Bvh4Node {
+    /// A node with four empty slots.
+    pub const EMPTY: Self = Self {
+        min_x: [f32::MAX; 4],
+        max_x: [-f32::MAX; 4],
+        min_y: [f32::MAX; 4],
+        max_y: [-f32::MAX; 4],
+        min_z: [f32::MAX; 4],
+        max_z: [-f32::MAX; 4],
+        child: [INVALID_INDEX; 4],
+        count: [0; 4],
+    };
+
+    /// Whether slot `i` is empty.
+    #[inline]
+    #[must_use]
+    pub fn is_empty_slot(&self, i: usize) -> bool {
+        self.child[i] == INVALID_INDEX && self.count[i] == 0
+    }
+
+    /// Whether slot `i` is a leaf.
+    #[inline]
+    #[must_use]
+    pub fn is_leaf_slot(&self, i: usize) -> bool {
+        self.count[i] != 0
+    }
+
+    /// Whether slot `i` is an interior node.
+    #[inline]
+    #[must_use]
+    pub fn is_interior_slot(&self, i: usize) -> bool {
+        self.count[i] == 0 && self.child[i] != INVALID_INDEX
+    }
+
+    /// The box of slot `i` as `(min, max)`.
+    #[inline]
+    #[must_use]
+    pub fn slot_bounds(&self, i: usize) -> ([f32; 3], [f32; 3]) {
+        (
+            [self.min_x[i], self.min_y[i], self.min_z[i]],
+            [self.max_x[i], self.max_y[i], self.max_z[i]],
+        )
+    }
+
+    /// Sets slot `i`'s box.
+    #[inline]
+    pub fn set_slot_bounds(&mut self, i: usize, min: [f32; 3], max: [f32; 3]) {
+        self.min_x[i] = min[0];
+        self.min_y[i] = min[1];
+        self.min_z[i] = min[2];
+        self.max_x[i] = max[0];
+        self.max_y[i] = max[1];
+        self.max_z[i] = max[2];
+    }
+}
+
+impl Default for Bvh4Node {
+    fn default() -> Self {
+        Self::EMPTY
     }
 }
 

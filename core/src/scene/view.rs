@@ -1,15 +1,15 @@
 //! [`SceneView`]: borrowed slices of the packed scene, the one argument every traversal and shading
 //! function takes. The CPU host builds it from `Vec`s, the GPU kernel from storage buffers.
 use super::layout::{
-    BvhNode, Light, Material, SceneGlobals, TextureInfo, TriangleInfo, TrianglePositions,
+    Bvh4Node, Light, Material, SceneGlobals, TextureInfo, TriangleInfo, TrianglePositions,
 };
 
 /// The packed scene as borrowed slices. Arrays a scene does not need are empty.
 #[derive(Clone, Copy)]
 pub struct SceneView<'a> {
     pub globals: SceneGlobals,
-    /// BVH nodes, root first (see [`BvhNode`]).
-    pub nodes: &'a [BvhNode],
+    /// 4-wide BVH nodes, root first (see [`Bvh4Node`]); empty for an empty scene.
+    pub nodes: &'a [Bvh4Node],
     /// Triangle positions in BVH leaf order.
     pub triangles: &'a [TrianglePositions],
     /// Per-triangle vertex indices and material, parallel to `triangles`.

@@ -1,0 +1,211 @@
+//! Collapsing the binary BVH into the 4-wide [`Bvh4Node`] layout.
+//!
+//! Each 4-wide node starts from the two children of a binary node and greedily opens the interior
+//! candidate with the largest surface area (replacing it by its two children) until it has four children
+//! or only leaves are left (Wald, Benthin, Boulos 2008; Pharr, "collapsing" a binary BVH). Leaves stay the
+//! binary leaves, so the triangles keep their leaf order.
+//!
+//! **Depth guard.** Traversal's stack bounds the depth of the 4-wide tree (see
+//! [`fovea_core::bvh::TRAVERSAL_STACK_SIZE`]). Let `h` be a binary node's height (leaf = 0) and `d` the
+//! depth of the 4-wide node made from it. The collapse keeps `d + ceil(h / 2) <= ceil(MAX_DEPTH / 2)`:
+//! a greedy choice is taken only if every interior child satisfies it; otherwise the node first opens
+//! every interior child of its binary node (so every interior child is at least two binary levels down,
+//! `h' <= h - 2`, and the bound carries over), then continues greedily. Interior nodes have `h >= 1`, so
+//! 4-wide node depths stay below `ceil(MAX_DEPTH / 2) = MAX_NODE_DEPTH + 1`.
+use fovea_core::scene::{Bvh4Node, BvhNode};
+
+use super::{BvhStats, MAX_DEPTH};
+
+/// Moves `x` down by at least two ulps (and at least 1e-30), so boxes strictly contain their triangles.
+#[inline]
+fn widen_down(x: f32) -> f32 {
+    x - (x.abs() * (1.0 / 4_194_304.0)).max(1e-30)
+}
+
+/// Moves `x` up by at least two ulps (and at least 1e-30).
+#[inline]
+fn widen_up(x: f32) -> f32 {
+    x + (x.abs() * (1.0 / 4_194_304.0)).max(1e-30)
+}
+
+/// `ceil(h / 2)`.
+#[inline]
+fn half_up(h: u32) -> u32 {
+    h.div_ceil(2)
+}
+
+/// The binary arena of [`super::binary::build_node`]: slot 0 the root; an interior node at slot `s`
+/// stores its left child's primitive count `l` in `left_or_first`, its children sit at `s + 1` and
+/// `s + 2 l`.
+struct Arena<'a> {
+    nodes: &'a [BvhNode],
+    /// Height of each used slot's subtree (leaf = 0).
+    heights: Vec<u8>,
+}
+
+impl<'a> Arena<'a> {
+    fn new(nodes: &'a [BvhNode]) -> Self {
+        let mut arena = Self {
+            nodes,
+            heights: vec![0; nodes.len()],
+        };
+        arena.compute_height(0);
+        arena
+    }
+
+    /// Fills `heights` for the subtree at `slot` and returns its height (recursion depth is bounded by
+    /// the binary builder's depth guard).
+    fn compute_height(&mut self, slot: usize) -> u32 {
+        if self.nodes[slot].is_leaf() {
+            return 0;
+        }
+        let (l, r) = self.children(slot);
+        let h = 1 + self.compute_height(l).max(self.compute_height(r));
+        self.heights[slot] = h as u8;
+        h
+    }
+
+    #[inline]
+    fn children(&self, slot: usize) -> (usize, usize) {
+        (slot + 1, slot + 2 * self.nodes[slot].left_or_first as usize)
+    }
+
+    #[inline]
+    fn height(&self, slot: usize) -> u32 {
+        u32::from(self.heights[slot])
+    }
+
+    #[inline]
+    fn half_area(&self, slot: usize) -> f32 {
+        let n = &self.nodes[slot];
+        let d = [
+            (n.bounds_max[0] - n.bounds_min[0]).max(0.0),
+            (n.bounds_max[1] - n.bounds_min[1]).max(0.0),
+            (n.bounds_max[2] - n.bounds_min[2]).max(0.0),
+        ];
+        d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+    }
+}
+
+/// Up to four binary slots that become one 4-wide node's children, in leaf order.
+#[derive(Clone, Copy)]
+struct Candidates {
+    slots: [usize; 4],
+    len: usize,
+}
+
+impl Candidates {
+    /// Replaces candidate `i` by its two binary children (in place, keeping the leaf order).
+    fn open(&mut self, arena: &Arena, i: usize) {
+        let (l, r) = arena.children(self.slots[i]);
+        for k in (i + 1..self.len).rev() {
+            self.slots[k + 1] = self.slots[k];
+        }
+        self.slots[i] = l;
+        self.slots[i + 1] = r;
+        self.len += 1;
+    }
+
+    /// Opens the interior candidate of largest surface area until there are four or none is left.
+    fn open_greedily(&mut self, arena: &Arena) {
+        while self.len < 4 {
+            let mut best = usize::MAX;
+            let mut best_area = f32::NEG_INFINITY;
+            for i in 0..self.len {
+                let s = self.slots[i];
+                if !arena.nodes[s].is_leaf() && arena.half_area(s) > best_area {
+                    best = i;
+                    best_area = arena.half_area(s);
+                }
+            }
+            if best == usize::MAX {
+                return;
+            }
+            self.open(arena, best);
+        }
+    }
+
+    /// The children of the 4-wide node made from binary `slot` at 4-wide depth `depth` (see the module
+    /// documentation for the depth guard).
+    fn of(arena: &Arena, slot: usize, depth: u32) -> Self {
+        let mut c = Self {
+            slots: [slot, 0, 0, 0],
+            len: 1,
+        };
+        if arena.nodes[slot].is_leaf() {
+            // Only a root can be a leaf: a one-leaf tree.
+            return c;
+        }
+        c.open(arena, 0);
+        let start = c;
+        c.open_greedily(arena);
+        let limit = half_up(MAX_DEPTH);
+        let within = (0..c.len).all(|i| {
+            let s = c.slots[i];
+            arena.nodes[s].is_leaf() || depth + 1 + half_up(arena.height(s)) <= limit
+        });
+        if within {
+            return c;
+        }
+        // Depth guard: every interior child two binary levels down (at most two opens, four slots).
+        c = start;
+        let mut i = 0;
+        while i < c.len {
+            if arena.nodes[c.slots[i]].is_leaf() {
+                i += 1;
+            } else {
+                c.open(arena, i);
+                i += 2;
+            }
+        }
+        c.open_greedily(arena);
+        c
+    }
+}
+
+/// Collapses the binary tree in `arena` (see [`super::binary::build_node`]) into 4-wide nodes: node 0 is
+/// the root, the interior children of a node are stored next to each other and after it (depth first).
+/// Fills the node, leaf and depth fields of `stats`.
+pub(super) fn collapse(
+    arena: &[BvhNode],
+    leaf_count: usize,
+    stats: &mut BvhStats,
+) -> Vec<Bvh4Node> {
+    let arena = Arena::new(arena);
+    stats.binary_max_depth = arena.height(0);
+    // A 4-wide tree over `n` leaves has at most `n - 1` nodes, typically about `n / 2.5`.
+    let mut nodes = Vec::with_capacity(leaf_count / 2 + 1);
+    nodes.push(Bvh4Node::EMPTY);
+    let mut stack = vec![(0usize, 0usize, 0u32)];
+    while let Some((slot, position, depth)) = stack.pop() {
+        let c = Candidates::of(&arena, slot, depth);
+        stats.max_depth = stats.max_depth.max(depth);
+        let mut node = Bvh4Node::EMPTY;
+        let first_child = nodes.len();
+        let mut interior = 0;
+        for i in 0..c.len {
+            let b = &arena.nodes[c.slots[i]];
+            node.set_slot_bounds(i, b.bounds_min.map(widen_down), b.bounds_max.map(widen_up));
+            if b.is_leaf() {
+                node.child[i] = b.left_or_first;
+                node.count[i] = b.triangle_count;
+                stats.leaf_count += 1;
+            } else {
+                node.child[i] = (first_child + interior) as u32;
+                node.count[i] = 0;
+                interior += 1;
+            }
+        }
+        nodes[position] = node;
+        nodes.resize(first_child + interior, Bvh4Node::EMPTY);
+        // Push in reverse so the first child's subtree is written first (depth-first order).
+        let mut k = interior;
+        for i in (0..c.len).rev() {
+            if !arena.nodes[c.slots[i]].is_leaf() {
+                k -= 1;
+                stack.push((c.slots[i], first_child + k, depth + 1));
+            }
+        }
+    }
+    nodes
+}

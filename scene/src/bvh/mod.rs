@@ -1,0 +1,691 @@
+//! BVH construction: a binned-SAH binary tree, built in parallel, collapsed into the 4-wide nodes
+//! ([`Bvh4Node`]) that traversal reads.
+//!
+//! - [`binary`]: the binary builder (Wald 2007), with a depth guard that bounds leaf depth by
+//!   [`MAX_DEPTH`].
+//! - [`collapse`]: greedy collapse into 4-wide nodes (largest surface area opened first), with a depth
+//!   guard that bounds node depth by [`MAX_NODE_DEPTH`], so traversal's fixed stack
+//!   ([`TRAVERSAL_STACK_SIZE`] entries, at most `3 D + 4` of them used) cannot overflow.
+//!
+//! Boxes are widened by a few ulps so that they strictly contain their triangles; leaves keep the binary
+//! builder's leaf order, which is the order of the packed triangle arrays.
+mod binary;
+mod collapse;
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use fovea_core::bvh::{MAX_NODE_COUNT, TRAVERSAL_STACK_SIZE};
+use fovea_core::scene::{Bvh4Node, BvhNode, TrianglePositions};
+use glam::Vec3A;
+use rayon::prelude::*;
+
+use binary::{build_node, Aabb, Bins, Context, PrimRef, Side, MAX_BINS};
+
+/// The deepest 4-wide node (root = 0) [`build_bvh`] produces: traversal then needs at most
+/// `3 * MAX_NODE_DEPTH + 4 <= TRAVERSAL_STACK_SIZE` stack entries.
+pub const MAX_NODE_DEPTH: u32 = (TRAVERSAL_STACK_SIZE as u32 - 4) / 3;
+
+/// The deepest leaf (root = 0) of the intermediate binary tree. The collapse keeps 4-wide node depths
+/// below `ceil(MAX_DEPTH / 2)`, hence within [`MAX_NODE_DEPTH`].
+pub const MAX_DEPTH: u32 = 2 * (MAX_NODE_DEPTH + 1);
+
+/// Builder settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BvhBuildOptions {
+    /// Leaves hold at most this many triangles, except when all centroids of a node coincide (then up to
+    /// four times this many, since no split can separate them).
+    pub max_leaf_size: u32,
+    /// SAH bins per axis (2 to 32).
+    pub bin_count: u32,
+    /// SAH cost of visiting an interior node.
+    pub traversal_cost: f32,
+    /// SAH cost of one ray-triangle test.
+    pub intersection_cost: f32,
+}
+
+impl Default for BvhBuildOptions {
+    fn default() -> Self {
+        Self {
+            max_leaf_size: 4,
+            bin_count: 32,
+            traversal_cost: 1.0,
+            intersection_cost: 1.0,
+        }
+    }
+}
+
+/// What a build produced and how long it took.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BvhStats {
+    pub build_ms: f64,
+    /// 4-wide nodes.
+    pub node_count: usize,
+    pub leaf_count: usize,
+    /// Depth of the deepest 4-wide node; the root alone has depth 0 (its leaves hang below it).
+    pub max_depth: u32,
+    /// Depth of the deepest leaf of the intermediate binary tree (root = 0).
+    pub binary_max_depth: u32,
+    /// Bytes of the node array.
+    pub memory_bytes: usize,
+}
+
+/// A built BVH in traversal layout (see [`Bvh4Node`]).
+#[derive(Clone, Debug, Default)]
+pub struct Bvh {
+    pub nodes: Vec<Bvh4Node>,
+    /// `triangle_order[i]` is the input index of the triangle stored at position `i` of the leaf-ordered
+    /// triangle arrays.
+    pub triangle_order: Vec<u32>,
+    pub stats: BvhStats,
+}
+
+/// Builds a BVH over `triangles` with binned SAH and collapses it to 4-wide nodes (see the module
+/// documentation). An empty input gives an empty node array; degenerate triangles are accepted (their
+/// boxes are flat or points).
+#[must_use]
+pub fn build_bvh(triangles: &[TrianglePositions], options: &BvhBuildOptions) -> Bvh {
+    let start = Instant::now();
+    let n = triangles.len();
+    if n == 0 {
+        return Bvh {
+            stats: BvhStats {
+                build_ms: start.elapsed().as_secs_f64() * 1e3,
+                ..BvhStats::default()
+            },
+            ..Bvh::default()
+        };
+    }
+    assert!(
+        n < (u32::MAX / 2) as usize,
+        "too many triangles for 32-bit node indices"
+    );
+    let max_leaf = options.max_leaf_size.max(1) as usize;
+    let ctx = Context {
+        bins: (options.bin_count as usize).clamp(2, MAX_BINS),
+        max_leaf,
+        coincident_leaf: 4 * max_leaf,
+        traversal_cost: options.traversal_cost.max(0.0),
+        intersection_cost: options.intersection_cost.max(1e-6),
+        leaves: AtomicUsize::new(0),
+    };
+
+    let mut prims: Vec<PrimRef> = triangles
+        .par_iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let a = Vec3A::from_slice(&t.v0[..3]);
+            let b = Vec3A::from_slice(&t.v1[..3]);
+            let c = Vec3A::from_slice(&t.v2[..3]);
+            PrimRef {
+                bounds: Aabb {
+                    min: a.min(b).min(c),
+                    max: a.max(b).max(c),
+                },
+                index: i as u32,
+            }
+        })
+        .collect();
+    let root = Side::of(&prims);
+    let mut arena = vec![BvhNode::default(); 2 * n - 1];
+    let mut bins = Bins::empty();
+    build_node(&ctx, &mut prims, &mut arena, 0, root, 0, &mut bins);
+
+    let mut stats = BvhStats::default();
+    let nodes = collapse::collapse(&arena, ctx.leaves.load(Ordering::Relaxed), &mut stats);
+    drop(arena);
+    assert!(
+        nodes.len() < MAX_NODE_COUNT,
+        "too many BVH nodes for traversal's stack entries"
+    );
+    let triangle_order: Vec<u32> = prims.par_iter().map(|p| p.index).collect();
+
+    stats.node_count = nodes.len();
+    stats.memory_bytes = nodes.len() * std::mem::size_of::<Bvh4Node>();
+    stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
+    Bvh {
+        nodes,
+        triangle_order,
+        stats,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fovea_core::bvh::{any_hit, closest_hit, Hit};
+    use fovea_core::geometry::triangle::WatertightRay;
+    use fovea_core::geometry::Ray;
+    use fovea_core::math::{pack_vec3, vec3_from};
+    use fovea_core::scene::{Material, SceneGlobals, SceneView, TriangleInfo};
+    use glam::Vec3;
+
+    /// SplitMix64 for reproducible test data.
+    struct TestRng(u64);
+    impl TestRng {
+        fn next_u64(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+        fn uniform(&mut self) -> f32 {
+            (self.next_u64() >> 40) as f32 * (1.0 / 16_777_216.0)
+        }
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.uniform()
+        }
+        fn vec(&mut self, lo: f32, hi: f32) -> Vec3 {
+            Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
+        }
+        fn unit_vector(&mut self) -> Vec3 {
+            loop {
+                let v = self.vec(-1.0, 1.0);
+                let l = v.length_squared();
+                if l > 1e-4 && l <= 1.0 {
+                    return v / l.sqrt();
+                }
+            }
+        }
+    }
+
+    fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
+        TrianglePositions {
+            v0: pack_vec3(a, 0.0),
+            v1: pack_vec3(b, 0.0),
+            v2: pack_vec3(c, 0.0),
+        }
+    }
+
+    /// A random soup: triangles of assorted sizes in `[-10, 10]^3`, every 50th one degenerate.
+    fn soup(n: usize, rng: &mut TestRng) -> Vec<TrianglePositions> {
+        (0..n)
+            .map(|i| {
+                let c = rng.vec(-10.0, 10.0);
+                let size = 10f32.powf(rng.range(-2.0, 0.5));
+                let a = c + rng.vec(-size, size);
+                let b = c + rng.vec(-size, size);
+                match i % 50 {
+                    0 => tri(a, a, a),
+                    25 => tri(a, b, a + (b - a) * 0.25),
+                    _ => tri(a, b, c + rng.vec(-size, size)),
+                }
+            })
+            .collect()
+    }
+
+    /// The packed scene arrays a traversal needs, in BVH leaf order.
+    struct Packed {
+        bvh: Bvh,
+        triangles: Vec<TrianglePositions>,
+        info: Vec<TriangleInfo>,
+        materials: Vec<Material>,
+    }
+
+    impl Packed {
+        fn new(input: &[TrianglePositions]) -> Self {
+            Self::with_options(input, &BvhBuildOptions::default())
+        }
+
+        fn with_options(input: &[TrianglePositions], options: &BvhBuildOptions) -> Self {
+            let bvh = build_bvh(input, options);
+            let triangles: Vec<_> = bvh
+                .triangle_order
+                .iter()
+                .map(|&i| input[i as usize])
+                .collect();
+            let info = vec![TriangleInfo::default(); triangles.len()];
+            Self {
+                bvh,
+                triangles,
+                info,
+                materials: vec![Material::default()],
+            }
+        }
+
+        fn view(&self) -> SceneView<'_> {
+            SceneView {
+                globals: SceneGlobals::default(),
+                nodes: &self.bvh.nodes,
+                triangles: &self.triangles,
+                triangle_info: &self.info,
+                normals: &[],
+                uvs: &[],
+                materials: &self.materials,
+                textures: &[],
+                texels: &[],
+                lights: &[],
+                light_cdf: &[],
+                triangle_light: &[],
+                environment_texels: &[],
+                environment_marginal_cdf: &[],
+                environment_conditional_cdf: &[],
+            }
+        }
+    }
+
+    fn brute_force(triangles: &[TrianglePositions], ray: &Ray, t_max: f32) -> Hit {
+        let w = WatertightRay::new(ray);
+        let mut best = Hit::miss();
+        let mut closest = t_max;
+        for (i, t) in triangles.iter().enumerate() {
+            let h = w.intersect(t, closest);
+            if h.hit {
+                closest = h.t;
+                best = Hit {
+                    t: h.t,
+                    triangle: i as u32,
+                    b1: h.b1,
+                    b2: h.b2,
+                };
+            }
+        }
+        best
+    }
+
+    /// What [`validate`]'s walk has seen so far.
+    struct Walk<'a> {
+        bvh: &'a Bvh,
+        input: &'a [TrianglePositions],
+        max_leaf: usize,
+        reached: Vec<bool>,
+        next_expected_child: usize,
+        next_triangle: usize,
+        leaves: usize,
+        max_depth: u32,
+    }
+
+    impl Walk<'_> {
+        /// Checks node `i` and, slot by slot, its subtrees (recursively, so leaves are met in leaf
+        /// order).
+        fn node(&mut self, i: usize, depth: u32) {
+            assert!(!self.reached[i], "node {i} reached twice");
+            self.reached[i] = true;
+            self.max_depth = self.max_depth.max(depth);
+            let node = self.bvh.nodes[i];
+            let used = (0..4).take_while(|&s| !node.is_empty_slot(s)).count();
+            assert!(
+                used >= 1 && (i == 0 || used >= 2),
+                "node {i} has {used} children"
+            );
+            // The builder allocates a node's interior children together when it writes the node,
+            // depth first.
+            for slot in 0..used {
+                if node.is_interior_slot(slot) {
+                    assert_eq!(node.child[slot] as usize, self.next_expected_child);
+                    self.next_expected_child += 1;
+                }
+            }
+            for slot in 0..4 {
+                let (lo, hi) = node.slot_bounds(slot);
+                let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+                if slot >= used {
+                    assert!(node.is_empty_slot(slot), "empty slots come last");
+                    assert!(lo.cmpgt(hi).all(), "empty slots are inverted");
+                    assert_eq!(node.count[slot], 0);
+                } else if node.is_leaf_slot(slot) {
+                    self.leaf(node.child[slot] as usize, node.count[slot] as usize, lo, hi);
+                } else {
+                    let c = node.child[slot] as usize;
+                    let child = self.bvh.nodes[c];
+                    for s in 0..4 {
+                        if !child.is_empty_slot(s) {
+                            let (clo, chi) = child.slot_bounds(s);
+                            assert!(
+                                Vec3::from(clo).cmpge(lo).all() && Vec3::from(chi).cmple(hi).all()
+                            );
+                        }
+                    }
+                    self.node(c, depth + 1);
+                }
+            }
+        }
+
+        fn leaf(&mut self, first: usize, count: usize, lo: Vec3, hi: Vec3) {
+            self.leaves += 1;
+            let range = first..first + count;
+            assert_eq!(range.start, self.next_triangle, "leaves out of leaf order");
+            self.next_triangle = range.end;
+            let centroid = |k: usize| {
+                let t = &self.input[self.bvh.triangle_order[k] as usize];
+                let (a, b, c) = (vec3_from(t.v0), vec3_from(t.v1), vec3_from(t.v2));
+                a.min(b).min(c) + a.max(b).max(c)
+            };
+            let coincident = range.clone().all(|k| centroid(k) == centroid(range.start));
+            assert!(
+                count >= 1
+                    && (count <= self.max_leaf || (coincident && count <= 4 * self.max_leaf))
+            );
+            for k in range {
+                let t = &self.input[self.bvh.triangle_order[k] as usize];
+                for v in [t.v0, t.v1, t.v2] {
+                    let v = vec3_from(v);
+                    assert!(
+                        v.cmpgt(lo).all() && v.cmplt(hi).all(),
+                        "{v:?} not strictly in {lo:?}..{hi:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Checks the layout invariants: every node reached exactly once, interior children stored together
+    /// (depth first), empty slots inverted and after the used ones, leaf ranges met in leaf order and
+    /// together covering all triangles once, every box strictly containing its triangles and its child
+    /// node's boxes, leaf sizes bounded, and the reported depths and counts exact and within the stack
+    /// bound.
+    fn validate(bvh: &Bvh, input: &[TrianglePositions], max_leaf: usize) {
+        let n = input.len();
+        let mut seen = vec![false; n];
+        for &i in &bvh.triangle_order {
+            assert!(!seen[i as usize], "triangle {i} appears twice");
+            seen[i as usize] = true;
+        }
+        assert!(seen.iter().all(|&s| s), "a triangle is missing");
+        if n == 0 {
+            assert!(bvh.nodes.is_empty());
+            return;
+        }
+        assert_eq!(bvh.nodes.len(), bvh.stats.node_count);
+        assert_eq!(
+            bvh.stats.memory_bytes,
+            bvh.nodes.len() * std::mem::size_of::<Bvh4Node>()
+        );
+        let mut walk = Walk {
+            bvh,
+            input,
+            max_leaf,
+            reached: vec![false; bvh.nodes.len()],
+            next_expected_child: 1,
+            next_triangle: 0,
+            leaves: 0,
+            max_depth: 0,
+        };
+        walk.node(0, 0);
+        assert_eq!(walk.next_triangle, n, "leaves do not cover all triangles");
+        assert!(walk.reached.iter().all(|&r| r), "unreachable nodes");
+        assert_eq!(walk.leaves, bvh.stats.leaf_count);
+        assert_eq!(walk.max_depth, bvh.stats.max_depth);
+        assert!(bvh.stats.max_depth <= MAX_NODE_DEPTH);
+        assert!(3 * bvh.stats.max_depth as usize + 4 <= TRAVERSAL_STACK_SIZE);
+        assert!(bvh.stats.binary_max_depth <= MAX_DEPTH);
+    }
+
+    /// Random rays: origins inside and outside the soup, random and axis-aligned directions, infinite and
+    /// finite segments.
+    fn random_ray(rng: &mut TestRng, triangles: &[TrianglePositions]) -> (Ray, f32) {
+        let origin = rng.vec(-15.0, 15.0);
+        let dir = match rng.next_u64() % 8 {
+            0 => [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z]
+                [(rng.next_u64() % 6) as usize],
+            1 => (rng.vec(-10.0, 10.0) - origin).normalize(),
+            2..=4 => {
+                // Aimed at a random point of a random triangle.
+                let t = &triangles[(rng.next_u64() % triangles.len() as u64) as usize];
+                let (b1, b2) = (rng.uniform() * 0.5, rng.uniform() * 0.5);
+                let p =
+                    vec3_from(t.v0) * (1.0 - b1 - b2) + vec3_from(t.v1) * b1 + vec3_from(t.v2) * b2;
+                (p - origin).normalize_or(Vec3::X)
+            }
+            _ => rng.unit_vector(),
+        };
+        let t_max = if rng.uniform() < 0.5 {
+            f32::INFINITY
+        } else {
+            rng.range(0.0, 30.0)
+        };
+        (Ray::new(origin, dir), t_max)
+    }
+
+    fn assert_matches_brute_force(packed: &Packed, rng: &mut TestRng, rays: usize) -> usize {
+        let scene = packed.view();
+        let mut hits = 0;
+        for _ in 0..rays {
+            let (ray, t_max) = random_ray(rng, &packed.triangles);
+            let expected = brute_force(&packed.triangles, &ray, t_max);
+            let got = closest_hit(&scene, &ray, t_max);
+            assert_eq!(got.is_hit(), expected.is_hit(), "{ray:?} {t_max}");
+            if expected.is_hit() {
+                hits += 1;
+                assert_eq!(got.t, expected.t, "{ray:?}");
+                if got.triangle != expected.triangle {
+                    // A tie: the other triangle must be hit at the very same distance.
+                    let other = WatertightRay::new(&ray)
+                        .intersect(&packed.triangles[got.triangle as usize], f32::INFINITY);
+                    assert!(other.hit && other.t == expected.t);
+                }
+            }
+            assert_eq!(any_hit(&scene, &ray, t_max), expected.is_hit());
+        }
+        hits
+    }
+
+    #[test]
+    fn traversal_equals_brute_force_on_random_soups() {
+        let mut rng = TestRng(1);
+        let mut total_hits = 0;
+        for &n in &[1usize, 2, 3, 5, 8, 17, 64, 300, 1000, 5000] {
+            let input = soup(n, &mut rng);
+            let packed = Packed::new(&input);
+            validate(&packed.bvh, &input, 4);
+            let rays = if n >= 1000 { 1000 } else { 2000 };
+            total_hits += assert_matches_brute_force(&packed, &mut rng, rays);
+        }
+        assert!(total_hits > 2000, "{total_hits}");
+    }
+
+    #[test]
+    fn empty_and_single_triangle() {
+        let empty = build_bvh(&[], &BvhBuildOptions::default());
+        assert!(empty.nodes.is_empty() && empty.triangle_order.is_empty());
+        let packed = Packed::new(&[]);
+        let ray = Ray::new(Vec3::ZERO, Vec3::Z);
+        assert!(!closest_hit(&packed.view(), &ray, f32::INFINITY).is_hit());
+
+        let one = [tri(
+            Vec3::new(-1.0, -1.0, 2.0),
+            Vec3::new(1.0, -1.0, 2.0),
+            Vec3::new(0.0, 1.0, 2.0),
+        )];
+        let packed = Packed::new(&one);
+        assert_eq!(packed.bvh.nodes.len(), 1);
+        assert_eq!(packed.bvh.stats.leaf_count, 1);
+        assert_eq!(packed.bvh.stats.max_depth, 0);
+        assert_eq!(packed.bvh.stats.binary_max_depth, 0);
+        assert!(packed.bvh.nodes[0].is_leaf_slot(0));
+        assert!((1..4).all(|s| packed.bvh.nodes[0].is_empty_slot(s)));
+        validate(&packed.bvh, &one, 4);
+        let h = closest_hit(&packed.view(), &ray, f32::INFINITY);
+        assert!(h.is_hit() && h.triangle == 0 && (h.t - 2.0).abs() < 1e-6);
+        // A single degenerate triangle: a flat or point box, nothing to hit, nothing to break.
+        let p = Vec3::new(0.0, 0.0, 2.0);
+        let point = [tri(p, p, p)];
+        let packed = Packed::new(&point);
+        validate(&packed.bvh, &point, 4);
+        assert!(!closest_hit(&packed.view(), &ray, f32::INFINITY).is_hit());
+    }
+
+    /// Adversarial inputs for the SAH: identical centroids, and centroids on geometric progressions (which
+    /// binning can only peel off one at a time). The depth guard keeps the tree within the stack, and
+    /// traversal stays exact.
+    #[test]
+    fn depth_stays_bounded_on_adversarial_input() {
+        let mut rng = TestRng(5);
+        let mut cases: Vec<Vec<TrianglePositions>> = Vec::new();
+        // 20 000 triangles with the same centroid (different shapes and sizes).
+        cases.push(
+            (0..20_000)
+                .map(|_| {
+                    // Bounds symmetric about the origin: every centroid is exactly zero.
+                    let m = rng.vec(0.1, 1.0);
+                    let c = rng.vec(-1.0, 1.0).clamp(-m, m);
+                    tri(m, -m, c)
+                })
+                .collect(),
+        );
+        // 20 000 copies of one triangle.
+        cases.push(vec![tri(Vec3::ZERO, Vec3::X, Vec3::Y); 20_000]);
+        // Geometric progressions 2^-i (tiny triangles) and 1.25^i.
+        cases.push(
+            (0..126)
+                .map(|i| {
+                    let x = 2f32.powi(-i);
+                    tri(
+                        Vec3::new(x, 0.0, 0.0),
+                        Vec3::new(x, 1.0, 0.0),
+                        Vec3::new(x, 0.0, 1.0),
+                    )
+                })
+                .collect(),
+        );
+        cases.push(
+            (0..300)
+                .map(|i| {
+                    let x = 1.25f32.powi(i);
+                    let s = x * 0.01;
+                    tri(
+                        Vec3::new(x, 0.0, 0.0),
+                        Vec3::new(x + s, s, 0.0),
+                        Vec3::new(x, 0.0, s),
+                    )
+                })
+                .collect(),
+        );
+        cases.push(
+            (0..4000)
+                .map(|i| {
+                    let x = 2f32.powf(-(i as f32) * 0.03);
+                    tri(
+                        Vec3::new(x, -1.0, -1.0),
+                        Vec3::new(x, 1.0, -1.0),
+                        Vec3::new(x, 0.0, 1.0),
+                    )
+                })
+                .collect(),
+        );
+        // 1.1^i spans 37 decades: SAH peels off one triangle per level until the depth guard takes over.
+        cases.push(
+            (0..900)
+                .map(|i| {
+                    let x = 1.1f32.powi(i);
+                    let s = x * 0.01;
+                    tri(
+                        Vec3::new(x, 0.0, 0.0),
+                        Vec3::new(x, s, 0.0),
+                        Vec3::new(x, 0.0, s),
+                    )
+                })
+                .collect(),
+        );
+        // Two bins make binning peel off one progression step per level: a spine as deep as the input is
+        // long unless the depth guard steps in.
+        let two_bins = BvhBuildOptions {
+            bin_count: 2,
+            ..BvhBuildOptions::default()
+        };
+        let mut deepest = 0;
+        let mut deepest4 = 0;
+        for (input, options) in cases
+            .iter()
+            .flat_map(|c| [(c, BvhBuildOptions::default()), (c, two_bins)])
+        {
+            let packed = Packed::with_options(input, &options);
+            validate(&packed.bvh, input, 4);
+            deepest = deepest.max(packed.bvh.stats.binary_max_depth);
+            deepest4 = deepest4.max(packed.bvh.stats.max_depth);
+            let scene = packed.view();
+            for _ in 0..500 {
+                let origin = rng.vec(-2.0, 2.0) + Vec3::new(0.5, 0.0, 0.0);
+                let ray = Ray::new(origin, rng.unit_vector());
+                let expected = brute_force(&packed.triangles, &ray, f32::INFINITY);
+                let got = closest_hit(&scene, &ray, f32::INFINITY);
+                assert_eq!(got.is_hit(), expected.is_hit());
+                assert_eq!(got.t, expected.t);
+            }
+        }
+        // The guards were needed (and used): some tree reached the deepest levels they allow.
+        assert!(deepest > MAX_DEPTH - 8, "{deepest}");
+        assert!(deepest4 > MAX_NODE_DEPTH - 4, "{deepest4}");
+    }
+
+    /// Rays from inside a closed, finely tessellated sphere aimed exactly at its vertices and edges never
+    /// escape through the BVH either (the conservative slab test keeps the watertight test's hits).
+    #[test]
+    fn closed_mesh_is_watertight_through_the_bvh() {
+        let mut rng = TestRng(9);
+        let (rings, segments) = (40usize, 80usize);
+        let centre = Vec3::new(3.0, -2.0, 7.5);
+        let vertex = |r: usize, s: usize| {
+            let theta = std::f32::consts::PI * r as f32 / rings as f32;
+            let phi = 2.0 * std::f32::consts::PI * (s % segments) as f32 / segments as f32;
+            if r == 0 || r == rings {
+                return centre + Vec3::new(0.0, 0.0, if r == 0 { 2.0 } else { -2.0 });
+            }
+            centre
+                + 2.0
+                    * Vec3::new(
+                        theta.sin() * phi.cos(),
+                        theta.sin() * phi.sin(),
+                        theta.cos(),
+                    )
+        };
+        let mut mesh = Vec::new();
+        for r in 0..rings {
+            for s in 0..segments {
+                let (a, b, c, d) = (
+                    vertex(r, s),
+                    vertex(r, s + 1),
+                    vertex(r + 1, s + 1),
+                    vertex(r + 1, s),
+                );
+                if r != 0 {
+                    mesh.push(tri(a, b, d));
+                }
+                if r != rings - 1 {
+                    mesh.push(tri(b, c, d));
+                }
+            }
+        }
+        let packed = Packed::new(&mesh);
+        validate(&packed.bvh, &mesh, 4);
+        let scene = packed.view();
+        let mut rays = 0;
+        for t in &mesh {
+            let v = [vec3_from(t.v0), vec3_from(t.v1), vec3_from(t.v2)];
+            for k in 0..3 {
+                for target in [
+                    v[k],
+                    (v[k] + v[(k + 1) % 3]) * 0.5,
+                    v[k].lerp(v[(k + 1) % 3], rng.uniform()),
+                ] {
+                    for origin in [centre, centre + rng.unit_vector() * rng.range(0.0, 1.5)] {
+                        let ray = Ray::new(origin, target - origin);
+                        assert!(closest_hit(&scene, &ray, f32::INFINITY).is_hit(), "{ray:?}");
+                        assert!(any_hit(&scene, &ray, f32::INFINITY));
+                        rays += 1;
+                    }
+                }
+            }
+        }
+        assert!(rays > 50_000);
+    }
+
+    #[test]
+    fn builds_200k_triangles_quickly() {
+        let mut rng = TestRng(77);
+        let input = soup(200_000, &mut rng);
+        let bvh = build_bvh(&input, &BvhBuildOptions::default());
+        eprintln!(
+            "200k random triangles: {:.1} ms, {} nodes, {} leaves, depth {} (binary {})",
+            bvh.stats.build_ms,
+            bvh.stats.node_count,
+            bvh.stats.leaf_count,
+            bvh.stats.max_depth,
+            bvh.stats.binary_max_depth
+        );
+        validate(&bvh, &input, 4);
+        // Generous bound (a loaded 2-core machine); the typical time is far lower.
+        assert!(bvh.stats.build_ms < 2000.0);
+    }
+}
