@@ -260,8 +260,11 @@ impl DisneyParams {
         f += f_s * (d_s * g_o * g_i);
 
         // Clearcoat: 0.25 · clearcoat · GTR1 · Schlick(0.04) · G(0.25) / (4 cos θo cos θi).
-        let d_c = gtr1_d(h.z, lobes.cc_alpha);
+        // GTR1 needs a logarithm: skip it for the (common) materials without clearcoat, whose clearcoat
+        // probability is zero too.
+        let mut d_c = 0.0;
         if lobes.clearcoat > 0.0 {
+            d_c = gtr1_d(h.z, lobes.cc_alpha);
             let f_c = 0.04 + 0.96 * fh;
             let g_c = smith_g1_over_2cos(wo, CLEARCOAT_G_ALPHA, CLEARCOAT_G_ALPHA)
                 * smith_g1_over_2cos(wi, CLEARCOAT_G_ALPHA, CLEARCOAT_G_ALPHA);
