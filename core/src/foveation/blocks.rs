@@ -104,10 +104,10 @@ pub fn block_centre(block: &OwnedBlock) -> Vec2 {
 #[inline]
 #[must_use]
 pub fn block_extent(block: &OwnedBlock, width: u32, height: u32) -> [u32; 2] {
-    [
-        block.size.min(width.saturating_sub(block.origin[0])),
-        block.size.min(height.saturating_sub(block.origin[1])),
-    ]
+    // (`saturating_sub` is not available in rust-gpu.)
+    let room_x = if width > block.origin[0] { width - block.origin[0] } else { 0 };
+    let room_y = if height > block.origin[1] { height - block.origin[1] } else { 0 };
+    [block.size.min(room_x), block.size.min(room_y)]
 }
 
 /// A sample position uniform over the block's clipped footprint, for `u` in [0, 1)²: the paper's subpixel
