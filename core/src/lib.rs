@@ -25,6 +25,7 @@ pub mod camera;
 pub mod foveation;
 pub mod geometry;
 pub mod integrator;
+pub mod kernel_abi;
 pub mod lights;
 pub mod material;
 pub mod math;
