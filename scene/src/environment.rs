@@ -198,3 +198,89 @@ mod tests {
         assert_eq!(cdf, vec![0.0, 0.5, 1.0]);
     }
 }
+
+#[cfg(test)]
+mod sampling_tests {
+    use super::*;
+    use crate::pack::pack_scene;
+    use fovea_core::lights::environment;
+    use glam::Vec2;
+
+    /// A small map with a bright spot, packed with one triangle so that a scene exists.
+    fn packed_with_map() -> crate::pack::PackedScene {
+        let (w, h) = (16u32, 8u32);
+        let mut texels = vec![[0.1f32, 0.1, 0.1, 0.0]; (w * h) as usize];
+        texels[(2 * w + 11) as usize] = [50.0, 40.0, 30.0, 0.0];
+        texels[(6 * w + 3) as usize] = [0.0, 0.0, 0.0, 0.0];
+        let loaded = crate::mesh::LoadedScene {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            triangles: vec![[0, 1, 2]],
+            triangle_materials: vec![0],
+            materials: vec![fovea_core::scene::Material::default()],
+            material_names: vec!["m".into()],
+            textures: Vec::new(),
+            punctual_lights: Vec::new(),
+            camera: None,
+            warnings: Vec::new(),
+        };
+        let env = Environment::Map {
+            width: w,
+            height: h,
+            texels,
+            scale: [1.0; 3],
+        };
+        pack_scene(loaded, &env, &crate::bvh::BvhBuildOptions::default())
+    }
+
+    #[test]
+    fn map_sampling_pdf_matches_lookup_and_integrates_to_one() {
+        let packed = packed_with_map();
+        let scene = packed.view();
+        let mut state = 12345u32;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            (state >> 8) as f32 / 16_777_216.0
+        };
+        let mut bright = 0;
+        let n = 20_000;
+        for _ in 0..n {
+            let s = environment::sample(&scene, Vec2::new(next(), next()));
+            if s.pdf == 0.0 {
+                continue;
+            }
+            let p = environment::pdf(&scene, s.direction);
+            assert!(
+                (p - s.pdf).abs() <= 1e-3 * s.pdf,
+                "sampled pdf {} vs lookup {p}",
+                s.pdf
+            );
+            if environment::radiance(&scene, s.direction).x > 10.0 {
+                bright += 1;
+            }
+        }
+        // The bright texel carries most of the luminance, so most samples go there.
+        assert!(
+            bright > n / 2,
+            "{bright} of {n} samples hit the bright texel"
+        );
+        // ∫ pdf dω = 1, estimated with uniform sphere directions.
+        let m = 200_000;
+        let mut sum = 0.0f64;
+        for _ in 0..m {
+            let d = fovea_core::sampling::warp::square_to_uniform_sphere(Vec2::new(next(), next()));
+            sum += environment::pdf(&scene, d) as f64 * 4.0 * std::f64::consts::PI;
+        }
+        let integral = sum / m as f64;
+        assert!(
+            (integral - 1.0).abs() < 0.03,
+            "pdf integrates to {integral}"
+        );
+        // A black texel is never sampled: its pdf is zero.
+        let black = environment::uv_to_direction(Vec2::new(3.5 / 16.0, 6.5 / 8.0));
+        assert_eq!(environment::pdf(&scene, black), 0.0);
+    }
+}

@@ -6,7 +6,7 @@
 use glam::{Vec2, Vec3};
 
 use super::{LightSample, INFINITE_DISTANCE};
-use crate::math::float::{atan2, cos, safe_acos, sin, INV_2PI, INV_PI, PI};
+use crate::math::float::{atan2, cos, safe_sqrt, sin, INV_2PI, INV_PI, PI};
 use crate::math::vec3_from;
 use crate::sampling::distribution::{pdf_2d, sample_2d};
 use crate::sampling::warp::{square_to_uniform_sphere, UNIFORM_SPHERE_PDF};
@@ -17,7 +17,8 @@ use crate::scene::{SceneView, ENVIRONMENT_CONSTANT, ENVIRONMENT_MAP};
 #[must_use]
 pub fn direction_to_uv(d: Vec3) -> Vec2 {
     let u = (atan2(d.z, d.x) + PI) * INV_2PI;
-    let v = safe_acos(d.y) * INV_PI;
+    // atan2 rather than acos: acos(y) loses precision near the poles, where sin θ (the Jacobian) is small.
+    let v = atan2(safe_sqrt(d.x * d.x + d.z * d.z), d.y) * INV_PI;
     Vec2::new(u.clamp(0.0, 0.999_999_9), v.clamp(0.0, 0.999_999_9))
 }
 
