@@ -1,22 +1,41 @@
 #!/usr/bin/env bash
-# Installs what fovea needs on a fresh Debian or Ubuntu machine. Idempotent; safe to run again.
-# Today that is a Rust toolchain (cargo >= 1.85) and a C compiler for crates with build scripts.
+# Installs what fovea needs on a fresh Debian or Ubuntu machine. Idempotent and quiet; safe to run again.
+# - a Rust toolchain (cargo >= 1.85) and a C compiler for crates with build scripts;
+# - for the Vulkan backend: the SPIR-V tools (spirv-val, spirv-opt), a Vulkan loader, Mesa's drivers (lavapipe
+#   runs the kernel on the CPU where there is no GPU), vulkaninfo and the validation layers;
+# - the pinned nightly that rust-gpu builds the kernel with (see README, "GPU build").
 set -euo pipefail
 
+NIGHTLY=nightly-2026-08-15
+NIGHTLY_COMPONENTS=(rust-src rustc-dev llvm-tools)
+
+# --- apt packages -----------------------------------------------------------------------------------------
+apt_packages=(gcc pkg-config spirv-tools mesa-vulkan-drivers libvulkan1 vulkan-tools vulkan-validationlayers)
 need_apt=()
-command -v cc >/dev/null 2>&1 || need_apt+=(gcc)
-command -v pkg-config >/dev/null 2>&1 || need_apt+=(pkg-config)
+for pkg in "${apt_packages[@]}"; do
+  if command -v dpkg-query >/dev/null 2>&1; then
+    dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || need_apt+=("$pkg")
+  fi
+done
+if ! command -v dpkg-query >/dev/null 2>&1; then
+  # Not Debian-like: only check the commands the build itself runs.
+  for cmd in cc pkg-config spirv-val spirv-opt; do
+    command -v "$cmd" >/dev/null 2>&1 || need_apt+=("$cmd")
+  done
+fi
 if [ ${#need_apt[@]} -gt 0 ]; then
   if command -v apt-get >/dev/null 2>&1; then
     SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-    $SUDO apt-get update -qq
-    $SUDO apt-get install -y -qq "${need_apt[@]}"
+    echo "setup: installing ${need_apt[*]}"
+    $SUDO apt-get update -qq >/dev/null
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${need_apt[@]}" >/dev/null
   else
     echo "setup: please install: ${need_apt[*]}" >&2
     exit 1
   fi
 fi
 
+# --- stable Rust ------------------------------------------------------------------------------------------
 if ! command -v cargo >/dev/null 2>&1; then
   if [ -x "$HOME/.cargo/bin/cargo" ]; then
     export PATH="$HOME/.cargo/bin:$PATH"
@@ -25,4 +44,27 @@ if ! command -v cargo >/dev/null 2>&1; then
     exit 1
   fi
 fi
-echo "setup: $(cargo --version)"
+
+# --- the kernel's nightly ---------------------------------------------------------------------------------
+if command -v rustup >/dev/null 2>&1; then
+  if ! rustup toolchain list | grep -q "^${NIGHTLY}"; then
+    echo "setup: installing Rust ${NIGHTLY} (${NIGHTLY_COMPONENTS[*]}) for the GPU kernel"
+    rustup toolchain install "$NIGHTLY" --profile minimal \
+      --component "$(IFS=,; echo "${NIGHTLY_COMPONENTS[*]}")" >/dev/null 2>&1 ||
+      { echo "setup: rustup toolchain install ${NIGHTLY} failed" >&2; exit 1; }
+  fi
+  installed=$(rustup component list --installed --toolchain "$NIGHTLY")
+  missing=()
+  for c in "${NIGHTLY_COMPONENTS[@]}"; do
+    grep -q -e "^${c}\$" -e "^${c}-" <<<"$installed" || missing+=("$c")
+  done
+  if [ ${#missing[@]} -gt 0 ]; then
+    echo "setup: adding ${missing[*]} to ${NIGHTLY}"
+    rustup component add --toolchain "$NIGHTLY" "${missing[@]}" >/dev/null 2>&1 ||
+      { echo "setup: rustup component add failed" >&2; exit 1; }
+  fi
+else
+  echo "setup: rustup not found; the Vulkan backend needs Rust ${NIGHTLY} with ${NIGHTLY_COMPONENTS[*]}" >&2
+fi
+
+echo "setup: $(cargo --version); kernel toolchain ${NIGHTLY}"

@@ -5,7 +5,6 @@
 //! [`crate::scene::layout`] map one to one). Buffers a scene does not need are bound as small dummies.
 use bytemuck::{Pod, Zeroable};
 
-
 /// `SceneGlobals` (one element).
 pub const BINDING_GLOBALS: u32 = 0;
 /// `Bvh4Node` array.
@@ -88,3 +87,412 @@ pub struct KernelPushConstants {
 
 /// Workgroup size of every entry point.
 pub const WORKGROUP_SIZE: u32 = 64;
+
+// ---------------------------------------------------------------------------------------------------------
+// The `probe` entry point: evaluates one core function per invocation, for the cross-backend tests.
+// ---------------------------------------------------------------------------------------------------------
+
+/// `probe` input records (`[f32; 4]` each; [`PROBE_INPUT_RECORDS`] per item). Shares the binding of
+/// [`BINDING_BLOCKS`] (the probe never runs with blocks).
+pub const BINDING_PROBE_INPUT: u32 = 15;
+/// `probe` output records (`[f32; 4]` each; [`PROBE_OUTPUT_RECORDS`] per item). Shares the binding of
+/// [`BINDING_SAMPLES`].
+pub const BINDING_PROBE_OUTPUT: u32 = 16;
+/// Input records per probe item, whatever the selector: item `i` reads `inputs[i · 8 .. i · 8 + 8]`
+/// (unused records are ignored).
+pub const PROBE_INPUT_RECORDS: u32 = 8;
+/// Output records per probe item, whatever the selector: item `i` writes `outputs[i · 2 .. i · 2 + 2]`
+/// (unused records are written as zero).
+pub const PROBE_OUTPUT_RECORDS: u32 = 2;
+
+// Probe selectors. The `probe` entry point takes [`KernelPushConstants`]: `spp` is the selector and
+// `item_count` the number of items. Integers travel as `f32` bit patterns (`f32::from_bits` /
+// `to_bits`), so they come back bit-exact. `in[k]` is the item's k-th input record, `out[k]` its k-th
+// output record; components not named are ignored (input) or zero (output).
+
+/// [`crate::rng::pcg4d`]: `in[0]` = four words (bits) → `out[0]` = four hashed words (bits).
+pub const PROBE_PCG4D: u32 = 0;
+/// [`crate::rng::SampleRng`]: `in[0]` = (pixel x, pixel y, frame, sample) bits, `in[1]` = (region, seed,
+/// draws) bits → `out[0]` = `next_u32x4` after skipping `draws` draws (bits), `out[1].xy` = the
+/// following `next_2d`.
+pub const PROBE_SAMPLE_RNG: u32 = 1;
+/// [`crate::geometry::offset::offset_ray_origin`]: `in[0].xyz` = p, `in[1].xyz` = n → `out[0].xyz`.
+pub const PROBE_OFFSET_RAY_ORIGIN: u32 = 2;
+/// The watertight ray-triangle test ([`crate::geometry::triangle::WatertightRay`]): `in[0]` = (origin
+/// xyz, t_max), `in[1].xyz` = direction, `in[2]`, `in[3]`, `in[4]` = v0, v1, v2 (as packed in
+/// [`crate::scene::TrianglePositions`]) → `out[0]` = (t, b1, b2, hit ? 1 : 0).
+pub const PROBE_TRIANGLE: u32 = 3;
+/// [`crate::bsdf::disney::DisneyParams::eval_and_pdf`]: `in[0]` = (base colour rgb, metallic), `in[1]` =
+/// (roughness, anisotropic, specular, specular_tint), `in[2]` = (sheen, sheen_tint, clearcoat,
+/// clearcoat_gloss), `in[3].xyz` = wo, `in[4].xyz` = wi → `out[0]` = (f rgb, pdf).
+pub const PROBE_DISNEY_EVAL: u32 = 4;
+/// [`crate::bsdf::disney::DisneyParams::sample`]: `in[0..3]` as for [`PROBE_DISNEY_EVAL`], `in[3].xyz` =
+/// wo, `in[4].xyz` = u → `out[0]` = (wi xyz, pdf), `out[1].xyz` = f.
+pub const PROBE_DISNEY_SAMPLE: u32 = 5;
+/// [`crate::post::tonemap::tonemap_to_rgba8`]: `in[0]` = (hdr rgb, exposure EV) → `out[0].x` = packed
+/// RGBA8 (bits).
+pub const PROBE_TONEMAP: u32 = 6;
+/// [`crate::foveation::owning_block`] with the frame's foveation ([`BINDING_FRAME`]): `in[0].xy` = pixel
+/// (bits) → `out[0]` = (region, size, origin x, origin y) (bits).
+pub const PROBE_OWNING_BLOCK: u32 = 7;
+/// [`crate::foveation::cell_mean_at`] over the image in [`BINDING_REPLICATED`] (frame width, height and
+/// foveation): `in[0].x` = cell index (bits) → `out[0]` = the cell mean.
+pub const PROBE_CELL_MEAN: u32 = 8;
+/// [`crate::foveation::fill_pixel`] (the bilinear cell weights) over [`BINDING_REPLICATED`] and
+/// [`BINDING_CELL_MEANS`]: `in[0]` = (x, y, fill mode) (bits) → `out[0]` = the filled value.
+pub const PROBE_FILL_PIXEL: u32 = 9;
+/// Number of probe selectors; any other selector writes zeros.
+pub const PROBE_SELECTOR_COUNT: u32 = 10;
+
+/// The Disney parameters of probe input records `in[base .. base + 3]`.
+#[inline]
+#[must_use]
+fn probe_disney_params(inputs: &[[f32; 4]], base: usize) -> crate::bsdf::disney::DisneyParams {
+    let a = inputs[base];
+    let b = inputs[base + 1];
+    let c = inputs[base + 2];
+    crate::bsdf::disney::DisneyParams {
+        base_color: glam::Vec3::new(a[0], a[1], a[2]),
+        metallic: a[3],
+        roughness: b[0],
+        anisotropic: b[1],
+        specular: b[2],
+        specular_tint: b[3],
+        sheen: c[0],
+        sheen_tint: c[1],
+        clearcoat: c[2],
+        clearcoat_gloss: c[3],
+    }
+}
+
+/// `xyz` of a record.
+#[inline]
+#[must_use]
+fn probe_vec3(r: [f32; 4]) -> glam::Vec3 {
+    glam::Vec3::new(r[0], r[1], r[2])
+}
+
+/// Evaluates probe item `item` with `selector` (one of the `PROBE_*` selectors; see each for the record
+/// layout): reads `inputs[item · PROBE_INPUT_RECORDS ..]` and returns the item's
+/// [`PROBE_OUTPUT_RECORDS`] output records. Both the GPU `probe` entry point and the CPU side of the
+/// cross-backend tests call this, so they differ only in how the core functions were compiled.
+/// `replicated` and `cell_means` are only read by [`PROBE_CELL_MEAN`] and [`PROBE_FILL_PIXEL`].
+#[must_use]
+pub fn probe_eval(
+    selector: u32,
+    inputs: &[[f32; 4]],
+    item: u32,
+    frame: &crate::integrator::FrameParams,
+    replicated: &[[f32; 4]],
+    cell_means: &[[f32; 4]],
+) -> [[f32; 4]; 2] {
+    let base = (item * PROBE_INPUT_RECORDS) as usize;
+    let r0 = inputs[base];
+    let mut out = [[0.0f32; 4]; 2];
+    if selector == PROBE_PCG4D {
+        let h = crate::rng::pcg4d([
+            r0[0].to_bits(),
+            r0[1].to_bits(),
+            r0[2].to_bits(),
+            r0[3].to_bits(),
+        ]);
+        out[0] = [
+            f32::from_bits(h[0]),
+            f32::from_bits(h[1]),
+            f32::from_bits(h[2]),
+            f32::from_bits(h[3]),
+        ];
+    } else if selector == PROBE_SAMPLE_RNG {
+        let r1 = inputs[base + 1];
+        let mut rng = crate::rng::SampleRng::new(
+            [r0[0].to_bits(), r0[1].to_bits()],
+            r0[2].to_bits(),
+            r0[3].to_bits(),
+            r1[0].to_bits(),
+            r1[1].to_bits(),
+        );
+        for _ in 0..r1[2].to_bits() {
+            let _ = rng.next_u32x4();
+        }
+        let h = rng.next_u32x4();
+        out[0] = [
+            f32::from_bits(h[0]),
+            f32::from_bits(h[1]),
+            f32::from_bits(h[2]),
+            f32::from_bits(h[3]),
+        ];
+        let u = rng.next_2d();
+        out[1] = [u.x, u.y, 0.0, 0.0];
+    } else if selector == PROBE_OFFSET_RAY_ORIGIN {
+        let p = crate::geometry::offset::offset_ray_origin(
+            probe_vec3(r0),
+            probe_vec3(inputs[base + 1]),
+        );
+        out[0] = [p.x, p.y, p.z, 0.0];
+    } else if selector == PROBE_TRIANGLE {
+        let ray = crate::geometry::Ray::new(probe_vec3(r0), probe_vec3(inputs[base + 1]));
+        let tri = crate::scene::TrianglePositions {
+            v0: inputs[base + 2],
+            v1: inputs[base + 3],
+            v2: inputs[base + 4],
+        };
+        let hit = crate::geometry::triangle::WatertightRay::new(&ray).intersect(&tri, r0[3]);
+        out[0] = [hit.t, hit.b1, hit.b2, if hit.hit { 1.0 } else { 0.0 }];
+    } else if selector == PROBE_DISNEY_EVAL {
+        let params = probe_disney_params(inputs, base);
+        let (f, pdf) =
+            params.eval_and_pdf(probe_vec3(inputs[base + 3]), probe_vec3(inputs[base + 4]));
+        out[0] = [f.x, f.y, f.z, pdf];
+    } else if selector == PROBE_DISNEY_SAMPLE {
+        let params = probe_disney_params(inputs, base);
+        let s = params.sample(probe_vec3(inputs[base + 3]), probe_vec3(inputs[base + 4]));
+        out[0] = [s.wi.x, s.wi.y, s.wi.z, s.pdf];
+        out[1] = [s.f.x, s.f.y, s.f.z, 0.0];
+    } else if selector == PROBE_TONEMAP {
+        let packed = crate::post::tonemap::tonemap_to_rgba8(probe_vec3(r0), r0[3]);
+        out[0] = [f32::from_bits(packed), 0.0, 0.0, 0.0];
+    } else if selector == PROBE_OWNING_BLOCK {
+        let b = crate::foveation::owning_block(r0[0].to_bits(), r0[1].to_bits(), &frame.foveation);
+        out[0] = [
+            f32::from_bits(b.region),
+            f32::from_bits(b.size),
+            f32::from_bits(b.origin[0]),
+            f32::from_bits(b.origin[1]),
+        ];
+    } else if selector == PROBE_CELL_MEAN {
+        let m = crate::foveation::cell_mean_at(
+            replicated,
+            frame.width,
+            frame.height,
+            &frame.foveation,
+            r0[0].to_bits(),
+        );
+        out[0] = m.to_array();
+    } else if selector == PROBE_FILL_PIXEL {
+        let v = crate::foveation::fill_pixel(
+            replicated,
+            cell_means,
+            frame.width,
+            frame.height,
+            &frame.foveation,
+            r0[0].to_bits(),
+            r0[1].to_bits(),
+            r0[2].to_bits(),
+        );
+        out[0] = v.to_array();
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use std::vec;
+    use std::vec::Vec;
+
+    use super::*;
+    use crate::bsdf::DisneyParams;
+    use crate::foveation::{owning_block, FoveationParams};
+    use crate::geometry::triangle::WatertightRay;
+    use crate::geometry::Ray;
+    use crate::integrator::FrameParams;
+    use crate::rng::{pcg4d, SampleRng};
+    use crate::scene::TrianglePositions;
+    use glam::Vec3;
+
+    fn bits(v: [u32; 4]) -> [f32; 4] {
+        [
+            f32::from_bits(v[0]),
+            f32::from_bits(v[1]),
+            f32::from_bits(v[2]),
+            f32::from_bits(v[3]),
+        ]
+    }
+
+    fn frame(width: u32, height: u32) -> FrameParams {
+        let mut f: FrameParams = bytemuck::Zeroable::zeroed();
+        f.width = width;
+        f.height = height;
+        f.foveation = FoveationParams::paper([9.0, 7.0], 3.0, 6.0);
+        f
+    }
+
+    /// Runs the probe on one item whose input records are `records` (padded to the stride).
+    fn probe_one(selector: u32, records: &[[f32; 4]], frame: &FrameParams) -> [[f32; 4]; 2] {
+        probe_one_with(selector, records, frame, &[], &[])
+    }
+
+    fn probe_one_with(
+        selector: u32,
+        records: &[[f32; 4]],
+        frame: &FrameParams,
+        replicated: &[[f32; 4]],
+        cell_means: &[[f32; 4]],
+    ) -> [[f32; 4]; 2] {
+        // Item 1 of two, so the stride is exercised.
+        let mut inputs = vec![[f32::NAN; 4]; 2 * PROBE_INPUT_RECORDS as usize];
+        let base = PROBE_INPUT_RECORDS as usize;
+        inputs[base..base + records.len()].copy_from_slice(records);
+        probe_eval(selector, &inputs, 1, frame, replicated, cell_means)
+    }
+
+    #[test]
+    fn probe_pcg4d_is_bit_exact() {
+        let f = frame(16, 16);
+        for v in [
+            [0u32, 0, 0, 0],
+            [1, 2, 3, 4],
+            [0xffff_ffff, 0x7fc0_0001, 0xff80_0000, 12345],
+        ] {
+            let out = probe_one(PROBE_PCG4D, &[bits(v)], &f);
+            let got = [
+                out[0][0].to_bits(),
+                out[0][1].to_bits(),
+                out[0][2].to_bits(),
+                out[0][3].to_bits(),
+            ];
+            assert_eq!(got, pcg4d(v));
+            assert_eq!(out[1], [0.0; 4]);
+        }
+    }
+
+    #[test]
+    fn probe_sample_rng_skips_draws() {
+        let f = frame(16, 16);
+        let out = probe_one(
+            PROBE_SAMPLE_RNG,
+            &[bits([5, 6, 7, 8]), bits([2, 99, 3, 0])],
+            &f,
+        );
+        let mut rng = SampleRng::new([5, 6], 7, 8, 2, 99);
+        for _ in 0..3 {
+            let _ = rng.next_u32x4();
+        }
+        assert_eq!(out[0], bits(rng.next_u32x4()));
+        let u = rng.next_2d();
+        assert_eq!(out[1], [u.x, u.y, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn probe_geometry_matches_direct_calls() {
+        let f = frame(16, 16);
+        let p = Vec3::new(1.5, -200.0, 0.001);
+        let n = Vec3::new(0.0, 0.6, -0.8);
+        let out = probe_one(
+            PROBE_OFFSET_RAY_ORIGIN,
+            &[[p.x, p.y, p.z, 0.0], [n.x, n.y, n.z, 0.0]],
+            &f,
+        );
+        let q = crate::geometry::offset::offset_ray_origin(p, n);
+        assert_eq!(out[0], [q.x, q.y, q.z, 0.0]);
+
+        let tri = TrianglePositions {
+            v0: [-1.0, -1.0, 2.0, 0.0],
+            v1: [1.0, -1.0, 2.0, 0.0],
+            v2: [0.0, 1.0, 2.0, 0.0],
+        };
+        let ray = Ray::new(Vec3::new(0.1, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0));
+        let records = [
+            [0.1, 0.0, 0.0, 10.0],
+            [0.0, 0.0, 1.0, 0.0],
+            tri.v0,
+            tri.v1,
+            tri.v2,
+        ];
+        let out = probe_one(PROBE_TRIANGLE, &records, &f);
+        let hit = WatertightRay::new(&ray).intersect(&tri, 10.0);
+        assert!(hit.hit);
+        assert_eq!(out[0], [hit.t, hit.b1, hit.b2, 1.0]);
+        // Beyond t_max: a miss.
+        let mut records = records;
+        records[0][3] = 1.0;
+        assert_eq!(probe_one(PROBE_TRIANGLE, &records, &f)[0][3], 0.0);
+    }
+
+    #[test]
+    fn probe_disney_matches_direct_calls() {
+        let f = frame(16, 16);
+        let mut params = DisneyParams::diffuse(Vec3::new(0.8, 0.5, 0.2));
+        params.metallic = 0.3;
+        params.roughness = 0.4;
+        params.clearcoat = 0.5;
+        params.sheen = 0.2;
+        let head = [
+            [0.8, 0.5, 0.2, 0.3],
+            [0.4, 0.0, 0.5, 0.0],
+            [0.2, 0.0, 0.5, 0.0],
+        ];
+        let wo = Vec3::new(0.3, -0.2, 0.9);
+        let wi = Vec3::new(-0.4, 0.1, 0.7);
+        let mut records: Vec<[f32; 4]> = head.to_vec();
+        records.push([wo.x, wo.y, wo.z, 0.0]);
+        records.push([wi.x, wi.y, wi.z, 0.0]);
+        let out = probe_one(PROBE_DISNEY_EVAL, &records, &f);
+        let (fv, pdf) = params.eval_and_pdf(wo, wi);
+        assert!(pdf > 0.0);
+        assert_eq!(out[0], [fv.x, fv.y, fv.z, pdf]);
+
+        let u = Vec3::new(0.7, 0.25, 0.6);
+        records[4] = [u.x, u.y, u.z, 0.0];
+        let out = probe_one(PROBE_DISNEY_SAMPLE, &records, &f);
+        let s = params.sample(wo, u);
+        assert!(s.pdf > 0.0);
+        assert_eq!(out[0], [s.wi.x, s.wi.y, s.wi.z, s.pdf]);
+        assert_eq!(out[1], [s.f.x, s.f.y, s.f.z, 0.0]);
+    }
+
+    #[test]
+    fn probe_tonemap_and_foveation_match_direct_calls() {
+        let f = frame(16, 12);
+        let out = probe_one(PROBE_TONEMAP, &[[0.5, 2.0, 0.01, 1.0]], &f);
+        let packed = crate::post::tonemap::tonemap_to_rgba8(Vec3::new(0.5, 2.0, 0.01), 1.0);
+        assert_eq!(out[0][0].to_bits(), packed);
+
+        for (x, y) in [(0u32, 0u32), (9, 7), (15, 11), (5, 3)] {
+            let out = probe_one(PROBE_OWNING_BLOCK, &[bits([x, y, 0, 0])], &f);
+            let b = owning_block(x, y, &f.foveation);
+            assert_eq!(out[0], bits([b.region, b.size, b.origin[0], b.origin[1]]));
+        }
+
+        let (w, h) = (f.width, f.height);
+        let replicated: Vec<[f32; 4]> = (0..w * h)
+            .map(|i| [i as f32, (i % 7) as f32, 1.0, 1.0])
+            .collect();
+        let cells = crate::foveation::cell_buffer_len(w, h, &f.foveation);
+        let cell_means: Vec<[f32; 4]> = (0..cells)
+            .map(|i| crate::foveation::cell_mean_at(&replicated, w, h, &f.foveation, i).to_array())
+            .collect();
+        for i in [0, 1, cells / 2, cells - 1] {
+            let out = probe_one_with(PROBE_CELL_MEAN, &[bits([i, 0, 0, 0])], &f, &replicated, &[]);
+            assert_eq!(out[0], cell_means[i as usize]);
+        }
+        for (x, y) in [(0u32, 0u32), (1, 2), (15, 11), (6, 9)] {
+            let mode = crate::foveation::FILL_BILINEAR;
+            let out = probe_one_with(
+                PROBE_FILL_PIXEL,
+                &[bits([x, y, mode, 0])],
+                &f,
+                &replicated,
+                &cell_means,
+            );
+            let v = crate::foveation::fill_pixel(
+                &replicated,
+                &cell_means,
+                w,
+                h,
+                &f.foveation,
+                x,
+                y,
+                mode,
+            );
+            assert_eq!(out[0], v.to_array());
+        }
+    }
+
+    #[test]
+    fn probe_unknown_selector_writes_zeros() {
+        let f = frame(4, 4);
+        let out = probe_one(PROBE_SELECTOR_COUNT, &[[1.0; 4]], &f);
+        assert_eq!(out, [[0.0; 4]; 2]);
+    }
+}

@@ -1,6 +1,256 @@
 //! rust-gpu compute entry points of fovea.
 //!
-//! This crate will hold only entry points that map storage buffers and invocation ids to calls into
-//! `fovea-core` (the per-sample integrator, region ownership, block fill, tone mapping); no shading math
-//! lives here. It is built to SPIR-V by spirv-builder in the Vulkan issue; until then it is empty.
-#![no_std]
+//! Each entry point only maps an invocation id and the storage buffers of [`fovea_core::kernel_abi`] to
+//! one call into `fovea-core`; no rendering math lives here. One frame runs, per dispatch chunk of blocks
+//! of one region, `render_samples` then `reduce_blocks`, and then, once per frame, `cell_means`, `fill`
+//! and `tonemap` (the CPU host's passes 1-3 and its tone mapping, in the same order and with the same
+//! sums). `probe` evaluates single core functions for the cross-backend tests.
+//!
+//! All entry points run [`WORKGROUP_SIZE`] = 64 invocations per workgroup. The invocation index is
+//! `id.x + id.y · (num_workgroups.x · 64)`, so a host may dispatch up to 65535 workgroups in x and more
+//! rows in y; invocations past the item count return at once.
+//!
+//! Built to SPIR-V by `gpu-builder/` (run from `host-vulkan/build.rs`); on the host it compiles as a plain
+//! library (the attributes are then inert).
+#![cfg_attr(target_arch = "spirv", no_std)]
+// Entry points take one argument per binding.
+#![allow(clippy::too_many_arguments)]
+
+use fovea_core::foveation::{block_extent, cell_mean_at, fill_pixel, OwnedBlock};
+use fovea_core::glam::Vec3;
+use fovea_core::integrator::{render_block_sample, FrameParams};
+use fovea_core::kernel_abi::{self, GpuBlock, KernelPushConstants, WORKGROUP_SIZE};
+use fovea_core::post::tonemap::tonemap_to_rgba8;
+use fovea_core::scene::{
+    Bvh4Node, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleInfo,
+    TrianglePositions,
+};
+use spirv_std::glam::UVec3;
+use spirv_std::spirv;
+
+// `#[spirv(binding = N)]` needs literals: these checks keep the literals below equal to the ABI.
+const _: () = {
+    assert!(WORKGROUP_SIZE == 64);
+    assert!(kernel_abi::BINDING_GLOBALS == 0);
+    assert!(kernel_abi::BINDING_NODES == 1);
+    assert!(kernel_abi::BINDING_TRIANGLES == 2);
+    assert!(kernel_abi::BINDING_TRIANGLE_INFO == 3);
+    assert!(kernel_abi::BINDING_NORMALS == 4);
+    assert!(kernel_abi::BINDING_UVS == 5);
+    assert!(kernel_abi::BINDING_MATERIALS == 6);
+    assert!(kernel_abi::BINDING_TEXTURES == 7);
+    assert!(kernel_abi::BINDING_TEXELS == 8);
+    assert!(kernel_abi::BINDING_LIGHTS == 9);
+    assert!(kernel_abi::BINDING_LIGHT_CDF == 10);
+    assert!(kernel_abi::BINDING_TRIANGLE_LIGHT == 11);
+    assert!(kernel_abi::BINDING_ENVIRONMENT_TEXELS == 12);
+    assert!(kernel_abi::BINDING_ENVIRONMENT_MARGINAL == 13);
+    assert!(kernel_abi::BINDING_ENVIRONMENT_CONDITIONAL == 14);
+    assert!(kernel_abi::BINDING_BLOCKS == 15);
+    assert!(kernel_abi::BINDING_SAMPLES == 16);
+    assert!(kernel_abi::BINDING_REPLICATED == 17);
+    assert!(kernel_abi::BINDING_CELL_MEANS == 18);
+    assert!(kernel_abi::BINDING_HDR == 19);
+    assert!(kernel_abi::BINDING_LDR == 20);
+    assert!(kernel_abi::BINDING_FRAME == 21);
+    assert!(kernel_abi::BINDING_PROBE_INPUT == 15);
+    assert!(kernel_abi::BINDING_PROBE_OUTPUT == 16);
+    assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
+};
+
+/// The linear invocation index of a (possibly 2D) dispatch of 64-wide workgroups.
+#[inline]
+#[must_use]
+pub fn invocation_index(id: UVec3, num_workgroups: UVec3) -> u32 {
+    id.x + id.y * (num_workgroups.x * WORKGROUP_SIZE)
+}
+
+/// The block of a dispatch chunk as core's [`OwnedBlock`].
+#[inline]
+#[must_use]
+pub fn owned_block(b: &GpuBlock) -> OwnedBlock {
+    OwnedBlock {
+        region: b.region,
+        size: b.size,
+        origin: b.origin,
+    }
+}
+
+/// Pass 1a: invocation `i < block_count · spp` renders sample `i % spp` of block `i / spp` of the chunk
+/// into `samples[i]` (rgb, w = 0).
+#[spirv(compute(threads(64)))]
+pub fn render_samples(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] globals: &SceneGlobals,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] nodes: &[Bvh4Node],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] triangles: &[TrianglePositions],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] triangle_info: &[TriangleInfo],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] normals: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] uvs: &[[f32; 2]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] materials: &[Material],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] textures: &[TextureInfo],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] texels: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[Light],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] light_cdf: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] triangle_light: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] environment_texels: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 13)] environment_marginal_cdf: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 14)]
+    environment_conditional_cdf: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] blocks: &[GpuBlock],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] samples: &mut [[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+) {
+    let i = invocation_index(id, num_workgroups);
+    let spp = pc.spp;
+    if spp == 0 || i >= pc.block_count * spp {
+        return;
+    }
+    let scene = SceneView {
+        globals: *globals,
+        nodes,
+        triangles,
+        triangle_info,
+        normals,
+        uvs,
+        materials,
+        textures,
+        texels,
+        lights,
+        light_cdf,
+        triangle_light,
+        environment_texels,
+        environment_marginal_cdf,
+        environment_conditional_cdf,
+    };
+    let block = owned_block(&blocks[(i / spp) as usize]);
+    let c = render_block_sample(&scene, frame, &block, i % spp);
+    samples[i as usize] = [c.x, c.y, c.z, 0.0];
+}
+
+/// Pass 1b: invocation `j < block_count` averages the `spp` samples of block `j` (summed in order from
+/// zero, like the CPU host) and writes `[mean, 1]` to every pixel of the block's clipped footprint.
+#[spirv(compute(threads(64)))]
+pub fn reduce_blocks(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] blocks: &[GpuBlock],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] samples: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 17)] replicated: &mut [[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+) {
+    let j = invocation_index(id, num_workgroups);
+    if j >= pc.block_count {
+        return;
+    }
+    let spp = pc.spp;
+    let first = j * spp;
+    let mut sum = Vec3::ZERO;
+    for s in 0..spp {
+        let v = samples[(first + s) as usize];
+        sum += Vec3::new(v[0], v[1], v[2]);
+    }
+    let mean = sum / spp.max(1) as f32;
+    let value = [mean.x, mean.y, mean.z, 1.0];
+    let block = owned_block(&blocks[j as usize]);
+    let extent = block_extent(&block, frame.width, frame.height);
+    for dy in 0..extent[1] {
+        let row = (block.origin[1] + dy) * frame.width + block.origin[0];
+        for dx in 0..extent[0] {
+            replicated[(row + dx) as usize] = value;
+        }
+    }
+}
+
+/// Pass 2: invocation `i < item_count` writes element `i` of the cell-mean buffer.
+#[spirv(compute(threads(64)))]
+pub fn cell_means(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 17)] replicated: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 18)] cell_means: &mut [[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+) {
+    let i = invocation_index(id, num_workgroups);
+    if i >= pc.item_count {
+        return;
+    }
+    let m = cell_mean_at(replicated, frame.width, frame.height, &frame.foveation, i);
+    cell_means[i as usize] = m.to_array();
+}
+
+/// Pass 3: invocation `p < item_count` (= width · height) fills pixel `p` (row-major) of the HDR image,
+/// alpha 1 like the CPU host.
+#[spirv(compute(threads(64)))]
+pub fn fill(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 17)] replicated: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 18)] cell_means: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &mut [[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+) {
+    let p = invocation_index(id, num_workgroups);
+    if p >= pc.item_count || frame.width == 0 {
+        return;
+    }
+    let (x, y) = (p % frame.width, p / frame.width);
+    let v = fill_pixel(
+        replicated,
+        cell_means,
+        frame.width,
+        frame.height,
+        &frame.foveation,
+        x,
+        y,
+        pc.fill_mode,
+    );
+    hdr[p as usize] = [v.x, v.y, v.z, 1.0];
+}
+
+/// Tone mapping: invocation `p < item_count` writes pixel `p` of the RGBA8 image (exposure
+/// `exposure_ev`, Reinhard, sRGB; core's [`tonemap_to_rgba8`]).
+#[spirv(compute(threads(64)))]
+pub fn tonemap(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 20)] ldr: &mut [u32],
+) {
+    let p = invocation_index(id, num_workgroups);
+    if p >= pc.item_count {
+        return;
+    }
+    let c = hdr[p as usize];
+    ldr[p as usize] = tonemap_to_rgba8(Vec3::new(c[0], c[1], c[2]), pc.exposure_ev);
+}
+
+/// Cross-backend probe: item `i < item_count` evaluates core function `spp` (a `PROBE_*` selector of
+/// [`kernel_abi`]) on its input records and writes its two output records
+/// ([`kernel_abi::probe_eval`]).
+#[spirv(compute(threads(64)))]
+pub fn probe(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] inputs: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] outputs: &mut [[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 17)] replicated: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 18)] cell_means: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+) {
+    let i = invocation_index(id, num_workgroups);
+    if i >= pc.item_count {
+        return;
+    }
+    let out = kernel_abi::probe_eval(pc.spp, inputs, i, frame, replicated, cell_means);
+    let base = (i * kernel_abi::PROBE_OUTPUT_RECORDS) as usize;
+    outputs[base] = out[0];
+    outputs[base + 1] = out[1];
+}

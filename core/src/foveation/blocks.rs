@@ -104,9 +104,9 @@ pub fn block_centre(block: &OwnedBlock) -> Vec2 {
 #[inline]
 #[must_use]
 pub fn block_extent(block: &OwnedBlock, width: u32, height: u32) -> [u32; 2] {
-    // (`saturating_sub` is not available in rust-gpu.)
-    let room_x = if width > block.origin[0] { width - block.origin[0] } else { 0 };
-    let room_y = if height > block.origin[1] { height - block.origin[1] } else { 0 };
+    // `max` then subtract: `saturating_sub` is not available in rust-gpu.
+    let room_x = width.max(block.origin[0]) - block.origin[0];
+    let room_y = height.max(block.origin[1]) - block.origin[1];
     [block.size.min(room_x), block.size.min(room_y)]
 }
 
