@@ -6,6 +6,8 @@ bash scripts/setup.sh
 export PATH="$HOME/.cargo/bin:$PATH"
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
+# The kernel and its builder are separate workspaces (the builder pins a nightly without rustfmt).
+rustfmt --edition 2021 --check gpu-kernel/src/*.rs gpu-builder/src/*.rs
 echo "== cargo clippy"
 cargo clippy --workspace --all-targets -q -- -D warnings
 echo "== cargo test"

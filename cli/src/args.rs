@@ -22,7 +22,7 @@ pub enum Command {
 /// Which backend renders.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Backend {
-    /// Vulkan when available, else the CPU.
+    /// Vulkan on a hardware device when there is one, else the CPU.
     Auto,
     Cpu,
     Vulkan,
@@ -45,6 +45,9 @@ pub struct RenderArgs {
     /// Backend.
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: Backend,
+    /// Vulkan device index (see `fovea devices`); default: the first discrete, else integrated GPU.
+    #[arg(long, value_name = "N")]
+    pub device: Option<usize>,
     /// Image size WxH in pixels.
     #[arg(long, default_value = "1920x1080", value_name = "WxH")]
     pub resolution: String,

@@ -1,5 +1,6 @@
 //! `fovea`: the command line of the fovea foveated path tracer.
 mod args;
+mod backend;
 mod error;
 mod output;
 mod parse;
@@ -15,11 +16,7 @@ fn main() -> std::process::ExitCode {
     let result = match &cli.command {
         args::Command::Render(r) => render::run(r),
         args::Command::Devices => {
-            println!(
-                "0: cpu  {}",
-                stats::cpu_device_name(rayon::current_num_threads())
-            );
-            println!("(Vulkan devices: this build has no Vulkan backend yet)");
+            backend::print_devices();
             Ok(())
         }
     };

@@ -139,20 +139,21 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()>
 /// Colours of the regions in the overlay: fovea green, intermediate amber, periphery blue.
 const REGION_COLORS: [[f32; 3]; 3] = [[0.2, 0.85, 0.3], [1.0, 0.7, 0.1], [0.25, 0.45, 1.0]];
 
-/// The render with each pixel tinted by the region of its owning block and block edges darkened.
+/// The render (tone-mapped 8-bit RGB bytes `base`) with each pixel tinted by the region of its owning
+/// block and block edges darkened.
 pub fn regions_overlay(
-    image: &FrameImage,
-    exposure_ev: f32,
+    base: &[u8],
+    width: u32,
+    height: u32,
     foveation: &FoveationParams,
 ) -> Vec<u8> {
-    let base = tonemapped_rgb8(image, exposure_ev);
     let mut out = Vec::with_capacity(base.len());
-    for y in 0..image.height {
-        for x in 0..image.width {
+    for y in 0..height {
+        for x in 0..width {
             let block = owning_block(x, y, foveation);
             let tint = REGION_COLORS[block.region.min(2) as usize];
             let edge = block.size > 1 && (x == block.origin[0] || y == block.origin[1]);
-            let i = ((y * image.width + x) * 3) as usize;
+            let i = ((y * width + x) * 3) as usize;
             for c in 0..3 {
                 let v = 0.5 * base[i + c] as f32 / 255.0 + 0.5 * tint[c];
                 let v = if edge { v * 0.6 } else { v };

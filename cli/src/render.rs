@@ -11,12 +11,15 @@ use fovea_core::integrator::{FrameParams, IntegratorSettings};
 use fovea_scene::environment::Environment;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::args::{Backend, Fill, RenderArgs};
+use crate::args::{Fill, RenderArgs};
+use crate::backend::Renderer;
 use crate::error::{FoveaError, Result};
-use crate::output::{check_output_path, regions_overlay, write_image, write_png, ImageFormat};
+use crate::output::{
+    check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png, ImageFormat,
+};
 use crate::parse::{self, MAX_SPP};
 use crate::scene_setup::{choose_camera, prepare_scene, DEFAULT_SKY};
-use crate::stats::{cpu_device_name, FrameStats};
+use crate::stats::FrameStats;
 use crate::trace::{read_gaze_trace, GazeSample};
 
 /// Everything `render` needs, parsed and checked before any work starts.
@@ -248,32 +251,9 @@ fn frame_path(path: &Path, frame: u32) -> PathBuf {
 pub fn run(args: &RenderArgs) -> Result<()> {
     let wall = Instant::now();
     let plan = plan(args)?;
-    let backend_name =
-        match args.backend {
-            Backend::Vulkan => return Err(FoveaError::Backend(
-                "the Vulkan backend is not available in this build of fovea yet; use --backend cpu"
-                    .into(),
-            )),
-            Backend::Auto => {
-                if args.verbose {
-                    eprintln!(
-                        "note: --backend auto uses the CPU (this build has no Vulkan backend yet)"
-                    );
-                }
-                "cpu"
-            }
-            Backend::Cpu => "cpu",
-        };
-    let mut pool = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = args.threads {
-        if n == 0 || n > 1024 {
-            return Err(FoveaError::option("--threads", "must be 1 to 1024"));
-        }
-        pool = pool.num_threads(n);
-    }
-    let pool = pool
-        .build()
-        .map_err(|e| FoveaError::Backend(format!("cannot start worker threads: {e}")))?;
+    // The backend first: a bad `--device` fails before the scene loads.
+    let mut renderer = Renderer::new(args.backend, args.device, args.threads, args.quiet)?;
+    let backend_name = renderer.name();
 
     let eye = args
         .eye
@@ -322,7 +302,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
     let [w, h] = plan.resolution;
     let camera = choose_camera(&scene, eye, target, up, args.fov, w as f32 / h as f32)?;
-    let view = scene.packed.view();
+    renderer.set_scene(&scene.packed)?;
     let integrator = IntegratorSettings {
         max_bounces: args.depth,
         russian_roulette_start: args.russian_roulette,
@@ -357,41 +337,56 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             );
             bar
         };
-        let (image, stats) = pool
-            .install(|| fovea_cpu::render_frame(&view, &frame, plan.fill_mode, &|n| bar.inc(n)));
+        // The HDR image is needed for EXR output; PNG and the overlay use the backend's tone map.
+        let want_hdr = plan.output_format == ImageFormat::Exr;
+        let rendered = renderer.render(
+            &scene.packed,
+            &frame,
+            plan.fill_mode,
+            args.exposure,
+            want_hdr,
+            &|n| bar.inc(n),
+        )?;
         bar.finish_and_clear();
+        let rgb8 = match (rendered.rgb8, &rendered.hdr) {
+            (Some(bytes), _) => bytes,
+            (None, Some(hdr)) => tonemapped_rgb8(hdr, args.exposure),
+            (None, None) => unreachable!("every backend returns HDR or tone-mapped pixels"),
+        };
 
         let output = if plan.per_frame_outputs {
             frame_path(&plan.output, g.frame)
         } else {
             plan.output.clone()
         };
-        write_image(&output, plan.output_format, &image, args.exposure)?;
+        match (plan.output_format, &rendered.hdr) {
+            (ImageFormat::Exr, Some(hdr)) => {
+                write_image(&output, ImageFormat::Exr, hdr, args.exposure)?
+            }
+            (ImageFormat::Exr, None) => unreachable!("HDR is requested for EXR output"),
+            (ImageFormat::Png, _) => write_png(&output, w, h, &rgb8)?,
+        }
         if let Some(p) = &args.regions_overlay {
             let p = if plan.per_frame_outputs {
                 frame_path(p, g.frame)
             } else {
                 p.clone()
             };
-            write_png(
-                &p,
-                w,
-                h,
-                &regions_overlay(&image, args.exposure, &foveation),
-            )?;
+            write_png(&p, w, h, &regions_overlay(&rgb8, w, h, &foveation))?;
         }
         frames.push(FrameStats {
             frame: g.frame,
             gaze: foveation.gaze,
             output,
-            render: stats,
+            render: rendered.stats,
+            extra: rendered.extra,
         });
     }
 
     let wall_ms = wall.elapsed().as_secs_f64() * 1e3;
     let report = crate::stats::build_report(
         backend_name,
-        &cpu_device_name(pool.current_num_threads()),
+        &renderer.device_name(),
         &plan.foveation_template,
         args.uniform,
         plan.radii_px,

@@ -15,6 +15,8 @@ pub struct FrameStats {
     pub gaze: [f32; 2],
     pub output: PathBuf,
     pub render: RenderStats,
+    /// Backend-specific figures (Vulkan: chunks, idle invocations, upload time, validation messages).
+    pub extra: Option<Value>,
 }
 
 /// "AMD EPYC ... (2 threads)" from /proc/cpuinfo where available.
@@ -59,6 +61,7 @@ pub fn build_report(
             })
         })
         .collect();
+    let backend_details = first.extra.clone().unwrap_or(Value::Null);
     let uniform_samples = resolution[0] as u64 * resolution[1] as u64 * foveation.spp[0] as u64;
     json!({
         "backend": backend,
@@ -86,6 +89,7 @@ pub fn build_report(
         "paths_per_second": first.render.primary_samples as f64 / (render_ms / 1e3).max(1e-9),
         "frames": frame_list,
         "warnings": scene.warnings,
+        "backend_details": backend_details,
     })
 }
 

@@ -151,7 +151,11 @@ fn bad_input_fails_cleanly() {
     expect_failure(&[scene, "--spp", "32,16"], "--spp", &png);
     expect_failure(&[scene, "--blocks", "1,3,4"], "divide", &png);
     expect_failure(&[scene, "--gaze", "1,nan"], "--gaze", &png);
-    expect_failure(&[scene, "--backend", "vulkan"], "Vulkan", &png);
+    expect_failure(
+        &[scene, "--backend", "vulkan", "--device", "99"],
+        "device",
+        &png,
+    );
     let unknown = dir.join("x.bmp");
     let out = fovea()
         .args(["render", scene, "-o"])

@@ -1,5 +1,32 @@
-//! The ash Vulkan host of fovea.
+//! # fovea-vulkan
 //!
-//! It will own the Vulkan instance and device, upload the packed scene buffers of `fovea-scene` once per
-//! scene and dispatch the SPIR-V kernel of `fovea-gpu-kernel`. Not built yet: `fovea render --backend
-//! vulkan` reports that the Vulkan backend is not available in this build.
+//! The ash Vulkan host of fovea: it uploads the packed scene of `fovea-scene` once per scene and runs the
+//! rust-gpu kernel (`fovea-gpu-kernel`, built to SPIR-V by `host-vulkan/build.rs`) over it, with the
+//! bindings and push constants of `fovea_core::kernel_abi`. A frame is the CPU host's three passes as
+//! dispatches, plus the tone map:
+//!
+//! 1. **Samples.** The host enumerates the blocks of each region (`owning_block(p).origin == p`) and splits
+//!    them into chunks of at most [`blocks::DEFAULT_MAX_CHUNK_SAMPLES`] samples. Per chunk,
+//!    `render_samples` runs one invocation per sample and `reduce_blocks` one per block (mean of its
+//!    samples, written over the block's footprint of the replicated image). Each chunk is one submission
+//!    waited on with a timeout, so no dispatch runs long and the samples buffer stays small.
+//! 2. **Cell means** (`cell_means`), 3. **fill** (`fill`) and the **tone map** (`tonemap`) run one
+//!    invocation per cell or pixel, then the LDR (and optionally HDR) image is copied back.
+//!
+//! `render_ms` comes from GPU timestamps around the whole frame (wall time where the queue has none).
+//! With `FOVEA_VULKAN_VALIDATION=1` the Khronos validation layer is enabled and its warnings and errors are
+//! collected ([`VulkanContext::validation_messages`]).
+pub mod blocks;
+mod buffer;
+pub mod context;
+pub mod error;
+pub mod frame;
+pub mod instance;
+pub mod scene;
+pub mod spirv;
+
+pub use context::{validation_requested, ContextOptions, VulkanContext};
+pub use error::VulkanError;
+pub use frame::{GpuFrame, GpuRenderStats};
+pub use instance::{list_devices, DeviceInfo};
+pub use scene::GpuScene;

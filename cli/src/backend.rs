@@ -1,0 +1,295 @@
+//! Choosing and driving a backend: the CPU host, or (with the `vulkan` feature) the Vulkan host.
+use fovea_core::integrator::FrameParams;
+use fovea_cpu::{FrameImage, RenderStats};
+use fovea_scene::pack::PackedScene;
+
+use crate::args::Backend;
+use crate::error::{FoveaError, Result};
+use crate::stats::cpu_device_name;
+
+/// One rendered frame, as the backend produced it.
+pub struct Rendered {
+    /// Linear HDR (always on the CPU; on Vulkan only when asked for).
+    pub hdr: Option<FrameImage>,
+    /// Tone-mapped 8-bit sRGB RGB bytes, when the backend tone-mapped (Vulkan).
+    pub rgb8: Option<Vec<u8>>,
+    pub stats: RenderStats,
+    /// Backend-specific figures for the stats JSON.
+    pub extra: Option<serde_json::Value>,
+}
+
+/// A ready backend.
+pub enum Renderer {
+    Cpu(rayon::ThreadPool),
+    #[cfg(feature = "vulkan")]
+    Vulkan(Box<VulkanRenderer>),
+}
+
+/// The Vulkan context and the scene uploaded to it.
+#[cfg(feature = "vulkan")]
+pub struct VulkanRenderer {
+    // Field order: the scene's buffers go before the context.
+    scene: Option<fovea_vulkan::GpuScene>,
+    ctx: fovea_vulkan::VulkanContext,
+    upload_ms: f64,
+}
+
+/// Why `--backend auto` did not pick Vulkan, or `None` when it should.
+#[cfg(feature = "vulkan")]
+fn auto_vulkan_refusal() -> Option<String> {
+    match fovea_vulkan::list_devices() {
+        Err(e) => Some(e.to_string()),
+        Ok(devices) => {
+            let usable: Vec<_> = devices.iter().filter(|d| d.unsuitable.is_none()).collect();
+            if usable.is_empty() {
+                Some("no suitable Vulkan device".into())
+            } else if usable.iter().all(|d| d.device_type == "cpu") {
+                Some(format!(
+                    "only a software Vulkan driver ({}), which is slower than the CPU host; --backend vulkan forces it",
+                    usable[0].name
+                ))
+            } else {
+                None
+            }
+        }
+    }
+}
+
+fn cpu_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        if n == 0 || n > 1024 {
+            return Err(FoveaError::option("--threads", "must be 1 to 1024"));
+        }
+        pool = pool.num_threads(n);
+    }
+    pool.build()
+        .map_err(|e| FoveaError::Backend(format!("cannot start worker threads: {e}")))
+}
+
+impl Renderer {
+    /// Sets up the backend `choice` asks for. `auto` uses Vulkan when a hardware device is available
+    /// (or `--device` names one), else the CPU with a note on stderr (unless `quiet`).
+    pub fn new(
+        choice: Backend,
+        device: Option<usize>,
+        threads: Option<usize>,
+        quiet: bool,
+    ) -> Result<Self> {
+        if choice == Backend::Cpu && device.is_some() {
+            return Err(FoveaError::option(
+                "--device",
+                "selects a Vulkan device; use it with --backend vulkan or auto",
+            ));
+        }
+        let want_vulkan = match choice {
+            Backend::Cpu => false,
+            Backend::Vulkan => true,
+            Backend::Auto => {
+                if device.is_some() {
+                    true
+                } else {
+                    match Self::auto_refusal() {
+                        None => true,
+                        Some(why) => {
+                            if !quiet {
+                                eprintln!("note: rendering on the CPU: {why}");
+                            }
+                            false
+                        }
+                    }
+                }
+            }
+        };
+        if !want_vulkan {
+            return Ok(Self::Cpu(cpu_pool(threads)?));
+        }
+        Self::vulkan(device, choice == Backend::Auto, threads, quiet)
+    }
+
+    #[cfg(feature = "vulkan")]
+    fn auto_refusal() -> Option<String> {
+        auto_vulkan_refusal()
+    }
+
+    #[cfg(not(feature = "vulkan"))]
+    fn auto_refusal() -> Option<String> {
+        Some(
+            "this build of fovea has no Vulkan backend (built without the `vulkan` feature)".into(),
+        )
+    }
+
+    #[cfg(feature = "vulkan")]
+    fn vulkan(
+        device: Option<usize>,
+        auto: bool,
+        threads: Option<usize>,
+        quiet: bool,
+    ) -> Result<Self> {
+        let options = fovea_vulkan::ContextOptions {
+            device_index: device,
+            validation: fovea_vulkan::validation_requested(),
+        };
+        match fovea_vulkan::VulkanContext::new(&options) {
+            Ok(ctx) => Ok(Self::Vulkan(Box::new(VulkanRenderer {
+                scene: None,
+                ctx,
+                upload_ms: 0.0,
+            }))),
+            // `auto` without an explicit device falls back; anything explicit is an error.
+            Err(e) if auto && device.is_none() => {
+                if !quiet {
+                    eprintln!("note: rendering on the CPU: Vulkan failed: {e}");
+                }
+                Ok(Self::Cpu(cpu_pool(threads)?))
+            }
+            Err(e) => Err(FoveaError::Backend(format!("Vulkan backend: {e}"))),
+        }
+    }
+
+    #[cfg(not(feature = "vulkan"))]
+    fn vulkan(_: Option<usize>, _: bool, _: Option<usize>, _: bool) -> Result<Self> {
+        Err(FoveaError::Backend(
+            "this build of fovea has no Vulkan backend (built without the `vulkan` feature); use --backend cpu"
+                .into(),
+        ))
+    }
+
+    /// "cpu" or "vulkan".
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Cpu(_) => "cpu",
+            #[cfg(feature = "vulkan")]
+            Self::Vulkan(_) => "vulkan",
+        }
+    }
+
+    /// The device for `--stats`: the CPU model and thread count, or the Vulkan device's name.
+    pub fn device_name(&self) -> String {
+        match self {
+            Self::Cpu(pool) => cpu_device_name(pool.current_num_threads()),
+            #[cfg(feature = "vulkan")]
+            Self::Vulkan(v) => v.ctx.device_name().to_string(),
+        }
+    }
+
+    /// Makes `packed` available to the backend (a device upload on Vulkan).
+    pub fn set_scene(&mut self, packed: &PackedScene) -> Result<()> {
+        match self {
+            Self::Cpu(_) => {
+                let _ = packed;
+                Ok(())
+            }
+            #[cfg(feature = "vulkan")]
+            Self::Vulkan(v) => {
+                let start = std::time::Instant::now();
+                v.scene = None;
+                v.scene = Some(
+                    v.ctx
+                        .upload_scene(packed)
+                        .map_err(|e| FoveaError::Backend(format!("Vulkan backend: {e}")))?,
+                );
+                v.upload_ms = start.elapsed().as_secs_f64() * 1e3;
+                Ok(())
+            }
+        }
+    }
+
+    /// Renders one frame. On the CPU the HDR image is always returned; on Vulkan only with `want_hdr`, and
+    /// the tone-mapped bytes come from the device.
+    pub fn render(
+        &mut self,
+        packed: &PackedScene,
+        frame: &FrameParams,
+        fill_mode: u32,
+        exposure_ev: f32,
+        want_hdr: bool,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Rendered> {
+        match self {
+            Self::Cpu(pool) => {
+                // The CPU host always returns HDR; the CLI tone-maps it (same core function).
+                let _ = (exposure_ev, want_hdr);
+                let view = packed.view();
+                let (image, stats) =
+                    pool.install(|| fovea_cpu::render_frame(&view, frame, fill_mode, progress));
+                Ok(Rendered {
+                    hdr: Some(image),
+                    rgb8: None,
+                    stats,
+                    extra: None,
+                })
+            }
+            #[cfg(feature = "vulkan")]
+            Self::Vulkan(v) => {
+                let scene = v
+                    .scene
+                    .as_ref()
+                    .ok_or_else(|| FoveaError::Backend("no scene uploaded".into()))?;
+                let (image, stats) = v
+                    .ctx
+                    .render_frame_with_progress(
+                        scene,
+                        frame,
+                        fill_mode,
+                        exposure_ev,
+                        want_hdr,
+                        &|n| progress(n),
+                    )
+                    .map_err(|e| FoveaError::Backend(format!("Vulkan backend: {e}")))?;
+                let messages = v.ctx.validation_messages();
+                Ok(Rendered {
+                    rgb8: Some(image.rgb8()),
+                    hdr: image.hdr,
+                    extra: Some(serde_json::json!({
+                        "chunks": stats.chunks,
+                        "submissions": stats.submissions,
+                        "idle_invocations": stats.idle_invocations,
+                        "gpu_timestamps": stats.gpu_timestamps,
+                        "plan_ms": stats.plan_ms,
+                        "upload_ms": v.upload_ms,
+                        "scene_upload_bytes": scene.bytes,
+                        "validation_messages": messages,
+                    })),
+                    stats: stats.render,
+                })
+            }
+        }
+    }
+}
+
+/// `fovea devices`: the CPU host, then every Vulkan device.
+pub fn print_devices() {
+    println!(
+        "cpu       {}",
+        cpu_device_name(rayon::current_num_threads())
+    );
+    print_vulkan_devices();
+}
+
+#[cfg(feature = "vulkan")]
+fn print_vulkan_devices() {
+    match fovea_vulkan::list_devices() {
+        Ok(devices) if devices.is_empty() => println!("(no Vulkan devices)"),
+        Ok(devices) => {
+            for d in devices {
+                let [major, minor, patch] = d.api_version;
+                println!(
+                    "vulkan {}  {}  [{}, Vulkan {major}.{minor}.{patch}]{}",
+                    d.index,
+                    d.name,
+                    d.device_type,
+                    d.unsuitable
+                        .map(|r| format!("  unusable: {r}"))
+                        .unwrap_or_default()
+                );
+            }
+        }
+        Err(e) => println!("(no Vulkan: {e})"),
+    }
+}
+
+#[cfg(not(feature = "vulkan"))]
+fn print_vulkan_devices() {
+    println!("(Vulkan devices: this build has no Vulkan backend)");
+}

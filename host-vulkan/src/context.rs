@@ -1,0 +1,637 @@
+//! [`VulkanContext`]: instance, device, compute queue, the kernel's pipelines and the per-frame buffers.
+use std::sync::Arc;
+use std::time::Duration;
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use gpu_allocator::{AllocationSizes, AllocatorDebugSettings, MemoryLocation};
+
+use fovea_core::kernel_abi::{KernelPushConstants, BINDING_BLOCKS, BINDING_COUNT};
+
+use crate::blocks::{DEFAULT_MAX_CHUNK_SAMPLES, SOFTWARE_MAX_CHUNK_SAMPLES};
+use crate::buffer::GpuBuffer;
+use crate::error::{Result, VkContext, VulkanError};
+use crate::frame::FrameResources;
+use crate::instance::{choose_device, DeviceInfo, InstanceHandle, MessageLog, Shared};
+use crate::spirv::{self, capability, ENTRY_POINTS};
+
+/// How to set up a context.
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    /// Device index in [`crate::list_devices`] order; `None` picks automatically (discrete, then
+    /// integrated, then anything, e.g. lavapipe).
+    pub device_index: Option<usize>,
+    /// Enable `VK_LAYER_KHRONOS_validation` and record its messages.
+    pub validation: bool,
+}
+
+impl ContextOptions {
+    /// Automatic device; validation when the environment has `FOVEA_VULKAN_VALIDATION=1`.
+    #[must_use]
+    pub fn from_env() -> Self {
+        Self {
+            device_index: None,
+            validation: validation_requested(),
+        }
+    }
+}
+
+/// Whether `FOVEA_VULKAN_VALIDATION` asks for the validation layer (`1`, `true`, `yes`).
+#[must_use]
+pub fn validation_requested() -> bool {
+    matches!(
+        std::env::var("FOVEA_VULKAN_VALIDATION").as_deref(),
+        Ok("1" | "true" | "yes" | "on")
+    )
+}
+
+/// Device limits the host checks buffers against.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Limits {
+    pub max_storage_buffer_range: u64,
+    pub min_storage_buffer_offset_alignment: u64,
+    pub max_workgroup_count_x: u32,
+    pub max_memory_allocation_size: u64,
+    /// Size of the largest device-local heap.
+    pub device_local_heap: u64,
+}
+
+/// Indices into [`VulkanContext::pipelines`].
+pub(crate) mod pipeline {
+    pub const RENDER_SAMPLES: usize = 0;
+    pub const REDUCE_BLOCKS: usize = 1;
+    pub const CELL_MEANS: usize = 2;
+    pub const FILL: usize = 3;
+    pub const TONEMAP: usize = 4;
+}
+
+/// Timeout of each fence wait per chunk of work.
+pub const CHUNK_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// A Vulkan device ready to run the fovea kernel: one compute queue, one pipeline per entry point (all from
+/// the one SPIR-V module, created once), and the buffers of the last frame size, reused across frames.
+pub struct VulkanContext {
+    pub(crate) shared: Arc<Shared>,
+    pub(crate) info: DeviceInfo,
+    pub(crate) limits: Limits,
+    pub(crate) queue: vk::Queue,
+    pub(crate) command_pool: vk::CommandPool,
+    pub(crate) command_buffer: vk::CommandBuffer,
+    pub(crate) fence: vk::Fence,
+    pub(crate) set_layout: vk::DescriptorSetLayout,
+    pub(crate) pipeline_layout: vk::PipelineLayout,
+    pub(crate) pipelines: [vk::Pipeline; 5],
+    pub(crate) descriptor_pool: vk::DescriptorPool,
+    pub(crate) descriptor_set: vk::DescriptorSet,
+    /// Two timestamps per frame; null when the queue has no timestamp bits.
+    pub(crate) query_pool: vk::QueryPool,
+    /// Nanoseconds per timestamp tick.
+    pub(crate) timestamp_period: f32,
+    /// Mask of the valid timestamp bits.
+    pub(crate) timestamp_mask: u64,
+    pub(crate) frame: Option<FrameResources>,
+    pub(crate) poisoned: bool,
+    /// Bound on the samples of one `render_samples` dispatch (and one submission):
+    /// [`DEFAULT_MAX_CHUNK_SAMPLES`], or [`SOFTWARE_MAX_CHUNK_SAMPLES`] on a software driver.
+    pub max_chunk_samples: u32,
+}
+
+impl VulkanContext {
+    /// Loads Vulkan, picks a device and creates everything the kernel needs.
+    pub fn new(options: &ContextOptions) -> Result<Self> {
+        let code = spirv::load_kernel()?;
+        let module_info = spirv::module_info(&code);
+        for name in ENTRY_POINTS {
+            if !module_info.entry_points.iter().any(|e| e == name) {
+                return Err(VulkanError::KernelNotBuilt(format!(
+                    "the SPIR-V module has no entry point '{name}' (it has {:?})",
+                    module_info.entry_points
+                )));
+            }
+        }
+
+        let instance = InstanceHandle::new(options.validation)?;
+        let physical = instance.physical_devices()?;
+        let infos: Vec<DeviceInfo> = physical
+            .iter()
+            .enumerate()
+            .map(|(i, &pd)| instance.describe(i, pd))
+            .collect();
+        let index = choose_device(&infos, options.device_index)?;
+        let pd = physical[index];
+        let info = infos[index].clone();
+        let vk_instance = &instance.instance;
+
+        // SAFETY (this block and the queries below): `pd` belongs to `vk_instance`.
+        let queue_families = unsafe { vk_instance.get_physical_device_queue_family_properties(pd) };
+        // Prefer a compute-only queue family (async compute), else any with compute.
+        let family = queue_families
+            .iter()
+            .enumerate()
+            .filter(|(_, q)| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
+            .min_by_key(|(_, q)| q.queue_flags.contains(vk::QueueFlags::GRAPHICS))
+            .map(|(i, _)| i as u32)
+            .ok_or_else(|| VulkanError::UnsuitableDevice {
+                device: info.name.clone(),
+                reason: "no compute queue".into(),
+            })?;
+        let timestamp_bits = queue_families[family as usize].timestamp_valid_bits;
+
+        // Features the module's capabilities need.
+        let mut supported11 = vk::PhysicalDeviceVulkan11Features::default();
+        let mut supported12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut supported = vk::PhysicalDeviceFeatures2::default()
+            .push_next(&mut supported11)
+            .push_next(&mut supported12);
+        // SAFETY: valid chain of feature structs.
+        unsafe { vk_instance.get_physical_device_features2(pd, &mut supported) };
+        let base = supported.features;
+        let mut want = vk::PhysicalDeviceFeatures::default();
+        let mut want11 = vk::PhysicalDeviceVulkan11Features::default();
+        let mut want12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut missing = Vec::new();
+        let mut need = |ok: vk::Bool32, name: &'static str| -> vk::Bool32 {
+            if ok == vk::FALSE {
+                missing.push(name);
+            }
+            vk::TRUE
+        };
+        for &cap in &module_info.capabilities {
+            match cap {
+                capability::VULKAN_MEMORY_MODEL => {
+                    want12.vulkan_memory_model =
+                        need(supported12.vulkan_memory_model, "vulkanMemoryModel")
+                }
+                capability::VULKAN_MEMORY_MODEL_DEVICE_SCOPE => {
+                    want12.vulkan_memory_model_device_scope = need(
+                        supported12.vulkan_memory_model_device_scope,
+                        "vulkanMemoryModelDeviceScope",
+                    )
+                }
+                capability::INT64 => want.shader_int64 = need(base.shader_int64, "shaderInt64"),
+                capability::INT16 => want.shader_int16 = need(base.shader_int16, "shaderInt16"),
+                capability::FLOAT64 => {
+                    want.shader_float64 = need(base.shader_float64, "shaderFloat64")
+                }
+                capability::INT8 => {
+                    want12.shader_int8 = need(supported12.shader_int8, "shaderInt8")
+                }
+                capability::STORAGE_BUFFER_8BIT_ACCESS => {
+                    want12.storage_buffer8_bit_access = need(
+                        supported12.storage_buffer8_bit_access,
+                        "storageBuffer8BitAccess",
+                    )
+                }
+                capability::STORAGE_BUFFER_16BIT_ACCESS => {
+                    want11.storage_buffer16_bit_access = need(
+                        supported11.storage_buffer16_bit_access,
+                        "storageBuffer16BitAccess",
+                    )
+                }
+                capability::VARIABLE_POINTERS_STORAGE_BUFFER => {
+                    want11.variable_pointers_storage_buffer = need(
+                        supported11.variable_pointers_storage_buffer,
+                        "variablePointersStorageBuffer",
+                    )
+                }
+                capability::VARIABLE_POINTERS => {
+                    want11.variable_pointers_storage_buffer = need(
+                        supported11.variable_pointers_storage_buffer,
+                        "variablePointersStorageBuffer",
+                    );
+                    want11.variable_pointers =
+                        need(supported11.variable_pointers, "variablePointers")
+                }
+                capability::PHYSICAL_STORAGE_BUFFER_ADDRESSES => {
+                    want12.buffer_device_address =
+                        need(supported12.buffer_device_address, "bufferDeviceAddress")
+                }
+                _ => {}
+            }
+        }
+        if !missing.is_empty() {
+            return Err(VulkanError::UnsuitableDevice {
+                device: info.name.clone(),
+                reason: format!("the kernel needs {}", missing.join(", ")),
+            });
+        }
+
+        let priorities = [1.0f32];
+        let queue_info = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(family)
+            .queue_priorities(&priorities)];
+        let mut enabled = vk::PhysicalDeviceFeatures2::default()
+            .features(want)
+            .push_next(&mut want11)
+            .push_next(&mut want12);
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .push_next(&mut enabled);
+        // SAFETY: the create info and everything it points to live until the call returns.
+        let device = unsafe { vk_instance.create_device(pd, &device_info, None) }
+            .during("vkCreateDevice")?;
+        let allocator = match Allocator::new(&AllocatorCreateDesc {
+            instance: vk_instance.clone(),
+            device: device.clone(),
+            physical_device: pd,
+            debug_settings: AllocatorDebugSettings::default(),
+            buffer_device_address: false,
+            allocation_sizes: AllocationSizes::default(),
+        }) {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: nothing was created on the device yet.
+                unsafe { device.destroy_device(None) };
+                return Err(VulkanError::Allocator(e.to_string()));
+            }
+        };
+        let shared = Arc::new(Shared {
+            device,
+            allocator: std::mem::ManuallyDrop::new(std::sync::Mutex::new(allocator)),
+            physical_device: pd,
+            instance,
+        });
+        let limits = query_limits(&shared);
+        // SAFETY: `pd` belongs to the instance.
+        let props = unsafe { shared.instance.instance.get_physical_device_properties(pd) };
+
+        let mut ctx = Self {
+            shared,
+            info: info.clone(),
+            limits,
+            queue: vk::Queue::null(),
+            command_pool: vk::CommandPool::null(),
+            command_buffer: vk::CommandBuffer::null(),
+            fence: vk::Fence::null(),
+            set_layout: vk::DescriptorSetLayout::null(),
+            pipeline_layout: vk::PipelineLayout::null(),
+            pipelines: [vk::Pipeline::null(); 5],
+            descriptor_pool: vk::DescriptorPool::null(),
+            descriptor_set: vk::DescriptorSet::null(),
+            query_pool: vk::QueryPool::null(),
+            timestamp_period: props.limits.timestamp_period,
+            timestamp_mask: if timestamp_bits >= 64 {
+                u64::MAX
+            } else {
+                (1u64 << timestamp_bits) - 1
+            },
+            frame: None,
+            poisoned: false,
+            max_chunk_samples: if info.device_type == "cpu" {
+                SOFTWARE_MAX_CHUNK_SAMPLES
+            } else {
+                DEFAULT_MAX_CHUNK_SAMPLES
+            },
+        };
+        // From here on, `ctx`'s Drop cleans up whatever was created if a step fails.
+        ctx.create_objects(family, &code, timestamp_bits > 0)?;
+        Ok(ctx)
+    }
+
+    /// Queue, command buffer, fence, descriptor layout and set, pipelines and the timestamp pool.
+    fn create_objects(&mut self, family: u32, code: &[u32], timestamps: bool) -> Result<()> {
+        let device = &self.shared.device;
+        // SAFETY (whole function): every create call gets a valid create info whose pointers live until
+        // the call returns; the handles are stored in `self` at once, so Drop destroys them.
+        unsafe {
+            self.queue = device.get_device_queue(family, 0);
+            self.command_pool = device
+                .create_command_pool(
+                    &vk::CommandPoolCreateInfo::default()
+                        .queue_family_index(family)
+                        .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                    None,
+                )
+                .during("vkCreateCommandPool")?;
+            self.command_buffer = device
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default()
+                        .command_pool(self.command_pool)
+                        .level(vk::CommandBufferLevel::PRIMARY)
+                        .command_buffer_count(1),
+                )
+                .during("vkAllocateCommandBuffers")?[0];
+            self.fence = device
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+                .during("vkCreateFence")?;
+
+            let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..BINDING_COUNT)
+                .map(|b| {
+                    vk::DescriptorSetLayoutBinding::default()
+                        .binding(b)
+                        .descriptor_type(descriptor_type(b))
+                        .descriptor_count(1)
+                        .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                })
+                .collect();
+            self.set_layout = device
+                .create_descriptor_set_layout(
+                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
+                    None,
+                )
+                .during("vkCreateDescriptorSetLayout")?;
+            let push = [vk::PushConstantRange::default()
+                .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                .offset(0)
+                .size(std::mem::size_of::<KernelPushConstants>() as u32)];
+            let set_layouts = [self.set_layout];
+            self.pipeline_layout = device
+                .create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::default()
+                        .set_layouts(&set_layouts)
+                        .push_constant_ranges(&push),
+                    None,
+                )
+                .during("vkCreatePipelineLayout")?;
+            let pool_sizes = [
+                vk::DescriptorPoolSize::default()
+                    .ty(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(BINDING_COUNT - 1),
+                vk::DescriptorPoolSize::default()
+                    .ty(vk::DescriptorType::STORAGE_BUFFER_DYNAMIC)
+                    .descriptor_count(1),
+            ];
+            self.descriptor_pool = device
+                .create_descriptor_pool(
+                    &vk::DescriptorPoolCreateInfo::default()
+                        .max_sets(1)
+                        .pool_sizes(&pool_sizes),
+                    None,
+                )
+                .during("vkCreateDescriptorPool")?;
+            self.descriptor_set = device
+                .allocate_descriptor_sets(
+                    &vk::DescriptorSetAllocateInfo::default()
+                        .descriptor_pool(self.descriptor_pool)
+                        .set_layouts(&set_layouts),
+                )
+                .during("vkAllocateDescriptorSets")?[0];
+
+            let module = device
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None)
+                .during("vkCreateShaderModule")?;
+            let names: Vec<std::ffi::CString> = ENTRY_POINTS
+                .iter()
+                .map(|n| std::ffi::CString::new(*n).expect("entry point names have no NUL"))
+                .collect();
+            let infos: Vec<vk::ComputePipelineCreateInfo> = names
+                .iter()
+                .map(|name| {
+                    vk::ComputePipelineCreateInfo::default()
+                        .stage(
+                            vk::PipelineShaderStageCreateInfo::default()
+                                .stage(vk::ShaderStageFlags::COMPUTE)
+                                .module(module)
+                                .name(name),
+                        )
+                        .layout(self.pipeline_layout)
+                })
+                .collect();
+            let created = device.create_compute_pipelines(vk::PipelineCache::null(), &infos, None);
+            device.destroy_shader_module(module, None);
+            match created {
+                Ok(p) => self.pipelines.copy_from_slice(&p),
+                Err((p, r)) => {
+                    for pl in p {
+                        if pl != vk::Pipeline::null() {
+                            device.destroy_pipeline(pl, None);
+                        }
+                    }
+                    return Err(VulkanError::vk("vkCreateComputePipelines", r));
+                }
+            }
+
+            if timestamps {
+                self.query_pool = device
+                    .create_query_pool(
+                        &vk::QueryPoolCreateInfo::default()
+                            .query_type(vk::QueryType::TIMESTAMP)
+                            .query_count(2),
+                        None,
+                    )
+                    .during("vkCreateQueryPool")?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The chosen device.
+    #[must_use]
+    pub fn device_info(&self) -> &DeviceInfo {
+        &self.info
+    }
+
+    /// The device's name, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
+    #[must_use]
+    pub fn device_name(&self) -> &str {
+        &self.info.name
+    }
+
+    /// Whether frame times come from GPU timestamps (else wall time around the submissions).
+    #[must_use]
+    pub fn has_timestamps(&self) -> bool {
+        self.query_pool != vk::QueryPool::null()
+    }
+
+    /// A snapshot of every warning and error the validation layer reported so far (empty without
+    /// validation).
+    #[must_use]
+    pub fn validation_messages(&self) -> Vec<String> {
+        self.shared
+            .instance
+            .log
+            .lock()
+            .map(|l| l.clone())
+            .unwrap_or_default()
+    }
+
+    /// The live message list; it stays readable after the context is dropped (messages about leaked
+    /// objects arrive during destruction).
+    #[must_use]
+    pub fn validation_log(&self) -> MessageLog {
+        self.shared.instance.log.clone()
+    }
+
+    /// Fails if an earlier device loss or timeout left the device in an unknown state.
+    pub(crate) fn check_usable(&self) -> Result<()> {
+        if self.poisoned {
+            Err(VulkanError::Poisoned)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Marks the context unusable after a fatal error and passes the error on.
+    pub(crate) fn poison_on_fatal(&mut self, e: VulkanError) -> VulkanError {
+        if e.is_fatal() {
+            self.poisoned = true;
+        }
+        e
+    }
+
+    /// Records commands with `record`, submits them and waits up to `timeout`.
+    pub(crate) fn submit_and_wait(
+        &mut self,
+        what: &'static str,
+        timeout: Duration,
+        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
+    ) -> Result<()> {
+        self.check_usable()?;
+        let device = &self.shared.device;
+        let cb = self.command_buffer;
+        // SAFETY: the command buffer is not in use (every submission is waited on before the next), and
+        // the fence is unsignalled (reset after each wait).
+        let result = unsafe {
+            device
+                .reset_command_buffer(cb, vk::CommandBufferResetFlags::empty())
+                .during("vkResetCommandBuffer")
+                .and_then(|()| {
+                    device
+                        .begin_command_buffer(
+                            cb,
+                            &vk::CommandBufferBeginInfo::default()
+                                .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                        )
+                        .during("vkBeginCommandBuffer")
+                })
+                .and_then(|()| {
+                    record(device, cb);
+                    device.end_command_buffer(cb).during("vkEndCommandBuffer")
+                })
+                .and_then(|()| {
+                    let cbs = [cb];
+                    let submit = [vk::SubmitInfo::default().command_buffers(&cbs)];
+                    device
+                        .queue_submit(self.queue, &submit, self.fence)
+                        .during("vkQueueSubmit")
+                })
+                .and_then(|()| {
+                    let nanos = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
+                    match device.wait_for_fences(&[self.fence], true, nanos) {
+                        Ok(()) => Ok(()),
+                        Err(vk::Result::TIMEOUT) => Err(VulkanError::Timeout {
+                            what,
+                            seconds: timeout.as_secs(),
+                        }),
+                        Err(r) => Err(VulkanError::vk("vkWaitForFences", r)),
+                    }
+                })
+                .and_then(|()| device.reset_fences(&[self.fence]).during("vkResetFences"))
+        };
+        result.map_err(|e| self.poison_on_fatal(e))
+    }
+
+    /// Copies `data` into a new device-local storage buffer through a staging buffer.
+    pub(crate) fn upload<T: bytemuck::Pod>(
+        &mut self,
+        what: &str,
+        data: &[T],
+        size: u64,
+    ) -> Result<GpuBuffer> {
+        let bytes = std::mem::size_of_val(data) as u64;
+        let dst = GpuBuffer::new(
+            &self.shared,
+            what,
+            size.max(bytes),
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        let mut staging = GpuBuffer::new(
+            &self.shared,
+            "staging",
+            dst.size,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let mut padded = vec![0u8; dst.size as usize];
+        padded[..bytes as usize].copy_from_slice(bytemuck::cast_slice(data));
+        staging.write(&padded)?;
+        let (src_buf, dst_buf, n) = (staging.buffer, dst.buffer, dst.size);
+        self.submit_and_wait("a scene upload", CHUNK_TIMEOUT, |device, cb| {
+            let region = [vk::BufferCopy::default().size(n)];
+            // SAFETY: both buffers are at least `n` bytes and alive until the wait returns.
+            unsafe { device.cmd_copy_buffer(cb, src_buf, dst_buf, &region) };
+        })?;
+        Ok(dst)
+    }
+
+    /// Checks a buffer of `bytes` that is bound as a storage buffer against the device limits
+    /// (`maxStorageBufferRange`, `maxMemoryAllocationSize`); the error names the limit.
+    pub fn check_size(&self, what: &str, bytes: u64) -> Result<()> {
+        let l = &self.limits;
+        if bytes > l.max_storage_buffer_range {
+            return Err(VulkanError::TooLarge {
+                what: what.into(),
+                bytes,
+                limit_name: "maxStorageBufferRange",
+                limit: l.max_storage_buffer_range,
+            });
+        }
+        if bytes > l.max_memory_allocation_size {
+            return Err(VulkanError::TooLarge {
+                what: what.into(),
+                bytes,
+                limit_name: "maxMemoryAllocationSize",
+                limit: l.max_memory_allocation_size,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Descriptor type of each binding: the chunk's block list is bound with a dynamic offset, everything else
+/// as a plain storage buffer.
+fn descriptor_type(binding: u32) -> vk::DescriptorType {
+    if binding == BINDING_BLOCKS {
+        vk::DescriptorType::STORAGE_BUFFER_DYNAMIC
+    } else {
+        vk::DescriptorType::STORAGE_BUFFER
+    }
+}
+
+fn query_limits(shared: &Shared) -> Limits {
+    let instance = &shared.instance.instance;
+    let pd = shared.physical_device;
+    let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut maintenance3);
+    // SAFETY: valid physical device and property chain.
+    unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+    let limits = props2.properties.limits;
+    // SAFETY: as above.
+    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let heaps = &memory.memory_heaps[..memory.memory_heap_count as usize];
+    let device_local_heap = heaps
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or_else(|| heaps.iter().map(|h| h.size).max().unwrap_or(0));
+    Limits {
+        max_storage_buffer_range: u64::from(limits.max_storage_buffer_range),
+        min_storage_buffer_offset_alignment: limits.min_storage_buffer_offset_alignment.max(1),
+        max_workgroup_count_x: limits.max_compute_work_group_count[0],
+        max_memory_allocation_size: maintenance3.max_memory_allocation_size,
+        device_local_heap,
+    }
+}
+
+impl Drop for VulkanContext {
+    fn drop(&mut self) {
+        let device = &self.shared.device;
+        // SAFETY: waiting for the device first makes every object below unused; null handles (a
+        // half-built context) are skipped by the Vulkan destroy functions.
+        unsafe {
+            let _ = device.device_wait_idle();
+            self.frame = None;
+            for p in self.pipelines {
+                device.destroy_pipeline(p, None);
+            }
+            device.destroy_pipeline_layout(self.pipeline_layout, None);
+            device.destroy_descriptor_pool(self.descriptor_pool, None);
+            device.destroy_descriptor_set_layout(self.set_layout, None);
+            device.destroy_query_pool(self.query_pool, None);
+            device.destroy_fence(self.fence, None);
+            device.destroy_command_pool(self.command_pool, None);
+        }
+    }
+}

@@ -1,0 +1,598 @@
+//! Rendering one frame on the device: the same three passes as the CPU host (samples, cell means, fill)
+//! plus the tone map, as dispatches of the kernel's entry points.
+use std::time::Instant;
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use fovea_core::foveation::fill::cell_buffer_len;
+use fovea_core::foveation::regions::FOVEATION_OK;
+use fovea_core::integrator::FrameParams;
+use fovea_core::kernel_abi::*;
+use fovea_cpu::{FrameImage, RenderStats};
+
+use crate::blocks::{
+    block_buffer_contents, enumerate_blocks, plan_chunks, workgroups_2d, ChunkPlan,
+};
+use crate::buffer::GpuBuffer;
+use crate::context::{pipeline, VulkanContext, CHUNK_TIMEOUT};
+use crate::error::{Result, VulkanError};
+use crate::scene::{GpuScene, SCENE_BINDINGS};
+
+/// A frame read back from the device.
+#[derive(Clone, Debug)]
+pub struct GpuFrame {
+    pub width: u32,
+    pub height: u32,
+    /// Tone-mapped pixels, RGBA8 packed in `u32` with R in the low byte (core's `tonemap_to_rgba8`).
+    pub ldr: Vec<u32>,
+    /// The filled linear HDR image, when asked for.
+    pub hdr: Option<FrameImage>,
+}
+
+impl GpuFrame {
+    /// The LDR image as 8-bit sRGB RGB bytes (what a PNG stores).
+    #[must_use]
+    pub fn rgb8(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(self.ldr.len() * 3);
+        for p in &self.ldr {
+            out.extend_from_slice(&[*p as u8, (*p >> 8) as u8, (*p >> 16) as u8]);
+        }
+        out
+    }
+}
+
+/// What a GPU frame cost: the CPU host's statistics plus how the work was split.
+#[derive(Clone, Debug, Default)]
+pub struct GpuRenderStats {
+    /// `render_ms` covers everything from the first dispatch to the end of the readback copies.
+    pub render: RenderStats,
+    /// `render_samples` invocations with no sample to render (each chunk's last workgroup).
+    pub idle_invocations: u64,
+    /// `render_samples` + `reduce_blocks` pairs.
+    pub chunks: u32,
+    /// Queue submissions (one per chunk, plus one for the cell means, fill, tone map and readback).
+    pub submissions: u32,
+    /// Whether `render_ms` comes from GPU timestamps (else host wall time around the submissions).
+    pub gpu_timestamps: bool,
+    /// Host time to enumerate blocks and plan chunks.
+    pub plan_ms: f64,
+}
+
+/// Buffer sizes of one frame layout; buffers are reused while a frame fits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Sizes {
+    pixels: u64,
+    cells: u64,
+    block_buffer: u64,
+    chunk_blocks: u64,
+    chunk_samples: u64,
+}
+
+impl Sizes {
+    fn fits_in(&self, other: &Sizes) -> bool {
+        self.pixels <= other.pixels
+            && self.cells <= other.cells
+            && self.block_buffer <= other.block_buffer
+            && self.chunk_blocks <= other.chunk_blocks
+            && self.chunk_samples <= other.chunk_samples
+    }
+}
+
+/// The per-frame buffers (see `kernel_abi` for what each binding holds).
+pub(crate) struct FrameResources {
+    sizes: Sizes,
+    frame: GpuBuffer,
+    blocks: GpuBuffer,
+    samples: GpuBuffer,
+    replicated: GpuBuffer,
+    cell_means: GpuBuffer,
+    hdr: GpuBuffer,
+    ldr: GpuBuffer,
+    ldr_readback: GpuBuffer,
+    hdr_readback: GpuBuffer,
+}
+
+const PIXEL: u64 = 16;
+
+impl FrameResources {
+    fn new(ctx: &VulkanContext, s: Sizes) -> Result<Self> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let src = vk::BufferUsageFlags::TRANSFER_SRC;
+        let dst = vk::BufferUsageFlags::TRANSFER_DST;
+        let sh = &ctx.shared;
+        for (what, bytes) in [
+            ("the block list", s.block_buffer * 16),
+            ("the samples buffer", s.chunk_samples * PIXEL),
+            ("the HDR image", s.pixels * PIXEL),
+            ("the cell means", s.cells * PIXEL),
+        ] {
+            ctx.check_size(what, bytes)?;
+        }
+        Ok(Self {
+            sizes: s,
+            frame: GpuBuffer::new(
+                sh,
+                "frame parameters",
+                std::mem::size_of::<FrameParams>() as u64,
+                storage,
+                MemoryLocation::CpuToGpu,
+            )?,
+            blocks: GpuBuffer::new(
+                sh,
+                "block list",
+                s.block_buffer * 16,
+                storage,
+                MemoryLocation::CpuToGpu,
+            )?,
+            samples: GpuBuffer::new(
+                sh,
+                "samples",
+                s.chunk_samples * PIXEL,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?,
+            replicated: GpuBuffer::new(
+                sh,
+                "replicated image",
+                s.pixels * PIXEL,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?,
+            cell_means: GpuBuffer::new(
+                sh,
+                "cell means",
+                s.cells.max(1) * PIXEL,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?,
+            hdr: GpuBuffer::new(
+                sh,
+                "HDR image",
+                s.pixels * PIXEL,
+                storage | src,
+                MemoryLocation::GpuOnly,
+            )?,
+            ldr: GpuBuffer::new(
+                sh,
+                "LDR image",
+                s.pixels * 4,
+                storage | src,
+                MemoryLocation::GpuOnly,
+            )?,
+            ldr_readback: GpuBuffer::new(
+                sh,
+                "LDR readback",
+                s.pixels * 4,
+                dst,
+                MemoryLocation::GpuToCpu,
+            )?,
+            hdr_readback: GpuBuffer::new(
+                sh,
+                "HDR readback",
+                s.pixels * PIXEL,
+                dst,
+                MemoryLocation::GpuToCpu,
+            )?,
+        })
+    }
+}
+
+/// A memory barrier after a dispatch: its writes (and reads, for buffers reused next) before the next
+/// dispatch (`COMPUTE_SHADER`) or the readback copies (`TRANSFER`).
+fn barrier(device: &ash::Device, cb: vk::CommandBuffer, dst_stage: vk::PipelineStageFlags) {
+    let dst_access = if dst_stage == vk::PipelineStageFlags::TRANSFER {
+        vk::AccessFlags::TRANSFER_READ
+    } else {
+        vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE
+    };
+    let b = [vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::SHADER_READ)
+        .dst_access_mask(dst_access)];
+    // SAFETY: recording into a command buffer in the recording state.
+    unsafe {
+        device.cmd_pipeline_barrier(
+            cb,
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            dst_stage,
+            vk::DependencyFlags::empty(),
+            &b,
+            &[],
+            &[],
+        );
+    }
+}
+
+impl VulkanContext {
+    /// Uploads `packed` (see [`GpuScene::upload`]).
+    pub fn upload_scene(&mut self, packed: &fovea_scene::pack::PackedScene) -> Result<GpuScene> {
+        GpuScene::upload(self, packed)
+    }
+
+    /// Renders one frame of `scene` (see [`Self::render_frame_with_progress`]).
+    pub fn render_frame(
+        &mut self,
+        scene: &GpuScene,
+        frame: &FrameParams,
+        fill_mode: u32,
+        exposure_ev: f32,
+        want_hdr: bool,
+    ) -> Result<(GpuFrame, GpuRenderStats)> {
+        self.render_frame_with_progress(scene, frame, fill_mode, exposure_ev, want_hdr, &|_| {})
+    }
+
+    /// Renders one frame: enumerates the blocks on the host, dispatches `render_samples` and
+    /// `reduce_blocks` per chunk (one submission each, each waited on with a timeout), then `cell_means`,
+    /// `fill`, `tonemap` and the readback. `progress` receives the samples of each finished chunk.
+    pub fn render_frame_with_progress(
+        &mut self,
+        scene: &GpuScene,
+        frame: &FrameParams,
+        fill_mode: u32,
+        exposure_ev: f32,
+        want_hdr: bool,
+        progress: &dyn Fn(u64),
+    ) -> Result<(GpuFrame, GpuRenderStats)> {
+        self.check_usable()?;
+        if scene.buffers.len() != SCENE_BINDINGS
+            || !scene.buffers.iter().all(|b| b.same_device(&self.shared))
+        {
+            return Err(VulkanError::Invalid(
+                "the scene was uploaded to another Vulkan context".into(),
+            ));
+        }
+        let (w, h) = (frame.width, frame.height);
+        if w == 0 || h == 0 {
+            return Err(VulkanError::Invalid("the image is empty".into()));
+        }
+        if frame.foveation.validate() != FOVEATION_OK {
+            return Err(VulkanError::Invalid(
+                "inconsistent foveation parameters".into(),
+            ));
+        }
+        let plan_start = Instant::now();
+        let fov = &frame.foveation;
+        let blocks = enumerate_blocks(w, h, fov);
+        let align_blocks = self
+            .limits
+            .min_storage_buffer_offset_alignment
+            .div_ceil(16)
+            .max(1);
+        // Offsets must be multiples of the alignment; a 16-byte block list works when the alignment is a
+        // power of two (Vulkan requires that).
+        let plan = plan_chunks(
+            &blocks,
+            [fov.spp[0], fov.spp[1], fov.spp[2]],
+            self.max_chunk_samples.max(1),
+            align_blocks,
+        );
+        let block_data = block_buffer_contents(&blocks, &plan);
+        let pixels = u64::from(w) * u64::from(h);
+        let cells = u64::from(cell_buffer_len(w, h, fov));
+        let sizes = Sizes {
+            pixels,
+            cells,
+            block_buffer: plan.block_buffer_len,
+            chunk_blocks: u64::from(plan.max_chunk_blocks.max(1)),
+            chunk_samples: plan.max_chunk_samples.max(1),
+        };
+        let plan_ms = plan_start.elapsed().as_secs_f64() * 1e3;
+
+        if !self.frame.as_ref().is_some_and(|f| sizes.fits_in(&f.sizes)) {
+            self.frame = None; // free the old buffers first
+            self.frame = Some(FrameResources::new(self, sizes)?);
+        }
+        {
+            let res = self
+                .frame
+                .as_mut()
+                .expect("frame resources were just created");
+            res.frame.write(&[*frame])?;
+            res.blocks.write(&block_data)?;
+        }
+        self.write_descriptors(scene, &sizes);
+
+        let result = self.dispatch_frame(&plan, &sizes, fill_mode, exposure_ev, want_hdr, progress);
+        let (render_ms, gpu_timestamps, submissions) = result?;
+
+        let res = self.frame.as_mut().expect("frame resources exist");
+        let ldr = res.ldr_readback.read::<u32>(pixels as usize)?;
+        let hdr = if want_hdr {
+            Some(FrameImage {
+                width: w,
+                height: h,
+                pixels: res.hdr_readback.read::<[f32; 4]>(pixels as usize)?,
+            })
+        } else {
+            None
+        };
+        let samples_per_region = plan.samples_per_region();
+        let stats = GpuRenderStats {
+            render: RenderStats {
+                render_ms,
+                primary_samples: samples_per_region.iter().sum(),
+                samples_per_region,
+                blocks_per_region: [
+                    blocks[0].len() as u64,
+                    blocks[1].len() as u64,
+                    blocks[2].len() as u64,
+                ],
+            },
+            idle_invocations: plan.idle_invocations(),
+            chunks: plan.chunks.len() as u32,
+            submissions,
+            gpu_timestamps,
+            plan_ms,
+        };
+        Ok((
+            GpuFrame {
+                width: w,
+                height: h,
+                ldr,
+                hdr,
+            },
+            stats,
+        ))
+    }
+
+    /// Points every binding at this frame's buffers (nothing is in flight: every submission was waited
+    /// on).
+    fn write_descriptors(&mut self, scene: &GpuScene, sizes: &Sizes) {
+        let res = self.frame.as_ref().expect("frame resources exist");
+        let mut infos: Vec<(u32, vk::DescriptorBufferInfo)> = Vec::new();
+        for (b, buf) in scene.buffers.iter().enumerate() {
+            infos.push((
+                b as u32,
+                vk::DescriptorBufferInfo::default()
+                    .buffer(buf.buffer)
+                    .offset(0)
+                    .range(scene.ranges[b]),
+            ));
+        }
+        let frame_buffers = [
+            (BINDING_BLOCKS, &res.blocks, sizes.chunk_blocks * 16),
+            (BINDING_SAMPLES, &res.samples, sizes.chunk_samples * PIXEL),
+            (BINDING_REPLICATED, &res.replicated, sizes.pixels * PIXEL),
+            (
+                BINDING_CELL_MEANS,
+                &res.cell_means,
+                sizes.cells.max(1) * PIXEL,
+            ),
+            (BINDING_HDR, &res.hdr, sizes.pixels * PIXEL),
+            (BINDING_LDR, &res.ldr, sizes.pixels * 4),
+            (
+                BINDING_FRAME,
+                &res.frame,
+                std::mem::size_of::<FrameParams>() as u64,
+            ),
+        ];
+        for (binding, buf, range) in frame_buffers {
+            infos.push((
+                binding,
+                vk::DescriptorBufferInfo::default()
+                    .buffer(buf.buffer)
+                    .offset(0)
+                    .range(range),
+            ));
+        }
+        let writes: Vec<vk::WriteDescriptorSet> = infos
+            .iter()
+            .map(|(binding, info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(self.descriptor_set)
+                    .dst_binding(*binding)
+                    .descriptor_type(if *binding == BINDING_BLOCKS {
+                        vk::DescriptorType::STORAGE_BUFFER_DYNAMIC
+                    } else {
+                        vk::DescriptorType::STORAGE_BUFFER
+                    })
+                    .buffer_info(std::slice::from_ref(info))
+            })
+            .collect();
+        // SAFETY: the set is not in use by any pending command buffer, and every buffer is alive.
+        unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
+    }
+
+    /// Records and submits all dispatches of a frame; returns (render ms, whether GPU-timed, submissions).
+    #[allow(clippy::too_many_arguments)]
+    fn dispatch_frame(
+        &mut self,
+        plan: &ChunkPlan,
+        sizes: &Sizes,
+        fill_mode: u32,
+        exposure_ev: f32,
+        want_hdr: bool,
+        progress: &dyn Fn(u64),
+    ) -> Result<(f64, bool, u32)> {
+        let layout = self.pipeline_layout;
+        let set = self.descriptor_set;
+        let pipelines = self.pipelines;
+        let query_pool = self.query_pool;
+        let max_x = self.limits.max_workgroup_count_x;
+        let timed = query_pool != vk::QueryPool::null();
+        let push = move |device: &ash::Device, cb: vk::CommandBuffer, pc: &KernelPushConstants| {
+            // SAFETY: the range matches the pipeline layout's push-constant range.
+            unsafe {
+                device.cmd_push_constants(
+                    cb,
+                    layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    bytemuck::bytes_of(pc),
+                );
+            }
+        };
+        let bind = move |device: &ash::Device, cb: vk::CommandBuffer, p: usize, offset: u32| {
+            // SAFETY: valid pipeline, layout and set; one dynamic offset for the one dynamic binding.
+            unsafe {
+                device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, pipelines[p]);
+                device.cmd_bind_descriptor_sets(
+                    cb,
+                    vk::PipelineBindPoint::COMPUTE,
+                    layout,
+                    0,
+                    &[set],
+                    &[offset],
+                );
+            }
+        };
+        let dispatch = move |device: &ash::Device, cb: vk::CommandBuffer, items: u64| {
+            let [x, y] = workgroups_2d(items, max_x);
+            // SAFETY: a compute pipeline and its descriptor set are bound.
+            unsafe { device.cmd_dispatch(cb, x, y, 1) };
+        };
+        let base = KernelPushConstants {
+            block_count: 0,
+            spp: 0,
+            item_count: 0,
+            fill_mode,
+            exposure_ev,
+            _pad: [0; 3],
+        };
+
+        let wall = Instant::now();
+        let mut submissions = 0u32;
+        for (i, chunk) in plan.chunks.iter().enumerate() {
+            let offset = ChunkPlan::block_offset(chunk) as u32;
+            let pc = KernelPushConstants {
+                block_count: chunk.block_count,
+                spp: chunk.spp,
+                ..base
+            };
+            let first = i == 0;
+            let c = *chunk;
+            self.submit_and_wait("a sample chunk", CHUNK_TIMEOUT, |device, cb| {
+                if first && timed {
+                    // SAFETY: the query pool has two queries; they are reset before being written.
+                    unsafe {
+                        device.cmd_reset_query_pool(cb, query_pool, 0, 2);
+                        device.cmd_write_timestamp(
+                            cb,
+                            vk::PipelineStageFlags::TOP_OF_PIPE,
+                            query_pool,
+                            0,
+                        );
+                    }
+                }
+                bind(device, cb, pipeline::RENDER_SAMPLES, offset);
+                push(device, cb, &pc);
+                dispatch(device, cb, c.samples());
+                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+                bind(device, cb, pipeline::REDUCE_BLOCKS, offset);
+                push(device, cb, &pc);
+                dispatch(device, cb, u64::from(c.block_count));
+                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+            })?;
+            submissions += 1;
+            progress(chunk.samples());
+        }
+
+        let res = self.frame.as_ref().expect("frame resources exist");
+        let (ldr, ldr_rb, hdr, hdr_rb) = (
+            res.ldr.buffer,
+            res.ldr_readback.buffer,
+            res.hdr.buffer,
+            res.hdr_readback.buffer,
+        );
+        let (pixels, cells) = (sizes.pixels, sizes.cells);
+        let no_chunks = plan.chunks.is_empty();
+        self.submit_and_wait("the fill and tone map", CHUNK_TIMEOUT, |device, cb| {
+            if no_chunks && timed {
+                // SAFETY: as above.
+                unsafe {
+                    device.cmd_reset_query_pool(cb, query_pool, 0, 2);
+                    device.cmd_write_timestamp(
+                        cb,
+                        vk::PipelineStageFlags::TOP_OF_PIPE,
+                        query_pool,
+                        0,
+                    );
+                }
+            }
+            if cells > 0 {
+                bind(device, cb, pipeline::CELL_MEANS, 0);
+                push(
+                    device,
+                    cb,
+                    &KernelPushConstants {
+                        item_count: cells as u32,
+                        ..base
+                    },
+                );
+                dispatch(device, cb, cells);
+                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+            }
+            let pc = KernelPushConstants {
+                item_count: pixels as u32,
+                ..base
+            };
+            bind(device, cb, pipeline::FILL, 0);
+            push(device, cb, &pc);
+            dispatch(device, cb, pixels);
+            barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+            bind(device, cb, pipeline::TONEMAP, 0);
+            push(device, cb, &pc);
+            dispatch(device, cb, pixels);
+            barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
+            // SAFETY: the readback buffers are as large as the images; the host barrier makes the copies
+            // visible to the mapped reads after the fence.
+            unsafe {
+                device.cmd_copy_buffer(
+                    cb,
+                    ldr,
+                    ldr_rb,
+                    &[vk::BufferCopy::default().size(pixels * 4)],
+                );
+                if want_hdr {
+                    device.cmd_copy_buffer(
+                        cb,
+                        hdr,
+                        hdr_rb,
+                        &[vk::BufferCopy::default().size(pixels * PIXEL)],
+                    );
+                }
+                let to_host = [vk::MemoryBarrier::default()
+                    .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                    .dst_access_mask(vk::AccessFlags::HOST_READ)];
+                device.cmd_pipeline_barrier(
+                    cb,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::HOST,
+                    vk::DependencyFlags::empty(),
+                    &to_host,
+                    &[],
+                    &[],
+                );
+                if timed {
+                    device.cmd_write_timestamp(
+                        cb,
+                        vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                        query_pool,
+                        1,
+                    );
+                }
+            }
+        })?;
+        submissions += 1;
+        let wall_ms = wall.elapsed().as_secs_f64() * 1e3;
+
+        if timed {
+            let mut ticks = [0u64; 2];
+            // SAFETY: both queries were written by the submissions waited on above.
+            let r = unsafe {
+                self.shared.device.get_query_pool_results(
+                    query_pool,
+                    0,
+                    &mut ticks,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
+            };
+            if r.is_ok() {
+                let dt = ticks[1].wrapping_sub(ticks[0]) & self.timestamp_mask;
+                let ms = dt as f64 * f64::from(self.timestamp_period) * 1e-6;
+                return Ok((ms, true, submissions));
+            }
+        }
+        Ok((wall_ms, false, submissions))
+    }
+}
