@@ -81,6 +81,8 @@ pub struct VulkanContext {
     pub(crate) set_layout: vk::DescriptorSetLayout,
     pub(crate) pipeline_layout: vk::PipelineLayout,
     pub(crate) pipelines: [vk::Pipeline; 5],
+    /// The `probe` entry point's pipeline, created on first use by [`VulkanContext::run_probe`].
+    pub(crate) probe_pipeline: vk::Pipeline,
     pub(crate) descriptor_pool: vk::DescriptorPool,
     pub(crate) descriptor_set: vk::DescriptorSet,
     /// Two timestamps per frame; null when the queue has no timestamp bits.
@@ -266,6 +268,7 @@ impl VulkanContext {
             set_layout: vk::DescriptorSetLayout::null(),
             pipeline_layout: vk::PipelineLayout::null(),
             pipelines: [vk::Pipeline::null(); 5],
+            probe_pipeline: vk::Pipeline::null(),
             descriptor_pool: vk::DescriptorPool::null(),
             descriptor_set: vk::DescriptorSet::null(),
             query_pool: vk::QueryPool::null(),
@@ -581,7 +584,7 @@ impl VulkanContext {
 
 /// Descriptor type of each binding: the chunk's block list is bound with a dynamic offset, everything else
 /// as a plain storage buffer.
-fn descriptor_type(binding: u32) -> vk::DescriptorType {
+pub(crate) fn descriptor_type(binding: u32) -> vk::DescriptorType {
     if binding == BINDING_BLOCKS {
         vk::DescriptorType::STORAGE_BUFFER_DYNAMIC
     } else {
@@ -626,6 +629,7 @@ impl Drop for VulkanContext {
             for p in self.pipelines {
                 device.destroy_pipeline(p, None);
             }
+            device.destroy_pipeline(self.probe_pipeline, None);
             device.destroy_pipeline_layout(self.pipeline_layout, None);
             device.destroy_descriptor_pool(self.descriptor_pool, None);
             device.destroy_descriptor_set_layout(self.set_layout, None);

@@ -22,6 +22,7 @@ pub mod context;
 pub mod error;
 pub mod frame;
 pub mod instance;
+pub mod probe;
 pub mod scene;
 pub mod spirv;
 

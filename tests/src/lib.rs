@@ -84,3 +84,50 @@ pub fn mean_rgb(image: &FrameImage, pixels: impl Iterator<Item = (u32, u32)>) ->
     }
     (sum / n.max(1) as f64).as_vec3()
 }
+
+/// Loads and packs a scene file and returns its camera description, if the file has one.
+pub fn load_packed_with_camera(
+    path: &Path,
+    environment: &Environment,
+) -> (PackedScene, Option<fovea_scene::mesh::CameraDesc>) {
+    let loaded = load_scene(path, &LoadOptions::default())
+        .unwrap_or_else(|e| panic!("loading {}: {e}", path.display()));
+    let camera = loaded.camera;
+    (
+        pack_scene(loaded, environment, &BvhBuildOptions::default()),
+        camera,
+    )
+}
+
+/// The file's camera if it has one, else a view from `+z` (slightly above) that frames the scene's
+/// bounding sphere, as `fovea render` chooses.
+pub fn scene_camera(
+    packed: &PackedScene,
+    desc: Option<&fovea_scene::mesh::CameraDesc>,
+    aspect: f32,
+) -> Camera {
+    if let Some(c) = desc {
+        return Camera::from_forward(
+            Vec3::from(c.position),
+            Vec3::from(c.forward),
+            Vec3::from(c.up),
+            c.yfov_radians,
+            aspect,
+        );
+    }
+    let (lo, hi) = (packed.bounds_min, packed.bounds_max);
+    let centre = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-3);
+    let fov = 45f32.to_radians();
+    let distance = radius / (0.5 * fov).tan() * 1.05;
+    let dir = Vec3::new(0.0, 0.15, 1.0).normalize();
+    Camera::look_at(centre + dir * distance, centre, Vec3::Y, fov, aspect)
+}
+
+/// The 8-bit sRGB RGB bytes of packed RGBA8 pixels (core's `tonemap_to_rgba8` layout).
+pub fn rgba8_to_rgb8(pixels: &[u32]) -> Vec<u8> {
+    pixels
+        .iter()
+        .flat_map(|p| [*p as u8, (*p >> 8) as u8, (*p >> 16) as u8])
+        .collect()
+}

@@ -1,0 +1,289 @@
+//! The kernel's `probe` entry point on the device: evaluates one core function per item (selectors and
+//! record layouts: `fovea_core::kernel_abi::PROBE_*`), so the cross-backend tests can compare single
+//! functions compiled to SPIR-V with the same functions compiled for the CPU (`kernel_abi::probe_eval`).
+//!
+//! A probe owns its buffers and its own descriptor set (same layout as the frame's), so it never
+//! disturbs the buffers of the last frame.
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use fovea_core::integrator::FrameParams;
+use fovea_core::kernel_abi::{
+    KernelPushConstants, BINDING_CELL_MEANS, BINDING_FRAME, BINDING_PROBE_INPUT,
+    BINDING_PROBE_OUTPUT, BINDING_REPLICATED, PROBE_INPUT_RECORDS, PROBE_OUTPUT_RECORDS,
+};
+
+use crate::blocks::workgroups_2d;
+use crate::buffer::GpuBuffer;
+use crate::context::{VulkanContext, CHUNK_TIMEOUT};
+use crate::error::{Result, VkContext, VulkanError};
+use crate::spirv;
+
+/// Name of the entry point.
+pub const PROBE_ENTRY_POINT: &str = "probe";
+
+impl VulkanContext {
+    /// Runs the `probe` entry point with `selector` over `inputs.len() / PROBE_INPUT_RECORDS` items
+    /// (item `i` reads `inputs[8 i .. 8 i + 8]`) and returns `PROBE_OUTPUT_RECORDS` records per item.
+    /// The frame parameters are zero and the images empty (see [`Self::run_probe_with`]).
+    pub fn run_probe(&mut self, selector: u32, inputs: &[[f32; 4]]) -> Result<Vec<[f32; 4]>> {
+        let frame: FrameParams = bytemuck::Zeroable::zeroed();
+        self.run_probe_with(selector, inputs, &frame, &[], &[])
+    }
+
+    /// [`Self::run_probe`] with the frame parameters (`PROBE_OWNING_BLOCK`, `PROBE_CELL_MEAN`,
+    /// `PROBE_FILL_PIXEL`), the replicated image and the cell means those selectors read.
+    pub fn run_probe_with(
+        &mut self,
+        selector: u32,
+        inputs: &[[f32; 4]],
+        frame: &FrameParams,
+        replicated: &[[f32; 4]],
+        cell_means: &[[f32; 4]],
+    ) -> Result<Vec<[f32; 4]>> {
+        self.check_usable()?;
+        let stride = PROBE_INPUT_RECORDS as usize;
+        if !inputs.len().is_multiple_of(stride) {
+            return Err(VulkanError::Invalid(format!(
+                "probe inputs must be a multiple of {stride} records, got {}",
+                inputs.len()
+            )));
+        }
+        let items = inputs.len() / stride;
+        if items == 0 {
+            return Ok(Vec::new());
+        }
+        let item_count = u32::try_from(items)
+            .map_err(|_| VulkanError::Invalid(format!("{items} probe items are too many")))?;
+        let out_records = items * PROBE_OUTPUT_RECORDS as usize;
+        let record = std::mem::size_of::<[f32; 4]>() as u64;
+        for (what, n) in [
+            ("the probe inputs", inputs.len()),
+            ("the probe outputs", out_records),
+            ("the probe image", replicated.len()),
+            ("the probe cell means", cell_means.len()),
+        ] {
+            self.check_size(what, n as u64 * record)?;
+        }
+        let pipeline = self.probe_pipeline()?;
+
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let sh = &self.shared;
+        let host_buffer = |what: &str, data: &[[f32; 4]]| -> Result<GpuBuffer> {
+            let mut b = GpuBuffer::new(
+                sh,
+                what,
+                data.len() as u64 * record,
+                storage,
+                MemoryLocation::CpuToGpu,
+            )?;
+            b.write(data)?;
+            Ok(b)
+        };
+        let input_buf = host_buffer("probe inputs", inputs)?;
+        let replicated_buf = host_buffer("probe image", replicated)?;
+        let cell_means_buf = host_buffer("probe cell means", cell_means)?;
+        let mut frame_buf = GpuBuffer::new(
+            sh,
+            "probe frame parameters",
+            std::mem::size_of::<FrameParams>() as u64,
+            storage,
+            MemoryLocation::CpuToGpu,
+        )?;
+        frame_buf.write(std::slice::from_ref(frame))?;
+        let mut output_buf = GpuBuffer::new(
+            sh,
+            "probe outputs",
+            out_records as u64 * record,
+            storage,
+            MemoryLocation::GpuToCpu,
+        )?;
+
+        let set = ProbeSet::new(self)?;
+        let bindings = [
+            (BINDING_PROBE_INPUT, &input_buf),
+            (BINDING_PROBE_OUTPUT, &output_buf),
+            (BINDING_REPLICATED, &replicated_buf),
+            (BINDING_CELL_MEANS, &cell_means_buf),
+            (BINDING_FRAME, &frame_buf),
+        ];
+        let infos: Vec<vk::DescriptorBufferInfo> = bindings
+            .iter()
+            .map(|(_, b)| {
+                vk::DescriptorBufferInfo::default()
+                    .buffer(b.buffer)
+                    .offset(0)
+                    .range(vk::WHOLE_SIZE)
+            })
+            .collect();
+        let writes: Vec<vk::WriteDescriptorSet> = bindings
+            .iter()
+            .zip(&infos)
+            .map(|((binding, _), info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(set.set)
+                    .dst_binding(*binding)
+                    .descriptor_type(crate::context::descriptor_type(*binding))
+                    .buffer_info(std::slice::from_ref(info))
+            })
+            .collect();
+        // SAFETY: the set is new and unused; every buffer is alive.
+        unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
+
+        let pc = KernelPushConstants {
+            block_count: 0,
+            spp: selector,
+            item_count,
+            fill_mode: 0,
+            exposure_ev: 0.0,
+            _pad: [0; 3],
+        };
+        let layout = self.pipeline_layout;
+        let [x, y] = workgroups_2d(items as u64, self.limits.max_workgroup_count_x);
+        let descriptor_set = set.set;
+        self.submit_and_wait("a probe", CHUNK_TIMEOUT, |device, cb| {
+            // SAFETY: valid pipeline, layout and set (one dynamic offset for the one dynamic binding);
+            // the barrier makes the shader writes visible to the mapped read after the fence.
+            unsafe {
+                device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, pipeline);
+                device.cmd_bind_descriptor_sets(
+                    cb,
+                    vk::PipelineBindPoint::COMPUTE,
+                    layout,
+                    0,
+                    &[descriptor_set],
+                    &[0],
+                );
+                device.cmd_push_constants(
+                    cb,
+                    layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    bytemuck::bytes_of(&pc),
+                );
+                device.cmd_dispatch(cb, x, y, 1);
+                let to_host = [vk::MemoryBarrier::default()
+                    .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+                    .dst_access_mask(vk::AccessFlags::HOST_READ)];
+                device.cmd_pipeline_barrier(
+                    cb,
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::PipelineStageFlags::HOST,
+                    vk::DependencyFlags::empty(),
+                    &to_host,
+                    &[],
+                    &[],
+                );
+            }
+        })?;
+        drop(set);
+        output_buf.read::<[f32; 4]>(out_records)
+    }
+
+    /// The `probe` pipeline, created on first use (the frame's pipelines do not include it).
+    fn probe_pipeline(&mut self) -> Result<vk::Pipeline> {
+        if self.probe_pipeline != vk::Pipeline::null() {
+            return Ok(self.probe_pipeline);
+        }
+        let code = spirv::load_kernel()?;
+        let info = spirv::module_info(&code);
+        if !info.entry_points.iter().any(|e| e == PROBE_ENTRY_POINT) {
+            return Err(VulkanError::KernelNotBuilt(format!(
+                "the SPIR-V module has no entry point '{PROBE_ENTRY_POINT}' (it has {:?})",
+                info.entry_points
+            )));
+        }
+        let device = &self.shared.device;
+        let name = std::ffi::CString::new(PROBE_ENTRY_POINT).expect("no NUL in the name");
+        // SAFETY: valid create infos whose pointers live until the calls return; the module is destroyed
+        // after pipeline creation, which Vulkan allows.
+        unsafe {
+            let module = device
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)
+                .during("vkCreateShaderModule")?;
+            let create = [vk::ComputePipelineCreateInfo::default()
+                .stage(
+                    vk::PipelineShaderStageCreateInfo::default()
+                        .stage(vk::ShaderStageFlags::COMPUTE)
+                        .module(module)
+                        .name(&name),
+                )
+                .layout(self.pipeline_layout)];
+            let created = device.create_compute_pipelines(vk::PipelineCache::null(), &create, None);
+            device.destroy_shader_module(module, None);
+            match created {
+                Ok(p) => self.probe_pipeline = p[0],
+                Err((p, r)) => {
+                    for pl in p {
+                        if pl != vk::Pipeline::null() {
+                            device.destroy_pipeline(pl, None);
+                        }
+                    }
+                    return Err(VulkanError::vk("vkCreateComputePipelines", r));
+                }
+            }
+        }
+        Ok(self.probe_pipeline)
+    }
+}
+
+/// A descriptor pool with one set of the kernel's layout, destroyed on drop.
+struct ProbeSet {
+    device: ash::Device,
+    pool: vk::DescriptorPool,
+    set: vk::DescriptorSet,
+}
+
+impl ProbeSet {
+    fn new(ctx: &VulkanContext) -> Result<Self> {
+        let device = ctx.shared.device.clone();
+        let count = fovea_core::kernel_abi::BINDING_COUNT;
+        let sizes = [
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(count - 1),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::STORAGE_BUFFER_DYNAMIC)
+                .descriptor_count(1),
+        ];
+        // SAFETY: valid create info.
+        let pool = unsafe {
+            device.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default()
+                    .max_sets(1)
+                    .pool_sizes(&sizes),
+                None,
+            )
+        }
+        .during("vkCreateDescriptorPool")?;
+        let layouts = [ctx.set_layout];
+        // SAFETY: the pool has room for one set of this layout.
+        let set = unsafe {
+            device.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default()
+                    .descriptor_pool(pool)
+                    .set_layouts(&layouts),
+            )
+        };
+        match set {
+            Ok(s) => Ok(Self {
+                device,
+                pool,
+                set: s[0],
+            }),
+            Err(r) => {
+                // SAFETY: the pool is unused.
+                unsafe { device.destroy_descriptor_pool(pool, None) };
+                Err(VulkanError::vk("vkAllocateDescriptorSets", r))
+            }
+        }
+    }
+}
+
+impl Drop for ProbeSet {
+    fn drop(&mut self) {
+        // SAFETY: every submission using the set was waited on before the set is dropped (or the
+        // context is poisoned after a timeout, where nothing better can be done).
+        unsafe { self.device.destroy_descriptor_pool(self.pool, None) };
+    }
+}

@@ -1,0 +1,925 @@
+//! Cross-backend consistency of single core functions: `kernel_abi::probe_eval` on the CPU against the
+//! kernel's `probe` entry point (the same function compiled to SPIR-V by rust-gpu) on the Vulkan device,
+//! over random and adversarial inputs for every `PROBE_*` selector.
+//!
+//! Integer results (pcg4d, the `SampleRng` words, `owning_block`) must be bit-exact. Float results are
+//! compared in ULPs and absolute error against per-function tolerances justified below; results that are
+//! discontinuous in their inputs (hit/miss at a triangle edge, the lobe choice of a BSDF sample, a value
+//! at the 0/non-zero boundary of the hemisphere test) are counted as flips and their rate is bounded.
+//! A table of the measured figures is printed (`-- --nocapture`).
+//!
+//! Without a Vulkan device the test prints a note and passes, except with `CI=true`. The validation
+//! layer is always on here and must stay silent.
+use fovea_core::foveation::fill::{cell_buffer_len, FILL_BILINEAR, FILL_REPLICATE};
+use fovea_core::foveation::regions::FoveationParams;
+use fovea_core::integrator::FrameParams;
+use fovea_core::kernel_abi::*;
+use fovea_vulkan::{ContextOptions, VulkanContext, VulkanError};
+
+const STRIDE: usize = PROBE_INPUT_RECORDS as usize;
+const OUT: usize = PROBE_OUTPUT_RECORDS as usize;
+
+/// A validating context on the default device, or `None` (test skipped) where there is no Vulkan device
+/// and `CI` is not `true` (as in `tests/vulkan.rs`).
+fn context() -> Option<VulkanContext> {
+    std::env::set_var("FOVEA_VULKAN_VALIDATION", "1");
+    let options = ContextOptions {
+        device_index: None,
+        validation: fovea_vulkan::validation_requested(),
+    };
+    match VulkanContext::new(&options) {
+        Ok(ctx) => Some(ctx),
+        Err(e @ (VulkanError::NoLoader(_) | VulkanError::NoDevice(_))) => {
+            if std::env::var("CI").as_deref() == Ok("true") {
+                panic!("CI=true but no Vulkan device: {e}");
+            }
+            eprintln!("skipping Vulkan probe test: {e}");
+            None
+        }
+        Err(e) => panic!("cannot create a Vulkan context: {e}"),
+    }
+}
+
+/// SplitMix64: a small deterministic generator for the inputs.
+struct Rng(u64);
+
+impl Rng {
+    fn u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    fn u32(&mut self) -> u32 {
+        (self.u64() >> 32) as u32
+    }
+    /// Uniform in [0, 1).
+    fn f(&mut self) -> f32 {
+        (self.u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.f()
+    }
+    fn below(&mut self, n: u32) -> u32 {
+        self.u32() % n
+    }
+    /// A uniform direction on the sphere.
+    fn dir(&mut self) -> [f32; 3] {
+        let z = self.range(-1.0, 1.0);
+        let phi = self.range(0.0, std::f32::consts::TAU);
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        [r * phi.cos(), r * phi.sin(), z]
+    }
+    /// A direction in the upper hemisphere, often grazing (z tiny, zero or slightly negative).
+    fn local_dir(&mut self) -> [f32; 3] {
+        let z = match self.below(8) {
+            0 => 0.0,
+            1 => self.range(0.0, 1e-4),
+            2 => -self.range(0.0, 1e-4),
+            3 => 1.0,
+            4 => self.range(-0.2, 0.0),
+            _ => self.range(0.0, 1.0),
+        };
+        let phi = self.range(0.0, std::f32::consts::TAU);
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        [r * phi.cos(), r * phi.sin(), z]
+    }
+    /// A number of random magnitude (1e-30 .. 1e30) and sign, sometimes exactly 0.
+    fn wide(&mut self) -> f32 {
+        if self.below(16) == 0 {
+            return 0.0;
+        }
+        let e = self.range(-30.0, 30.0);
+        let s = if self.below(2) == 0 { 1.0 } else { -1.0 };
+        s * 10f32.powf(e) * self.range(1.0, 10.0)
+    }
+    /// A parameter in [0, 1], often exactly 0 or 1.
+    fn unit_param(&mut self) -> f32 {
+        match self.below(5) {
+            0 => 0.0,
+            1 => 1.0,
+            _ => self.f(),
+        }
+    }
+}
+
+fn bits(v: [u32; 4]) -> [f32; 4] {
+    v.map(f32::from_bits)
+}
+
+/// A 32-bit float's position on the number line in ULPs (±0 both map to 0).
+fn ordered(x: f32) -> i64 {
+    let b = x.to_bits() as i32;
+    if b < 0 {
+        -i64::from(b & 0x7fff_ffff)
+    } else {
+        i64::from(b)
+    }
+}
+
+/// ULP distance of two floats (0 for two NaNs, `u64::MAX` for one NaN).
+fn ulps(a: f32, b: f32) -> u64 {
+    match (a.is_nan(), b.is_nan()) {
+        (true, true) => 0,
+        (false, false) => (ordered(a) - ordered(b)).unsigned_abs(),
+        _ => u64::MAX,
+    }
+}
+
+/// What the test tolerates for one float function: a component passes if it is within `max_ulps` or
+/// within `max_abs`; whole items that are flips (see `classify`) are counted and their rate bounded.
+#[derive(Clone, Copy)]
+struct Tolerance {
+    max_ulps: u64,
+    max_abs: f32,
+    /// Relative error allowed where the function amplifies input ULPs (0: none).
+    max_rel: f32,
+    max_flip_rate: f64,
+}
+
+/// Per-function figures for the table.
+struct Row {
+    name: &'static str,
+    n: usize,
+    exact: usize,
+    max_ulps: u64,
+    max_abs: f32,
+    flips: usize,
+    /// Ill-conditioned items (not compared).
+    ill: usize,
+    failures: Vec<String>,
+    tolerance: String,
+    worst: String,
+}
+
+/// The CPU reference outputs of one selector.
+fn cpu_eval(
+    selector: u32,
+    inputs: &[[f32; 4]],
+    frame: &FrameParams,
+    replicated: &[[f32; 4]],
+    cell_means: &[[f32; 4]],
+) -> Vec<[f32; 4]> {
+    let items = inputs.len() / STRIDE;
+    let mut out = Vec::with_capacity(items * OUT);
+    for i in 0..items {
+        out.extend_from_slice(&probe_eval(
+            selector, inputs, i as u32, frame, replicated, cell_means,
+        ));
+    }
+    out
+}
+
+/// Compares integer outputs bit for bit (`components` of each output record).
+fn compare_bits(
+    name: &'static str,
+    inputs: &[[f32; 4]],
+    cpu: &[[f32; 4]],
+    gpu: &[[f32; 4]],
+    components: &[(usize, usize)],
+) -> Row {
+    let items = cpu.len() / OUT;
+    let mut row = Row {
+        name,
+        n: items,
+        exact: 0,
+        max_ulps: 0,
+        max_abs: 0.0,
+        flips: 0,
+        ill: 0,
+        failures: Vec::new(),
+        tolerance: "bit-exact".into(),
+        worst: String::new(),
+    };
+    for i in 0..items {
+        let same = components
+            .iter()
+            .all(|&(r, c)| cpu[i * OUT + r][c].to_bits() == gpu[i * OUT + r][c].to_bits());
+        if same {
+            row.exact += 1;
+        } else if row.failures.len() < 5 {
+            row.failures.push(format!(
+                "item {i}: in {:?} cpu {:?} gpu {:?}",
+                &inputs[i * STRIDE..i * STRIDE + 2],
+                &cpu[i * OUT..i * OUT + OUT],
+                &gpu[i * OUT..i * OUT + OUT]
+            ));
+        }
+    }
+    row
+}
+
+/// Compares float outputs (`components`); `is_flip(cpu_item, gpu_item)` marks discontinuous outcomes.
+fn compare_floats(
+    name: &'static str,
+    inputs: &[[f32; 4]],
+    cpu: &[[f32; 4]],
+    gpu: &[[f32; 4]],
+    components: &[(usize, usize)],
+    tol: Tolerance,
+    classify: Classifier<'_>,
+) -> Row {
+    let items = cpu.len() / OUT;
+    let mut row = Row {
+        name,
+        n: items,
+        exact: 0,
+        max_ulps: 0,
+        max_abs: 0.0,
+        flips: 0,
+        ill: 0,
+        failures: Vec::new(),
+        tolerance: format!(
+            "{} ulp or {:.0e} abs or {:.0e} rel; flips <= {:.2} %",
+            tol.max_ulps,
+            tol.max_abs,
+            tol.max_rel,
+            100.0 * tol.max_flip_rate
+        ),
+        worst: String::new(),
+    };
+    for i in 0..items {
+        let (c, g) = (&cpu[i * OUT..i * OUT + OUT], &gpu[i * OUT..i * OUT + OUT]);
+        match classify(i, c, g) {
+            Class::Flip => {
+                row.flips += 1;
+                continue;
+            }
+            Class::IllConditioned => {
+                row.ill += 1;
+                continue;
+            }
+            Class::Compare => {}
+        }
+        let mut exact = true;
+        let mut ok = true;
+        for &(r, k) in components {
+            let (a, b) = (c[r][k], g[r][k]);
+            let u = ulps(a, b);
+            if u != 0 {
+                exact = false;
+            }
+            let abs = if u == 0 { 0.0 } else { (a - b).abs() };
+            if u > row.max_ulps {
+                row.worst = format!("item {i} cpu {c:?} gpu {g:?}");
+            }
+            row.max_ulps = row.max_ulps.max(u);
+            if abs.is_finite() {
+                row.max_abs = row.max_abs.max(abs);
+            }
+            let rel = abs / a.abs().max(b.abs());
+            let within = u <= tol.max_ulps || abs <= tol.max_abs || rel <= tol.max_rel;
+            if !within {
+                ok = false;
+            }
+        }
+        if exact {
+            row.exact += 1;
+        }
+        if !ok && row.failures.len() < 5 {
+            row.failures.push(format!(
+                "item {i}: in {:?} cpu {c:?} gpu {g:?}",
+                &inputs[i * STRIDE..i * STRIDE + 5]
+            ));
+        }
+    }
+    let rate = row.flips as f64 / (items - row.ill).max(1) as f64;
+    if rate > tol.max_flip_rate {
+        row.failures.push(format!(
+            "flip rate {:.3} % > {:.3} %",
+            100.0 * rate,
+            100.0 * tol.max_flip_rate
+        ));
+    }
+    row
+}
+
+/// How an item's outputs are compared.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Class {
+    /// Against the tolerance.
+    Compare,
+    /// A discontinuous outcome (hit/miss, lobe choice, zero/non-zero): counted, rate bounded.
+    Flip,
+    /// An input where the function is ill-conditioned (grazing, degenerate): counted, not compared.
+    IllConditioned,
+}
+
+/// Classifies item `i` from its CPU and GPU outputs.
+type Classifier<'a> = &'a dyn Fn(usize, &[[f32; 4]], &[[f32; 4]]) -> Class;
+
+fn no_flip(_: usize, _: &[[f32; 4]], _: &[[f32; 4]]) -> Class {
+    Class::Compare
+}
+
+/// Item builder: `records` padded to the stride.
+fn push_item(inputs: &mut Vec<[f32; 4]>, records: &[[f32; 4]]) {
+    let start = inputs.len();
+    inputs.extend_from_slice(records);
+    inputs.resize(start + STRIDE, [0.0; 4]);
+}
+
+fn pcg_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
+    let mut v = Vec::new();
+    let special = [0u32, 1, 0x7fff_ffff, 0x8000_0000, 0xffff_ffff, 0x7fc0_0000];
+    for i in 0..n {
+        let mut w = [rng.u32(), rng.u32(), rng.u32(), rng.u32()];
+        if i % 4 == 0 {
+            for x in &mut w {
+                *x = special[rng.below(special.len() as u32) as usize];
+            }
+        }
+        push_item(&mut v, &[bits(w)]);
+    }
+    v
+}
+
+fn rng_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
+    let mut v = Vec::new();
+    for i in 0..n {
+        let (x, y) = if i % 8 == 0 {
+            (u32::MAX - rng.below(2), rng.below(3))
+        } else {
+            (rng.below(4096), rng.below(4096))
+        };
+        push_item(
+            &mut v,
+            &[
+                bits([x, y, rng.u32(), rng.below(64)]),
+                bits([rng.below(3), rng.u32(), rng.below(12), 0]),
+            ],
+        );
+    }
+    v
+}
+
+fn offset_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
+    let mut v = Vec::new();
+    for i in 0..n {
+        let p = if i % 3 == 0 {
+            [rng.wide(), rng.wide(), rng.wide()]
+        } else {
+            [
+                rng.range(-100.0, 100.0),
+                rng.range(-100.0, 100.0),
+                rng.range(-100.0, 100.0),
+            ]
+        };
+        let nrm = match i % 5 {
+            0 => {
+                let mut a = [0.0; 3];
+                a[rng.below(3) as usize] = if rng.below(2) == 0 { 1.0 } else { -1.0 };
+                a
+            }
+            _ => rng.dir(),
+        };
+        push_item(
+            &mut v,
+            &[[p[0], p[1], p[2], 0.0], [nrm[0], nrm[1], nrm[2], 0.0]],
+        );
+    }
+    v
+}
+
+fn triangle_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
+    let mut v = Vec::new();
+    for i in 0..n {
+        let scale = match i % 4 {
+            0 => 10f32.powf(rng.range(-6.0, 6.0)),
+            _ => 1.0,
+        };
+        let centre = [
+            rng.range(-2.0, 2.0) * scale,
+            rng.range(-2.0, 2.0) * scale,
+            rng.range(-2.0, 2.0) * scale,
+        ];
+        let mut vert = || {
+            let d = rng.dir();
+            let r = rng.range(0.1, 1.0) * scale;
+            [
+                centre[0] + d[0] * r,
+                centre[1] + d[1] * r,
+                centre[2] + d[2] * r,
+                0.0,
+            ]
+        };
+        let (v0, v1, mut v2) = (vert(), vert(), vert());
+        if i % 17 == 0 {
+            // Degenerate: v2 on the line v0-v1.
+            for k in 0..3 {
+                v2[k] = 0.5 * (v0[k] + v1[k]);
+            }
+        }
+        // Aim at a point of barycentrics (b1, b2): inside, on an edge (b = 0 exactly or tiny) or outside.
+        let (b1, b2) = match i % 6 {
+            0 => (0.0, rng.f()),
+            1 => (rng.f() * 1e-6, rng.f()),
+            2 => {
+                let b = rng.f();
+                (b, 1.0 - b)
+            }
+            3 => (rng.range(-0.5, 1.5), rng.range(-0.5, 1.5)),
+            _ => {
+                let (a, b) = (rng.f(), rng.f());
+                if a + b > 1.0 {
+                    (1.0 - a, 1.0 - b)
+                } else {
+                    (a, b)
+                }
+            }
+        };
+        let b0 = 1.0 - b1 - b2;
+        let target = [
+            b0 * v0[0] + b1 * v1[0] + b2 * v2[0],
+            b0 * v0[1] + b1 * v1[1] + b2 * v2[1],
+            b0 * v0[2] + b1 * v1[2] + b2 * v2[2],
+        ];
+        let dir = if i % 11 == 0 {
+            // Edge-on: a direction in the triangle's plane.
+            let e = [v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]];
+            let len = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt().max(1e-30);
+            [e[0] / len, e[1] / len, e[2] / len]
+        } else {
+            rng.dir()
+        };
+        let dist = rng.range(0.5, 5.0) * scale;
+        let origin = [
+            target[0] - dir[0] * dist,
+            target[1] - dir[1] * dist,
+            target[2] - dir[2] * dist,
+        ];
+        // t_max: generous, or right at the expected distance.
+        let t_max = if i % 7 == 0 { dist } else { 1e30 };
+        push_item(
+            &mut v,
+            &[
+                [origin[0], origin[1], origin[2], t_max],
+                [dir[0], dir[1], dir[2], 0.0],
+                v0,
+                v1,
+                v2,
+            ],
+        );
+    }
+    v
+}
+
+fn disney_head(rng: &mut Rng) -> [[f32; 4]; 3] {
+    let rough = match rng.below(6) {
+        0 => 0.0,
+        1 => 1.0,
+        2 => rng.range(0.0, 0.05),
+        _ => rng.f(),
+    };
+    [
+        [rng.f(), rng.f(), rng.f(), rng.unit_param()],
+        [rough, rng.unit_param(), rng.unit_param(), rng.unit_param()],
+        [
+            rng.unit_param(),
+            rng.unit_param(),
+            rng.unit_param(),
+            rng.unit_param(),
+        ],
+    ]
+}
+
+fn disney_eval_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
+    let mut v = Vec::new();
+    for i in 0..n {
+        let head = disney_head(rng);
+        let wo = rng.local_dir();
+        let wi = match i % 6 {
+            // The mirror direction (the specular peak, where roughness 0 is a delta).
+            0 => [-wo[0], -wo[1], wo[2]],
+            _ => rng.local_dir(),
+        };
+        push_item(
+            &mut v,
+            &[
+                head[0],
+                head[1],
+                head[2],
+                [wo[0], wo[1], wo[2], 0.0],
+                [wi[0], wi[1], wi[2], 0.0],
+            ],
+        );
+    }
+    v
+}
+
+fn disney_sample_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
+    let mut v = Vec::new();
+    let edge = [0.0, 1.0 - f32::EPSILON / 2.0, 0.5];
+    for i in 0..n {
+        let head = disney_head(rng);
+        let wo = rng.local_dir();
+        let mut u = [rng.f(), rng.f(), rng.f()];
+        if i % 5 == 0 {
+            u[1 + rng.below(2) as usize] = edge[rng.below(3) as usize];
+        }
+        push_item(
+            &mut v,
+            &[
+                head[0],
+                head[1],
+                head[2],
+                [wo[0], wo[1], wo[2], 0.0],
+                [u[0], u[1], u[2], 0.0],
+            ],
+        );
+    }
+    v
+}
+
+fn tonemap_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
+    let mut v = Vec::new();
+    for i in 0..n {
+        let mut c = || match rng.below(8) {
+            0 => 0.0,
+            1 => 10f32.powf(rng.range(-8.0, 6.0)),
+            _ => rng.range(0.0, 2.0),
+        };
+        let rgb = [c(), c(), c()];
+        let ev = if i % 3 == 0 {
+            0.0
+        } else {
+            rng.range(-6.0, 6.0)
+        };
+        push_item(&mut v, &[[rgb[0], rgb[1], rgb[2], ev]]);
+    }
+    v
+}
+
+/// |cos| of the angle between a `PROBE_TRIANGLE` item's ray and its triangle's normal (f64).
+fn grazing_cos(item: &[[f32; 4]]) -> f64 {
+    let v = |r: [f32; 4]| [f64::from(r[0]), f64::from(r[1]), f64::from(r[2])];
+    let (d, a, b, c) = (v(item[1]), v(item[2]), v(item[3]), v(item[4]));
+    let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let n = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let dl = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let l1 = (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]).sqrt();
+    let l2 = (e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]).sqrt();
+    // A (nearly) degenerate triangle has no well-defined plane: treat it as grazing.
+    if dl == 0.0 || len <= 1e-3 * l1 * l2 {
+        return 0.0;
+    }
+    ((n[0] * d[0] + n[1] * d[1] + n[2] * d[2]) / (len * dl)).abs()
+}
+
+/// Rays closer than this to a triangle's plane (|cos| < 0.02, about 1.1°) are ill-conditioned: the
+/// determinant is a near-cancelling sum of products, so the FMA contraction on the GPU moves the hit
+/// point far more than a few ULPs. They are counted with the hit/miss flips.
+const GRAZING_COS: f64 = 0.02;
+
+/// Outgoing directions with `0 < wo.z` below this are grazing: the sampled half vector's `wo · h` and
+/// the Jacobian `1 / (4 wo · h)` cancel, so a one-ULP change of `h` moves the pdf by up to 0.3 %
+/// (measured). Such items are counted, not compared.
+const GRAZING_WO_Z: f32 = 1e-3;
+
+/// A foveated frame of 181 × 97 pixels (odd sizes: partial blocks at the edges).
+fn probe_frame() -> FrameParams {
+    let (w, h) = (181, 97);
+    let fov = FoveationParams::paper([70.3, 41.7], 17.0, 39.0);
+    fovea_tests::frame_params(fovea_tests::cornell_camera(w, h), fov, w, h, 0)
+}
+
+#[test]
+fn core_functions_agree_across_backends() {
+    let Some(mut ctx) = context() else { return };
+    let log = ctx.validation_log();
+    let device = ctx.device_name().to_string();
+    let mut rng = Rng(0x5eed_f00d);
+    let n = 4096;
+    let frame = probe_frame();
+    let zero_frame = frame;
+    let (w, h) = (frame.width, frame.height);
+    let mut rows: Vec<Row> = Vec::new();
+    let run = |ctx: &mut VulkanContext,
+               selector: u32,
+               inputs: &[[f32; 4]],
+               frame: &FrameParams,
+               replicated: &[[f32; 4]],
+               cell_means: &[[f32; 4]]| {
+        let cpu = cpu_eval(selector, inputs, frame, replicated, cell_means);
+        let gpu = ctx
+            .run_probe_with(selector, inputs, frame, replicated, cell_means)
+            .unwrap_or_else(|e| panic!("probe {selector}: {e}"));
+        assert_eq!(cpu.len(), gpu.len());
+        (cpu, gpu)
+    };
+
+    // Integers: bit-exact.
+    let inputs = pcg_inputs(&mut rng, n);
+    let (cpu, gpu) = run(&mut ctx, PROBE_PCG4D, &inputs, &zero_frame, &[], &[]);
+    rows.push(compare_bits(
+        "pcg4d",
+        &inputs,
+        &cpu,
+        &gpu,
+        &[(0, 0), (0, 1), (0, 2), (0, 3)],
+    ));
+    let inputs = rng_inputs(&mut rng, n);
+    let (cpu, gpu) = run(&mut ctx, PROBE_SAMPLE_RNG, &inputs, &zero_frame, &[], &[]);
+    rows.push(compare_bits(
+        "SampleRng next_u32x4",
+        &inputs,
+        &cpu,
+        &gpu,
+        &[(0, 0), (0, 1), (0, 2), (0, 3)],
+    ));
+    // `next_2d` is an integer-to-float conversion of 24 bits times 2^-24: exact on both sides.
+    rows.push(compare_bits(
+        "SampleRng next_2d",
+        &inputs,
+        &cpu,
+        &gpu,
+        &[(1, 0), (1, 1)],
+    ));
+    let mut inputs = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            push_item(&mut inputs, &[bits([x, y, 0, 0])]);
+        }
+    }
+    let (cpu, gpu) = run(&mut ctx, PROBE_OWNING_BLOCK, &inputs, &frame, &[], &[]);
+    rows.push(compare_bits(
+        "owning_block",
+        &inputs,
+        &cpu,
+        &gpu,
+        &[(0, 0), (0, 1), (0, 2), (0, 3)],
+    ));
+
+    // offset_ray_origin: pbrt's integer-ULP offset; tolerance from measurement (see the table).
+    let inputs = offset_inputs(&mut rng, n);
+    let (cpu, gpu) = run(
+        &mut ctx,
+        PROBE_OFFSET_RAY_ORIGIN,
+        &inputs,
+        &zero_frame,
+        &[],
+        &[],
+    );
+    rows.push(compare_floats(
+        "offset_ray_origin",
+        &inputs,
+        &cpu,
+        &gpu,
+        &[(0, 0), (0, 1), (0, 2)],
+        TOL_OFFSET,
+        &no_flip,
+    ));
+
+    let inputs = triangle_inputs(&mut rng, n);
+    let (cpu, gpu) = run(&mut ctx, PROBE_TRIANGLE, &inputs, &zero_frame, &[], &[]);
+    // A hit on one side and a miss on the other (edge, t_max or edge-on rays) is a flip.
+    let hit_flip = |i: usize, c: &[[f32; 4]], g: &[[f32; 4]]| {
+        if grazing_cos(&inputs[i * STRIDE..]) < GRAZING_COS {
+            Class::IllConditioned
+        } else if c[0][3] != g[0][3] {
+            Class::Flip
+        } else {
+            Class::Compare
+        }
+    };
+    let mut row = compare_floats(
+        "triangle (t, b1, b2)",
+        &inputs,
+        &cpu,
+        &gpu,
+        &[(0, 0), (0, 1), (0, 2), (0, 3)],
+        TOL_TRIANGLE,
+        &hit_flip,
+    );
+    let hits = (0..n).filter(|&i| cpu[i * OUT][3] == 1.0).count();
+    row.name = "triangle (t, b1, b2)";
+    eprintln!("triangle: {hits} of {n} CPU items hit");
+    rows.push(row);
+
+    let inputs = disney_eval_inputs(&mut rng, n);
+    let (cpu, gpu) = run(&mut ctx, PROBE_DISNEY_EVAL, &inputs, &zero_frame, &[], &[]);
+    // Zero on one side and non-zero on the other: the hemisphere test at a grazing direction.
+    let zero_flip = |_: usize, c: &[[f32; 4]], g: &[[f32; 4]]| {
+        if (c[0][3] == 0.0) != (g[0][3] == 0.0) {
+            Class::Flip
+        } else {
+            Class::Compare
+        }
+    };
+    rows.push(compare_floats(
+        "Disney eval_and_pdf",
+        &inputs,
+        &cpu,
+        &gpu,
+        &[(0, 0), (0, 1), (0, 2), (0, 3)],
+        TOL_DISNEY_EVAL,
+        &zero_flip,
+    ));
+
+    let inputs = disney_sample_inputs(&mut rng, n);
+    let (cpu, gpu) = run(
+        &mut ctx,
+        PROBE_DISNEY_SAMPLE,
+        &inputs,
+        &zero_frame,
+        &[],
+        &[],
+    );
+    // A different lobe or a sample below the surface on one side only: directions far apart or a
+    // zero pdf on one side.
+    let lobe_flip = |i: usize, c: &[[f32; 4]], g: &[[f32; 4]]| {
+        let wo_z = inputs[i * STRIDE + 3][2];
+        if (c[0][3] == 0.0) != (g[0][3] == 0.0) || (0..3).any(|k| (c[0][k] - g[0][k]).abs() > 1e-2)
+        {
+            Class::Flip
+        } else if wo_z > 0.0 && wo_z < GRAZING_WO_Z {
+            Class::IllConditioned
+        } else {
+            Class::Compare
+        }
+    };
+    rows.push(compare_floats(
+        "Disney sample (wi, pdf, f)",
+        &inputs,
+        &cpu,
+        &gpu,
+        &[(0, 0), (0, 1), (0, 2), (0, 3), (1, 0), (1, 1), (1, 2)],
+        TOL_DISNEY_SAMPLE,
+        &lobe_flip,
+    ));
+
+    // Tone map to RGBA8: quantised, so a rounding boundary can move a channel by one count.
+    let inputs = tonemap_inputs(&mut rng, n);
+    let (cpu, gpu) = run(&mut ctx, PROBE_TONEMAP, &inputs, &zero_frame, &[], &[]);
+    let mut row = compare_bits("tonemap_to_rgba8", &inputs, &cpu, &gpu, &[(0, 0)]);
+    let mut max_count_diff = 0i32;
+    for i in 0..n {
+        let (a, b) = (cpu[i * OUT][0].to_bits(), gpu[i * OUT][0].to_bits());
+        for s in 0..4 {
+            let d = ((a >> (8 * s)) & 0xff) as i32 - ((b >> (8 * s)) & 0xff) as i32;
+            max_count_diff = max_count_diff.max(d.abs());
+        }
+    }
+    row.max_ulps = max_count_diff as u64;
+    row.flips = n - row.exact;
+    row.tolerance = format!(
+        "<= 1 count/channel, <= {:.1} % items",
+        100.0 * TONEMAP_ROUNDING_RATE
+    );
+    if max_count_diff <= 1 && (row.flips as f64) <= TONEMAP_ROUNDING_RATE * n as f64 {
+        row.failures.clear();
+    }
+    rows.push(row);
+
+    // Cell means and the fill over a random replicated image of the foveated frame.
+    let replicated: Vec<[f32; 4]> = (0..w * h)
+        .map(|_| [rng.range(0.0, 4.0), rng.f(), rng.wide().abs().min(1e6), 1.0])
+        .collect();
+    let cells = cell_buffer_len(w, h, &frame.foveation);
+    let mut inputs = Vec::new();
+    for c in 0..cells {
+        push_item(&mut inputs, &[bits([c, 0, 0, 0])]);
+    }
+    let (cpu_means, gpu_means) = run(&mut ctx, PROBE_CELL_MEAN, &inputs, &frame, &replicated, &[]);
+    rows.push(compare_floats(
+        "cell_mean_at",
+        &inputs,
+        &cpu_means,
+        &gpu_means,
+        &[(0, 0), (0, 1), (0, 2), (0, 3)],
+        TOL_CELL_MEAN,
+        &no_flip,
+    ));
+    let cell_means: Vec<[f32; 4]> = (0..cells as usize).map(|c| cpu_means[c * OUT]).collect();
+    let mut inputs = Vec::new();
+    for mode in [FILL_BILINEAR, FILL_REPLICATE] {
+        for y in 0..h {
+            for x in 0..w {
+                push_item(&mut inputs, &[bits([x, y, mode, 0])]);
+            }
+        }
+    }
+    let (cpu, gpu) = run(
+        &mut ctx,
+        PROBE_FILL_PIXEL,
+        &inputs,
+        &frame,
+        &replicated,
+        &cell_means,
+    );
+    rows.push(compare_floats(
+        "fill_pixel",
+        &inputs,
+        &cpu,
+        &gpu,
+        &[(0, 0), (0, 1), (0, 2), (0, 3)],
+        TOL_FILL,
+        &no_flip,
+    ));
+
+    // The table.
+    eprintln!("\nCPU vs {device}: per-function agreement of kernel_abi::probe_eval");
+    eprintln!(
+        "| {:<26} | {:>6} | {:>9} | {:>9} | {:>10} | {:>6} | {:>6} | {:<40} |",
+        "function", "n", "bit-exact", "max ulp", "max abs", "flips", "ill", "tolerance"
+    );
+    eprintln!(
+        "|{:-<28}|{:-<8}|{:-<11}|{:-<11}|{:-<12}|{:-<8}|{:-<8}|{:-<42}|",
+        "", "", "", "", "", "", "", ""
+    );
+    for r in &rows {
+        eprintln!(
+            "| {:<26} | {:>6} | {:>8.3}% | {:>9} | {:>10.3e} | {:>6} | {:>6} | {:<40} |",
+            r.name,
+            r.n,
+            100.0 * r.exact as f64 / r.n.max(1) as f64,
+            r.max_ulps,
+            r.max_abs,
+            r.flips,
+            r.ill,
+            r.tolerance
+        );
+    }
+    if std::env::var_os("FOVEA_PROBE_WORST").is_some() {
+        for r in &rows {
+            eprintln!("worst {}: {}", r.name, r.worst);
+        }
+    }
+    let failures: Vec<String> = rows
+        .iter()
+        .flat_map(|r| r.failures.iter().map(move |f| format!("{}: {f}", r.name)))
+        .collect();
+    drop(ctx);
+    let messages = log.lock().unwrap().clone();
+    assert!(messages.is_empty(), "validation messages: {messages:#?}");
+    assert!(failures.is_empty(), "mismatches:\n{}", failures.join("\n"));
+}
+
+// Tolerances, each from the figures measured on lavapipe (llvmpipe, LLVM 15) and printed in the table.
+// Two facts set them: Debian's spirv-opt contracts `a * b + c` into `OpExtInst Fma` in the SPIR-V while
+// Rust on the CPU never contracts, so every sum of products may differ by the rounding of one product
+// (about one ULP of the larger term, unbounded in ULPs of a result that cancels to near zero, hence the
+// absolute floors); and GLSL.std.450's sqrt/sin/cos/exp/log/pow are specified only to a few ULPs (sqrt:
+// correctly rounded inverse of 2.5 ULP; sin/cos: 2^-11 absolute; exp/log/pow: 3 + 2|x| ULP), while
+// lavapipe evaluates them with LLVM's own (not libm's) code and does not fuse further.
+
+/// `offset_ray_origin` is integer ULP stepping plus one multiply-add per axis: measured bit-exact; the
+/// bound allows one fused multiply-add's rounding.
+const TOL_OFFSET: Tolerance = Tolerance {
+    max_ulps: 2,
+    max_abs: 0.0,
+    max_rel: 0.0,
+    max_flip_rate: 0.0,
+};
+/// The watertight test is products of sheared coordinates: within a few ULPs on well-conditioned rays
+/// (table: the large max-ULP figure is an edge hit's b1, 4.2e-7 on the CPU and -0.0 on the GPU); barycentrics of hits on an edge are near zero, where only the absolute error means anything.
+/// Grazing rays and degenerate triangles are not compared (see [`GRAZING_COS`]); hit/miss flips among
+/// the others (rays through an edge or vertex, `t` at `t_max`): measured 10 of 3440 (0.29 %).
+const TOL_TRIANGLE: Tolerance = Tolerance {
+    max_ulps: 16,
+    max_abs: 1e-5,
+    max_rel: 0.0,
+    max_flip_rate: 0.01,
+};
+/// Disney evaluation: measured at most 4 ULP (sqrt, pow and divisions of fused sums).
+const TOL_DISNEY_EVAL: Tolerance = Tolerance {
+    max_ulps: 16,
+    max_abs: 1e-6,
+    max_rel: 0.0,
+    max_flip_rate: 0.002,
+};
+/// Disney sampling: directions built from sin/cos of sampled angles (GLSL.std.450 sin/cos: 2^-11
+/// absolute) and reflections; the pdf and f are then evaluated at that direction, and for a sharp GGX
+/// lobe (roughness 0.04: alpha^2 = 2.6e-6) a few-ULP change of `wi` moves D by 2.6e-4 relative
+/// (measured, item with pdf 227.06 vs 227.00), hence the relative bound. Lobe flips (u.x on a lobe
+/// boundary, or a direction differing by more than 1e-2): measured 3 of 4096.
+const TOL_DISNEY_SAMPLE: Tolerance = Tolerance {
+    max_ulps: 64,
+    max_abs: 1e-3,
+    max_rel: 1e-2,
+    max_flip_rate: 0.005,
+};
+/// Tone map: measured bit-exact; a channel may move by one count where the float lands on a rounding
+/// boundary, bounded at 0.5 % of the items.
+const TONEMAP_ROUNDING_RATE: f64 = 0.005;
+/// Cell means are plain sums and one division (nothing to fuse): measured bit-exact.
+const TOL_CELL_MEAN: Tolerance = Tolerance {
+    max_ulps: 2,
+    max_abs: 0.0,
+    max_rel: 0.0,
+    max_flip_rate: 0.0,
+};
+/// The fill's bilinear weights are sums of products: measured bit-exact on lavapipe.
+const TOL_FILL: Tolerance = Tolerance {
+    max_ulps: 4,
+    max_abs: 1e-6,
+    max_rel: 0.0,
+    max_flip_rate: 0.0,
+};
