@@ -247,6 +247,8 @@ impl Renderer {
                         "idle_invocations": stats.idle_invocations,
                         "gpu_timestamps": stats.gpu_timestamps,
                         "plan_ms": stats.plan_ms,
+                        "pipeline_create_ms": v.ctx.pipeline_create_ms,
+                        "warmup_ms": stats.warmup_ms,
                         "upload_ms": v.upload_ms,
                         "scene_upload_bytes": scene.bytes,
                         "validation_messages": messages,

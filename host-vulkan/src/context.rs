@@ -96,6 +96,12 @@ pub struct VulkanContext {
     /// Bound on the samples of one `render_samples` dispatch (and one submission):
     /// [`DEFAULT_MAX_CHUNK_SAMPLES`], or [`SOFTWARE_MAX_CHUNK_SAMPLES`] on a software driver.
     pub max_chunk_samples: u32,
+    /// Host time of `vkCreateComputePipelines` for the five frame entry points (lavapipe translates the
+    /// module to NIR here; LLVM code generation waits for the first dispatch, see [`Self::warmed_up`]).
+    pub pipeline_create_ms: f64,
+    /// Whether every frame pipeline has been dispatched once (the first frame does it before its own
+    /// dispatches, so that its `render_ms` excludes a driver's lazy shader compilation).
+    pub(crate) warmed_up: bool,
 }
 
 impl VulkanContext {
@@ -285,6 +291,8 @@ impl VulkanContext {
             } else {
                 DEFAULT_MAX_CHUNK_SAMPLES
             },
+            pipeline_create_ms: 0.0,
+            warmed_up: false,
         };
         // From here on, `ctx`'s Drop cleans up whatever was created if a step fails.
         ctx.create_objects(family, &code, timestamp_bits > 0)?;
@@ -390,7 +398,9 @@ impl VulkanContext {
                         .layout(self.pipeline_layout)
                 })
                 .collect();
+            let start = std::time::Instant::now();
             let created = device.create_compute_pipelines(vk::PipelineCache::null(), &infos, None);
+            self.pipeline_create_ms = start.elapsed().as_secs_f64() * 1e3;
             device.destroy_shader_module(module, None);
             match created {
                 Ok(p) => self.pipelines.copy_from_slice(&p),

@@ -45,7 +45,8 @@ impl GpuFrame {
 /// What a GPU frame cost: the CPU host's statistics plus how the work was split.
 #[derive(Clone, Debug, Default)]
 pub struct GpuRenderStats {
-    /// `render_ms` covers everything from the first dispatch to the end of the readback copies.
+    /// `render_ms` covers everything from the first dispatch to the end of the readback copies (not the
+    /// first frame's warm-up, [`Self::warmup_ms`]).
     pub render: RenderStats,
     /// `render_samples` invocations with no sample to render (each chunk's last workgroup).
     pub idle_invocations: u64,
@@ -57,6 +58,10 @@ pub struct GpuRenderStats {
     pub gpu_timestamps: bool,
     /// Host time to enumerate blocks and plan chunks.
     pub plan_ms: f64,
+    /// Host wall time of the warm-up submission before the context's first frame: one empty workgroup
+    /// per frame pipeline, which makes a driver that compiles shaders lazily (lavapipe: LLVM at the first
+    /// dispatch) do so outside `render_ms`. Zero on later frames.
+    pub warmup_ms: f64,
 }
 
 /// Buffer sizes of one frame layout; buffers are reused while a frame fits.
@@ -291,6 +296,14 @@ impl VulkanContext {
             res.blocks.write(&block_data)?;
         }
         self.write_descriptors(scene, &sizes);
+        let warmup_ms = if self.warmed_up {
+            0.0
+        } else {
+            let start = Instant::now();
+            self.warm_up()?;
+            self.warmed_up = true;
+            start.elapsed().as_secs_f64() * 1e3
+        };
 
         let result = self.dispatch_frame(&plan, &sizes, fill_mode, exposure_ev, want_hdr, progress);
         let (render_ms, gpu_timestamps, submissions) = result?;
@@ -323,6 +336,7 @@ impl VulkanContext {
             submissions,
             gpu_timestamps,
             plan_ms,
+            warmup_ms,
         };
         Ok((
             GpuFrame {
@@ -391,6 +405,47 @@ impl VulkanContext {
             .collect();
         // SAFETY: the set is not in use by any pending command buffer, and every buffer is alive.
         unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
+    }
+
+    /// Dispatches one workgroup of every frame pipeline with zero items (each returns at once), so that
+    /// lazy shader compilation happens here. The descriptors must already point at live buffers.
+    fn warm_up(&mut self) -> Result<()> {
+        let layout = self.pipeline_layout;
+        let set = self.descriptor_set;
+        let pipelines = self.pipelines;
+        let pc = KernelPushConstants {
+            block_count: 0,
+            spp: 0,
+            item_count: 0,
+            fill_mode: 0,
+            exposure_ev: 0.0,
+            _pad: [0; 3],
+        };
+        self.submit_and_wait("the pipeline warm-up", CHUNK_TIMEOUT, |device, cb| {
+            for p in pipelines {
+                // SAFETY: valid pipeline, layout and set; zero counts make every invocation return.
+                unsafe {
+                    device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, p);
+                    device.cmd_bind_descriptor_sets(
+                        cb,
+                        vk::PipelineBindPoint::COMPUTE,
+                        layout,
+                        0,
+                        &[set],
+                        &[0],
+                    );
+                    device.cmd_push_constants(
+                        cb,
+                        layout,
+                        vk::ShaderStageFlags::COMPUTE,
+                        0,
+                        bytemuck::bytes_of(&pc),
+                    );
+                    device.cmd_dispatch(cb, 1, 1, 1);
+                }
+                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+            }
+        })
     }
 
     /// Records and submits all dispatches of a frame; returns (render ms, whether GPU-timed, submissions).
