@@ -131,3 +131,25 @@ pub fn rgba8_to_rgb8(pixels: &[u32]) -> Vec<u8> {
         .flat_map(|p| [*p as u8, (*p >> 8) as u8, (*p >> 16) as u8])
         .collect()
 }
+
+/// A validating Vulkan context on the default device, or `None` (the caller skips its test with a message)
+/// where there is no Vulkan loader or device and `CI` is not `true`; under `CI=true` a missing device fails.
+pub fn vulkan_context_or_skip(what: &str) -> Option<fovea_vulkan::VulkanContext> {
+    use fovea_vulkan::{ContextOptions, VulkanContext, VulkanError};
+    std::env::set_var("FOVEA_VULKAN_VALIDATION", "1");
+    let options = ContextOptions {
+        device_index: None,
+        validation: fovea_vulkan::validation_requested(),
+    };
+    match VulkanContext::new(&options) {
+        Ok(ctx) => Some(ctx),
+        Err(e @ (VulkanError::NoLoader(_) | VulkanError::NoDevice(_))) => {
+            if std::env::var("CI").as_deref() == Ok("true") {
+                panic!("CI=true but no Vulkan device: {e}");
+            }
+            eprintln!("skipping {what}: {e}");
+            None
+        }
+        Err(e) => panic!("cannot create a Vulkan context: {e}"),
+    }
+}

@@ -13,32 +13,10 @@ use fovea_core::foveation::regions::FoveationParams;
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_scene::environment::Environment;
 use fovea_tests::*;
-use fovea_vulkan::{ContextOptions, VulkanContext, VulkanError};
 use glam::Vec3;
 
 const W: u32 = 96;
 const H: u32 = 72;
-
-/// A validating context on the default device, or `None` (test skipped) where there is no Vulkan device
-/// and `CI` is not `true` (as in `tests/vulkan.rs`).
-fn context() -> Option<VulkanContext> {
-    std::env::set_var("FOVEA_VULKAN_VALIDATION", "1");
-    let options = ContextOptions {
-        device_index: None,
-        validation: fovea_vulkan::validation_requested(),
-    };
-    match VulkanContext::new(&options) {
-        Ok(ctx) => Some(ctx),
-        Err(e @ (VulkanError::NoLoader(_) | VulkanError::NoDevice(_))) => {
-            if std::env::var("CI").as_deref() == Ok("true") {
-                panic!("CI=true but no Vulkan device: {e}");
-            }
-            eprintln!("skipping Vulkan frame test: {e}");
-            None
-        }
-        Err(e) => panic!("cannot create a Vulkan context: {e}"),
-    }
-}
 
 /// The paper's three regions around the image centre, with few samples (4 / 2 / 1 on 1×1 / 2×2 / 4×4
 /// blocks) to keep lavapipe fast.
@@ -225,7 +203,9 @@ fn compare(cpu: &[[f32; 4]], gpu: &[[f32; 4]], gpu_ldr: &[u32]) -> Figures {
 
 #[test]
 fn small_scenes_render_alike_on_cpu_and_vulkan() {
-    let Some(mut ctx) = context() else { return };
+    let Some(mut ctx) = vulkan_context_or_skip("the Vulkan frame test") else {
+        return;
+    };
     let log = ctx.validation_log();
     let device = ctx.device_name().to_string();
     let mut rows = Vec::new();

@@ -14,31 +14,11 @@ use fovea_core::foveation::fill::{cell_buffer_len, FILL_BILINEAR, FILL_REPLICATE
 use fovea_core::foveation::regions::FoveationParams;
 use fovea_core::integrator::FrameParams;
 use fovea_core::kernel_abi::*;
-use fovea_vulkan::{ContextOptions, VulkanContext, VulkanError};
+use fovea_tests::vulkan_context_or_skip;
+use fovea_vulkan::VulkanContext;
 
 const STRIDE: usize = PROBE_INPUT_RECORDS as usize;
 const OUT: usize = PROBE_OUTPUT_RECORDS as usize;
-
-/// A validating context on the default device, or `None` (test skipped) where there is no Vulkan device
-/// and `CI` is not `true` (as in `tests/vulkan.rs`).
-fn context() -> Option<VulkanContext> {
-    std::env::set_var("FOVEA_VULKAN_VALIDATION", "1");
-    let options = ContextOptions {
-        device_index: None,
-        validation: fovea_vulkan::validation_requested(),
-    };
-    match VulkanContext::new(&options) {
-        Ok(ctx) => Some(ctx),
-        Err(e @ (VulkanError::NoLoader(_) | VulkanError::NoDevice(_))) => {
-            if std::env::var("CI").as_deref() == Ok("true") {
-                panic!("CI=true but no Vulkan device: {e}");
-            }
-            eprintln!("skipping Vulkan probe test: {e}");
-            None
-        }
-        Err(e) => panic!("cannot create a Vulkan context: {e}"),
-    }
-}
 
 /// SplitMix64: a small deterministic generator for the inputs.
 struct Rng(u64);
@@ -592,7 +572,9 @@ fn probe_frame() -> FrameParams {
 
 #[test]
 fn core_functions_agree_across_backends() {
-    let Some(mut ctx) = context() else { return };
+    let Some(mut ctx) = vulkan_context_or_skip("the Vulkan probe test") else {
+        return;
+    };
     let log = ctx.validation_log();
     let device = ctx.device_name().to_string();
     let mut rng = Rng(0x5eed_f00d);

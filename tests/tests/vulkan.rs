@@ -15,28 +15,6 @@ use glam::Vec3;
 const W: u32 = 64;
 const H: u32 = 48;
 
-/// A validating context on the default device, or `None` (test skipped) where there is no Vulkan device
-/// and `CI` is not `true`.
-fn context() -> Option<VulkanContext> {
-    // SAFETY (edition 2021: safe): tests only read this variable.
-    std::env::set_var("FOVEA_VULKAN_VALIDATION", "1");
-    let options = ContextOptions {
-        device_index: None,
-        validation: fovea_vulkan::validation_requested(),
-    };
-    match VulkanContext::new(&options) {
-        Ok(ctx) => Some(ctx),
-        Err(e @ (VulkanError::NoLoader(_) | VulkanError::NoDevice(_))) => {
-            if std::env::var("CI").as_deref() == Ok("true") {
-                panic!("CI=true but no Vulkan device: {e}");
-            }
-            eprintln!("skipping Vulkan test: {e}");
-            None
-        }
-        Err(e) => panic!("cannot create a Vulkan context: {e}"),
-    }
-}
-
 fn foveation() -> FoveationParams {
     FoveationParams::paper([W as f32 * 0.5, H as f32 * 0.45], 9.0, 20.0)
 }
@@ -82,7 +60,9 @@ fn diff(a: &[[f32; 4]], b: &[[f32; 4]]) -> Diff {
 
 #[test]
 fn cornell_box_on_vulkan_matches_the_cpu_host() {
-    let Some(mut ctx) = context() else { return };
+    let Some(mut ctx) = vulkan_context_or_skip("the Vulkan test") else {
+        return;
+    };
     let log = ctx.validation_log();
     let packed = load_packed(&cornell_box_path(), &Environment::None);
     let scene = ctx.upload_scene(&packed).expect("upload");
@@ -145,7 +125,9 @@ fn cornell_box_on_vulkan_matches_the_cpu_host() {
 
 #[test]
 fn sample_counts_match_core_and_frames_repeat_exactly() {
-    let Some(mut ctx) = context() else { return };
+    let Some(mut ctx) = vulkan_context_or_skip("the Vulkan test") else {
+        return;
+    };
     let packed = load_packed(&cornell_box_path(), &Environment::None);
     let scene = ctx.upload_scene(&packed).expect("upload");
     // Small chunks: many dispatches per region, idle invocations only in each chunk's last workgroup.
@@ -192,7 +174,9 @@ fn sample_counts_match_core_and_frames_repeat_exactly() {
 
 #[test]
 fn bad_device_index_is_a_clear_error() {
-    let Some(ctx) = context() else { return };
+    let Some(ctx) = vulkan_context_or_skip("the Vulkan test") else {
+        return;
+    };
     drop(ctx);
     let devices = fovea_vulkan::list_devices().expect("device list");
     assert!(!devices.is_empty());
@@ -220,7 +204,9 @@ fn bad_device_index_is_a_clear_error() {
 fn lost_empire_full_hd_on_vulkan_matches_the_cpu_host() {
     use fovea_core::camera::Camera;
     use fovea_core::foveation::display::{eccentricity_to_radius_px, DisplayGeometry};
-    let Some(mut ctx) = context() else { return };
+    let Some(mut ctx) = vulkan_context_or_skip("the Vulkan test") else {
+        return;
+    };
     let (w, h) = (1920, 1080);
     let packed = load_packed(
         &repo_root().join("assets/lost_empire/lost_empire.obj"),
@@ -292,7 +278,9 @@ fn lost_empire_full_hd_on_vulkan_matches_the_cpu_host() {
 
 #[test]
 fn oversized_buffers_name_the_limit() {
-    let Some(ctx) = context() else { return };
+    let Some(ctx) = vulkan_context_or_skip("the Vulkan test") else {
+        return;
+    };
     let err = ctx
         .check_size("the triangles", u64::MAX)
         .expect_err("no device takes 16 EiB");
