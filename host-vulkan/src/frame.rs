@@ -183,6 +183,54 @@ impl FrameResources {
     }
 }
 
+/// Records one compute dispatch over `items` invocations: binds `pipeline` and `set` (with the one dynamic
+/// offset the layout has), pushes `pc` and dispatches enough workgroups (2D above the x limit). Frames,
+/// the warm-up and probes all record through this.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn record_dispatch(
+    device: &ash::Device,
+    cb: vk::CommandBuffer,
+    pipeline: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    set: vk::DescriptorSet,
+    dynamic_offset: u32,
+    pc: &KernelPushConstants,
+    items: u64,
+    max_workgroups_x: u32,
+) {
+    let [x, y] = workgroups_2d(items, max_workgroups_x);
+    // SAFETY: valid pipeline, layout and set, one dynamic offset for the one dynamic binding, and a
+    // push-constant range that matches the layout's.
+    unsafe {
+        device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, pipeline);
+        device.cmd_bind_descriptor_sets(
+            cb,
+            vk::PipelineBindPoint::COMPUTE,
+            layout,
+            0,
+            &[set],
+            &[dynamic_offset],
+        );
+        device.cmd_push_constants(
+            cb,
+            layout,
+            vk::ShaderStageFlags::COMPUTE,
+            0,
+            bytemuck::bytes_of(pc),
+        );
+        device.cmd_dispatch(cb, x, y, 1);
+    }
+}
+
+/// Resets the frame's two timestamp queries and writes the first one.
+fn write_start_timestamp(device: &ash::Device, cb: vk::CommandBuffer, query_pool: vk::QueryPool) {
+    // SAFETY: the query pool has two queries; they are reset before being written.
+    unsafe {
+        device.cmd_reset_query_pool(cb, query_pool, 0, 2);
+        device.cmd_write_timestamp(cb, vk::PipelineStageFlags::TOP_OF_PIPE, query_pool, 0);
+    }
+}
+
 /// A memory barrier after a dispatch: its writes (and reads, for buffers reused next) before the next
 /// dispatch (`COMPUTE_SHADER`) or the readback copies (`TRANSFER`).
 fn barrier(device: &ash::Device, cb: vk::CommandBuffer, dst_stage: vk::PipelineStageFlags) {
@@ -395,11 +443,7 @@ impl VulkanContext {
                 vk::WriteDescriptorSet::default()
                     .dst_set(self.descriptor_set)
                     .dst_binding(*binding)
-                    .descriptor_type(if *binding == BINDING_BLOCKS {
-                        vk::DescriptorType::STORAGE_BUFFER_DYNAMIC
-                    } else {
-                        vk::DescriptorType::STORAGE_BUFFER
-                    })
+                    .descriptor_type(crate::context::descriptor_type(*binding))
                     .buffer_info(std::slice::from_ref(info))
             })
             .collect();
@@ -421,28 +465,11 @@ impl VulkanContext {
             exposure_ev: 0.0,
             _pad: [0; 3],
         };
+        let max_x = self.limits.max_workgroup_count_x;
         self.submit_and_wait("the pipeline warm-up", CHUNK_TIMEOUT, |device, cb| {
             for p in pipelines {
-                // SAFETY: valid pipeline, layout and set; zero counts make every invocation return.
-                unsafe {
-                    device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, p);
-                    device.cmd_bind_descriptor_sets(
-                        cb,
-                        vk::PipelineBindPoint::COMPUTE,
-                        layout,
-                        0,
-                        &[set],
-                        &[0],
-                    );
-                    device.cmd_push_constants(
-                        cb,
-                        layout,
-                        vk::ShaderStageFlags::COMPUTE,
-                        0,
-                        bytemuck::bytes_of(&pc),
-                    );
-                    device.cmd_dispatch(cb, 1, 1, 1);
-                }
+                // Zero counts make every invocation return at once.
+                record_dispatch(device, cb, p, layout, set, 0, &pc, 1, max_x);
                 barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
             }
         })
@@ -465,36 +492,23 @@ impl VulkanContext {
         let query_pool = self.query_pool;
         let max_x = self.limits.max_workgroup_count_x;
         let timed = query_pool != vk::QueryPool::null();
-        let push = move |device: &ash::Device, cb: vk::CommandBuffer, pc: &KernelPushConstants| {
-            // SAFETY: the range matches the pipeline layout's push-constant range.
-            unsafe {
-                device.cmd_push_constants(
-                    cb,
-                    layout,
-                    vk::ShaderStageFlags::COMPUTE,
-                    0,
-                    bytemuck::bytes_of(pc),
-                );
-            }
-        };
-        let bind = move |device: &ash::Device, cb: vk::CommandBuffer, p: usize, offset: u32| {
-            // SAFETY: valid pipeline, layout and set; one dynamic offset for the one dynamic binding.
-            unsafe {
-                device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, pipelines[p]);
-                device.cmd_bind_descriptor_sets(
-                    cb,
-                    vk::PipelineBindPoint::COMPUTE,
-                    layout,
-                    0,
-                    &[set],
-                    &[offset],
-                );
-            }
-        };
-        let dispatch = move |device: &ash::Device, cb: vk::CommandBuffer, items: u64| {
-            let [x, y] = workgroups_2d(items, max_x);
-            // SAFETY: a compute pipeline and its descriptor set are bound.
-            unsafe { device.cmd_dispatch(cb, x, y, 1) };
+        let dispatch = move |device: &ash::Device,
+                             cb: vk::CommandBuffer,
+                             p: usize,
+                             offset: u32,
+                             pc: &KernelPushConstants,
+                             items: u64| {
+            record_dispatch(
+                device,
+                cb,
+                pipelines[p],
+                layout,
+                set,
+                offset,
+                pc,
+                items,
+                max_x,
+            );
         };
         let base = KernelPushConstants {
             block_count: 0,
@@ -518,24 +532,25 @@ impl VulkanContext {
             let c = *chunk;
             self.submit_and_wait("a sample chunk", CHUNK_TIMEOUT, |device, cb| {
                 if first && timed {
-                    // SAFETY: the query pool has two queries; they are reset before being written.
-                    unsafe {
-                        device.cmd_reset_query_pool(cb, query_pool, 0, 2);
-                        device.cmd_write_timestamp(
-                            cb,
-                            vk::PipelineStageFlags::TOP_OF_PIPE,
-                            query_pool,
-                            0,
-                        );
-                    }
+                    write_start_timestamp(device, cb, query_pool);
                 }
-                bind(device, cb, pipeline::RENDER_SAMPLES, offset);
-                push(device, cb, &pc);
-                dispatch(device, cb, c.samples());
+                dispatch(
+                    device,
+                    cb,
+                    pipeline::RENDER_SAMPLES,
+                    offset,
+                    &pc,
+                    c.samples(),
+                );
                 barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
-                bind(device, cb, pipeline::REDUCE_BLOCKS, offset);
-                push(device, cb, &pc);
-                dispatch(device, cb, u64::from(c.block_count));
+                dispatch(
+                    device,
+                    cb,
+                    pipeline::REDUCE_BLOCKS,
+                    offset,
+                    &pc,
+                    u64::from(c.block_count),
+                );
                 barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
             })?;
             submissions += 1;
@@ -553,41 +568,23 @@ impl VulkanContext {
         let no_chunks = plan.chunks.is_empty();
         self.submit_and_wait("the fill and tone map", CHUNK_TIMEOUT, |device, cb| {
             if no_chunks && timed {
-                // SAFETY: as above.
-                unsafe {
-                    device.cmd_reset_query_pool(cb, query_pool, 0, 2);
-                    device.cmd_write_timestamp(
-                        cb,
-                        vk::PipelineStageFlags::TOP_OF_PIPE,
-                        query_pool,
-                        0,
-                    );
-                }
+                write_start_timestamp(device, cb, query_pool);
             }
             if cells > 0 {
-                bind(device, cb, pipeline::CELL_MEANS, 0);
-                push(
-                    device,
-                    cb,
-                    &KernelPushConstants {
-                        item_count: cells as u32,
-                        ..base
-                    },
-                );
-                dispatch(device, cb, cells);
+                let pc = KernelPushConstants {
+                    item_count: cells as u32,
+                    ..base
+                };
+                dispatch(device, cb, pipeline::CELL_MEANS, 0, &pc, cells);
                 barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
             }
             let pc = KernelPushConstants {
                 item_count: pixels as u32,
                 ..base
             };
-            bind(device, cb, pipeline::FILL, 0);
-            push(device, cb, &pc);
-            dispatch(device, cb, pixels);
+            dispatch(device, cb, pipeline::FILL, 0, &pc, pixels);
             barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
-            bind(device, cb, pipeline::TONEMAP, 0);
-            push(device, cb, &pc);
-            dispatch(device, cb, pixels);
+            dispatch(device, cb, pipeline::TONEMAP, 0, &pc, pixels);
             barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
             // SAFETY: the readback buffers are as large as the images; the host barrier makes the copies
             // visible to the mapped reads after the fence.

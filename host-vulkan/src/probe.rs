@@ -13,7 +13,6 @@ use fovea_core::kernel_abi::{
     BINDING_PROBE_OUTPUT, BINDING_REPLICATED, PROBE_INPUT_RECORDS, PROBE_OUTPUT_RECORDS,
 };
 
-use crate::blocks::workgroups_2d;
 use crate::buffer::GpuBuffer;
 use crate::context::{VulkanContext, CHUNK_TIMEOUT};
 use crate::error::{Result, VkContext, VulkanError};
@@ -139,29 +138,22 @@ impl VulkanContext {
             _pad: [0; 3],
         };
         let layout = self.pipeline_layout;
-        let [x, y] = workgroups_2d(items as u64, self.limits.max_workgroup_count_x);
+        let max_x = self.limits.max_workgroup_count_x;
         let descriptor_set = set.set;
         self.submit_and_wait("a probe", CHUNK_TIMEOUT, |device, cb| {
-            // SAFETY: valid pipeline, layout and set (one dynamic offset for the one dynamic binding);
-            // the barrier makes the shader writes visible to the mapped read after the fence.
+            crate::frame::record_dispatch(
+                device,
+                cb,
+                pipeline,
+                layout,
+                descriptor_set,
+                0,
+                &pc,
+                items as u64,
+                max_x,
+            );
+            // SAFETY: the barrier makes the shader writes visible to the mapped read after the fence.
             unsafe {
-                device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, pipeline);
-                device.cmd_bind_descriptor_sets(
-                    cb,
-                    vk::PipelineBindPoint::COMPUTE,
-                    layout,
-                    0,
-                    &[descriptor_set],
-                    &[0],
-                );
-                device.cmd_push_constants(
-                    cb,
-                    layout,
-                    vk::ShaderStageFlags::COMPUTE,
-                    0,
-                    bytemuck::bytes_of(&pc),
-                );
-                device.cmd_dispatch(cb, x, y, 1);
                 let to_host = [vk::MemoryBarrier::default()
                     .src_access_mask(vk::AccessFlags::SHADER_WRITE)
                     .dst_access_mask(vk::AccessFlags::HOST_READ)];
