@@ -33,5 +33,7 @@ pub mod post;
 pub mod rng;
 pub mod sampling;
 pub mod scene;
+#[cfg(test)]
+mod test_support;
 
 pub use glam;

@@ -326,20 +326,15 @@ mod tests {
     use super::*;
     use std::vec::Vec;
 
-    /// xorshift32 mapped to [0, 1).
-    struct Rng(u32);
-    impl Rng {
-        fn next(&mut self) -> f32 {
-            let mut x = self.0;
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            self.0 = x;
-            (x >> 8) as f32 * (1.0 / 16_777_216.0)
-        }
-        fn vec3(&mut self) -> Vec3 {
-            Vec3::new(self.next(), self.next(), self.next())
-        }
+    use crate::test_support::XorShift32 as Rng;
+
+    /// Disney-specific draws on top of the shared test generator.
+    trait DisneyDraws {
+        fn upper_dir(&mut self) -> Vec3;
+        fn params(&mut self) -> DisneyParams;
+    }
+
+    impl DisneyDraws for Rng {
         /// A direction above the surface, cos θ uniform in (0, 1].
         fn upper_dir(&mut self) -> Vec3 {
             let z = 1.0 - self.next();

@@ -210,36 +210,7 @@ mod tests {
     use crate::math::{pack_vec3, vec3_from};
     use std::vec::Vec;
 
-    /// SplitMix64: a tiny deterministic generator for tests.
-    struct TestRng(u64);
-    impl TestRng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^ (z >> 31)
-        }
-        fn uniform(&mut self) -> f32 {
-            (self.next_u64() >> 40) as f32 * (1.0 / 16_777_216.0)
-        }
-        fn range(&mut self, lo: f32, hi: f32) -> f32 {
-            lo + (hi - lo) * self.uniform()
-        }
-        fn unit_vector(&mut self) -> Vec3 {
-            loop {
-                let v = Vec3::new(
-                    self.range(-1.0, 1.0),
-                    self.range(-1.0, 1.0),
-                    self.range(-1.0, 1.0),
-                );
-                let l = v.length_squared();
-                if l > 1e-4 && l <= 1.0 {
-                    return v / crate::math::float::sqrt(l);
-                }
-            }
-        }
-    }
+    use crate::test_support::SplitMix64 as TestRng;
 
     fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
         TrianglePositions {

@@ -142,20 +142,7 @@ mod tests {
     use super::*;
     use std::vec;
 
-    struct Rng(u32);
-    impl Rng {
-        fn next(&mut self) -> f32 {
-            let mut x = self.0;
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            self.0 = x;
-            (x >> 8) as f32 * (1.0 / 16_777_216.0)
-        }
-        fn vec2(&mut self) -> Vec2 {
-            Vec2::new(self.next(), self.next())
-        }
-    }
+    use crate::test_support::XorShift32 as Rng;
 
     fn dir(theta: f32, phi: f32) -> Vec3 {
         Vec3::new(sin(theta) * cos(phi), sin(theta) * sin(phi), cos(theta))

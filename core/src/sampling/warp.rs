@@ -96,21 +96,7 @@ pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
 mod tests {
     use super::*;
 
-    /// xorshift32 mapped to [0, 1).
-    struct Rng(u32);
-    impl Rng {
-        fn next(&mut self) -> f32 {
-            let mut x = self.0;
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            self.0 = x;
-            (x >> 8) as f32 * (1.0 / 16_777_216.0)
-        }
-        fn vec2(&mut self) -> Vec2 {
-            Vec2::new(self.next(), self.next())
-        }
-    }
+    use crate::test_support::XorShift32 as Rng;
 
     #[test]
     fn concentric_disk_stays_in_disk_and_is_uniform() {

@@ -1,0 +1,62 @@
+//! Small deterministic random-number generators shared by core's unit tests (test builds only).
+use glam::{Vec2, Vec3};
+
+/// SplitMix64 (Steele, Lea, Flood 2014).
+pub(crate) struct SplitMix64(pub u64);
+
+impl SplitMix64 {
+    pub(crate) fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1).
+    pub(crate) fn uniform(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 * (1.0 / 16_777_216.0)
+    }
+
+    /// Uniform in [lo, hi).
+    pub(crate) fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.uniform()
+    }
+
+    /// A uniformly distributed unit vector (rejection sampling in the unit ball).
+    pub(crate) fn unit_vector(&mut self) -> Vec3 {
+        loop {
+            let v = Vec3::new(
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+            );
+            let l = v.length_squared();
+            if l > 1e-4 && l <= 1.0 {
+                return v / crate::math::float::sqrt(l);
+            }
+        }
+    }
+}
+
+/// xorshift32 (Marsaglia 2003) mapped to [0, 1).
+pub(crate) struct XorShift32(pub u32);
+
+impl XorShift32 {
+    pub(crate) fn next(&mut self) -> f32 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        self.0 = x;
+        (x >> 8) as f32 * (1.0 / 16_777_216.0)
+    }
+
+    pub(crate) fn vec2(&mut self) -> Vec2 {
+        Vec2::new(self.next(), self.next())
+    }
+
+    pub(crate) fn vec3(&mut self) -> Vec3 {
+        Vec3::new(self.next(), self.next(), self.next())
+    }
+}
