@@ -10,7 +10,7 @@ NIGHTLY=nightly-2026-08-15
 NIGHTLY_COMPONENTS=(rust-src rustc-dev llvm-tools)
 
 # --- apt packages -----------------------------------------------------------------------------------------
-apt_packages=(gcc pkg-config spirv-tools mesa-vulkan-drivers libvulkan1 vulkan-tools vulkan-validationlayers)
+apt_packages=(gcc g++ pkg-config spirv-tools mesa-vulkan-drivers libvulkan1 vulkan-tools vulkan-validationlayers)
 need_apt=()
 for pkg in "${apt_packages[@]}"; do
   if command -v dpkg-query >/dev/null 2>&1; then

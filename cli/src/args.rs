@@ -15,6 +15,13 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene (the bundled Lost Empire when no SCENE is given).
     Render(Box<RenderArgs>),
+    /// Error against run time: foveated and uniform configurations measured against a converged
+    /// reference (FLIP and relMSE per region, render time, speed-up), written as Markdown, JSON, CSV,
+    /// images and an SVG plot.
+    Report(Box<ReportArgs>),
+    /// Benchmarks: BVH build throughput, and a generated 10 M-triangle scene (load, build, render,
+    /// peak memory).
+    Bench(crate::bench::BenchArgs),
     /// List the devices fovea can render on.
     Devices,
 }
@@ -146,6 +153,112 @@ pub struct RenderArgs {
     #[arg(short, long)]
     pub verbose: bool,
     /// No progress bar and no summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct ReportArgs {
+    /// Scene files (.gltf, .glb or .obj). Default: the bundled Lost Empire. Several scenes get one
+    /// subfolder of --out each.
+    pub scenes: Vec<PathBuf>,
+
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "report", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Image size WxH in pixels (default 3840x2160, the paper's; 320x180 with --quick).
+    #[arg(long, value_name = "WxH")]
+    pub resolution: Option<String>,
+    /// Fixation in pixels X,Y (default: the image centre).
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    pub gaze: Option<String>,
+    /// Timed runs per configuration; the median render time is reported (default 3; 1 with --quick).
+    #[arg(long, value_name = "N")]
+    pub runs: Option<u32>,
+    /// Samples per pixel of the converged reference (default 1024; 256 with --quick).
+    #[arg(long, value_name = "N")]
+    pub reference_spp: Option<u32>,
+    /// Largest spp of the uniform sweep 1, 2, 4, ... (default 64; 8 with --quick).
+    #[arg(long, value_name = "N")]
+    pub sweep_max: Option<u32>,
+    /// Small and fast: 320x180, 1 run, a 256 spp reference, sweep to 8 (explicit options still win).
+    #[arg(long)]
+    pub quick: bool,
+    /// Folder of cached references (default: $FOVEA_CACHE_DIR, else $XDG_CACHE_HOME/fovea, else
+    /// $HOME/.cache/fovea).
+    #[arg(long, value_name = "DIR")]
+    pub cache_dir: Option<PathBuf>,
+    /// Render the reference again even when a cached one exists (and replace it).
+    #[arg(long)]
+    pub no_cache: bool,
+
+    /// Backend.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: Backend,
+    /// Vulkan device index (see `fovea devices`).
+    #[arg(long, value_name = "N")]
+    pub device: Option<usize>,
+    /// Worker threads of the CPU backend (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+
+    /// Eccentricity angles in degrees bounding the fovea and the intermediate region.
+    #[arg(long, default_value = "5.2,17", value_name = "E1,E2")]
+    pub eccentricity: String,
+    /// Physical display size in centimetres (the image fills it, whatever --resolution is).
+    #[arg(long, default_value = "70.848x39.852", value_name = "WxH")]
+    pub display_cm: String,
+    /// Viewing distance in centimetres.
+    #[arg(long, default_value_t = 60.0, value_name = "D")]
+    pub distance_cm: f32,
+    /// How block pixels are filled.
+    #[arg(long, value_enum, default_value = "bilinear")]
+    pub fill: Fill,
+    /// Bounces per path.
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub depth: u32,
+    /// Russian roulette from this bounce on (0: off).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub russian_roulette: u32,
+    /// Exposure compensation in EV before tone mapping (PNGs and FLIP).
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "EV",
+        allow_hyphen_values = true
+    )]
+    pub exposure: f32,
+    /// Seed of the test renders (the reference uses a different one, so its noise is independent).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub seed: u32,
+    /// Camera position (with --target); applies to every scene.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub eye: Option<String>,
+    /// Camera target point (with --eye).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub target: Option<String>,
+    /// Camera up vector.
+    #[arg(
+        long,
+        default_value = "0,1,0",
+        value_name = "X,Y,Z",
+        allow_hyphen_values = true
+    )]
+    pub up: String,
+    /// Vertical field of view in degrees.
+    #[arg(long, value_name = "DEG")]
+    pub fov: Option<f32>,
+    /// Constant environment ("sky") radiance (default: the bundled scene's sky for Lost Empire, none
+    /// for other scenes).
+    #[arg(long, value_name = "R,G,B")]
+    pub sky: Option<String>,
+    /// Equirectangular HDR environment map (.hdr or .exr).
+    #[arg(long, value_name = "FILE")]
+    pub env_map: Option<PathBuf>,
+    /// Scale of --env-map.
+    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    pub env_scale: f32,
+    /// No progress bar and no summary.
     #[arg(short, long)]
     pub quiet: bool,
 }

@@ -1,10 +1,12 @@
 //! `fovea`: the command line of the fovea foveated path tracer.
 mod args;
 mod backend;
+mod bench;
 mod error;
 mod output;
 mod parse;
 mod render;
+mod report;
 mod scene_setup;
 mod stats;
 mod trace;
@@ -15,6 +17,8 @@ fn main() -> std::process::ExitCode {
     let cli = args::Cli::parse();
     let result = match &cli.command {
         args::Command::Render(r) => render::run(r),
+        args::Command::Report(r) => report::run(r),
+        args::Command::Bench(b) => bench::run(b),
         args::Command::Devices => {
             backend::print_devices();
             Ok(())

@@ -14,4 +14,5 @@ pub mod gltf_loader;
 pub mod mesh;
 pub mod obj_loader;
 pub mod pack;
+pub mod procedural;
 pub mod texture;

@@ -1,0 +1,230 @@
+//! `fovea bench`: the benchmark figures the README quotes, measured by the project itself.
+//!
+//! - `fovea bench build [SCENE]`: BVH build throughput (triangles per second, median of several builds)
+//!   on a scene, by default the bundled Lost Empire.
+//! - `fovea bench scale`: a procedurally generated scene of N triangles (default 10 M, San Miguel's
+//!   scale) is generated, validated, built, packed and rendered foveated at 3840×2160 on the CPU; prints
+//!   the time of each step and the process's peak resident memory per triangle.
+//!
+//! The Mitsuba 3 comparison runs both renderers side by side and lives in `scripts/bench-peer.sh`; the
+//! CPU-vs-Vulkan comparison in `scripts/bench-vulkan.sh`. No test asserts any of these timings.
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::{Args, Subcommand};
+use fovea_core::camera::Camera;
+use fovea_core::foveation::display::{paper_params_for_display, DisplayGeometry};
+use fovea_core::integrator::{FrameParams, IntegratorSettings};
+use fovea_core::scene::TrianglePositions;
+use fovea_scene::bvh::{build_bvh, BvhBuildOptions};
+use fovea_scene::environment::Environment;
+use fovea_scene::mesh::{load_scene, LoadOptions};
+use fovea_scene::pack::pack_scene;
+use fovea_scene::procedural::city_scene;
+use glam::Vec3;
+use serde_json::json;
+
+use crate::error::{FoveaError, Result};
+use crate::scene_setup::default_scene_path;
+
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    pub what: BenchCommand,
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Also write the figures as JSON to this file.
+    #[arg(long, global = true, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Subcommand, Debug, Clone)]
+pub enum BenchCommand {
+    /// BVH build throughput on a scene (default: the bundled Lost Empire).
+    Build {
+        /// Scene file (.gltf, .glb or .obj).
+        scene: Option<PathBuf>,
+        /// Builds to time; the median is reported.
+        #[arg(long, default_value_t = 5)]
+        runs: u32,
+    },
+    /// Generate, build and render a procedural scene of N triangles; report times and peak memory.
+    Scale {
+        /// Triangles to generate.
+        #[arg(long, default_value_t = 10_000_000)]
+        triangles: u64,
+        /// Image size WxH.
+        #[arg(long, default_value = "3840x2160", value_name = "WxH")]
+        resolution: String,
+    },
+}
+
+/// Runs `fovea bench`.
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = args.threads {
+        if n == 0 || n > 1024 {
+            return Err(FoveaError::option("--threads", "must be 1 to 1024"));
+        }
+        pool = pool.num_threads(n);
+    }
+    let pool = pool
+        .build()
+        .map_err(|e| FoveaError::Backend(format!("cannot start worker threads: {e}")))?;
+    let figures = pool.install(|| match &args.what {
+        BenchCommand::Build { scene, runs } => bench_build(scene.as_deref(), *runs),
+        BenchCommand::Scale {
+            triangles,
+            resolution,
+        } => bench_scale(*triangles, resolution),
+    })?;
+    let threads = pool.current_num_threads();
+    let mut figures = figures;
+    figures["threads"] = json!(threads);
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&figures).expect("JSON values serialise")
+    );
+    if let Some(path) = &args.json {
+        crate::stats::write_json(path, &figures)?;
+    }
+    Ok(())
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Median BVH build time over `runs` builds of the scene's triangles.
+fn bench_build(scene: Option<&Path>, runs: u32) -> Result<serde_json::Value> {
+    if runs == 0 || runs > 1000 {
+        return Err(FoveaError::option("--runs", "must be 1 to 1000"));
+    }
+    let path = scene
+        .map(Path::to_path_buf)
+        .unwrap_or_else(default_scene_path);
+    let loaded = load_scene(&path, &LoadOptions::default())?;
+    let triangles: Vec<TrianglePositions> = loaded
+        .triangles
+        .iter()
+        .map(|t| {
+            let p = |i: u32| {
+                let v = loaded.positions[i as usize];
+                [v[0], v[1], v[2], 0.0]
+            };
+            TrianglePositions {
+                v0: p(t[0]),
+                v1: p(t[1]),
+                v2: p(t[2]),
+            }
+        })
+        .collect();
+    let mut times = Vec::new();
+    let mut nodes = 0;
+    for _ in 0..runs {
+        let start = Instant::now();
+        let bvh = build_bvh(&triangles, &BvhBuildOptions::default());
+        times.push(start.elapsed().as_secs_f64() * 1e3);
+        nodes = bvh.nodes.len();
+    }
+    let ms = median(times.clone());
+    let n = triangles.len();
+    eprintln!(
+        "BVH build: {n} triangles, median {ms:.1} ms of {runs} -> {:.2} M triangles/s",
+        n as f64 / ms / 1e3
+    );
+    Ok(json!({
+        "scene": path.display().to_string(),
+        "triangles": n,
+        "nodes": nodes,
+        "build_ms": times,
+        "median_build_ms": ms,
+        "triangles_per_second": n as f64 / (ms / 1e3),
+    }))
+}
+
+/// Peak resident memory of this process in bytes (Linux `VmHWM`), if known.
+fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// The 10 M-triangle scale run: generate, validate, build + pack, render foveated.
+fn bench_scale(triangles: u64, resolution: &str) -> Result<serde_json::Value> {
+    if !(1..=200_000_000).contains(&triangles) {
+        return Err(FoveaError::option("--triangles", "must be 1 to 200000000"));
+    }
+    let [w, h] = crate::parse::resolution(resolution)?;
+    let start = Instant::now();
+    let mut scene = city_scene(triangles, 7);
+    scene.validate(Path::new("procedural city"))?;
+    let generate_ms = start.elapsed().as_secs_f64() * 1e3;
+    let n = scene.triangle_count();
+    let start = Instant::now();
+    let packed = pack_scene(
+        scene,
+        &Environment::Constant([0.3, 0.35, 0.45]),
+        &BvhBuildOptions::default(),
+    );
+    let pack_total_ms = start.elapsed().as_secs_f64() * 1e3;
+    let bvh_ms = packed.stats.bvh.build_ms;
+    let memory_after_build = peak_memory_bytes();
+
+    let camera = Camera::look_at(
+        Vec3::new(0.0, 12.0, 45.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        60f32.to_radians(),
+        w as f32 / h as f32,
+    );
+    let foveation = paper_params_for_display(
+        [w as f32 * 0.5, h as f32 * 0.5],
+        &DisplayGeometry::default(),
+        w,
+    );
+    let frame = FrameParams {
+        camera,
+        foveation,
+        integrator: IntegratorSettings::default(),
+        width: w,
+        height: h,
+        frame_index: 0,
+        seed: 1,
+    };
+    let view = packed.view();
+    let (_image, stats) = fovea_cpu::render_frame(
+        &view,
+        &frame,
+        fovea_core::foveation::fill::FILL_BILINEAR,
+        &|_| {},
+    );
+    let peak = peak_memory_bytes();
+    let per_triangle = peak.map(|p| p as f64 / n as f64);
+    eprintln!(
+        "scale: {n} triangles; generate {generate_ms:.0} ms, BVH {bvh_ms:.0} ms, pack total \
+         {pack_total_ms:.0} ms ({:.2} M tris/s), packed {:.0} MB; render {w}x{h} foveated {:.0} ms; \
+         peak memory {} ({} bytes/triangle)",
+        n as f64 / pack_total_ms / 1e3,
+        packed.memory_bytes() as f64 / 1e6,
+        stats.render_ms,
+        peak.map_or("unknown".into(), |p| format!("{:.0} MB", p as f64 / 1e6)),
+        per_triangle.map_or("unknown".into(), |b| format!("{b:.0}")),
+    );
+    Ok(json!({
+        "triangles": n,
+        "generate_ms": generate_ms,
+        "bvh_build_ms": bvh_ms,
+        "pack_total_ms": pack_total_ms,
+        "packed_bytes": packed.memory_bytes(),
+        "peak_memory_after_build_bytes": memory_after_build,
+        "render_ms": stats.render_ms,
+        "primary_samples": stats.primary_samples,
+        "resolution": [w, h],
+        "peak_memory_bytes": peak,
+        "peak_bytes_per_triangle": per_triangle,
+    }))
+}

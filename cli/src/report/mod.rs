@@ -1,0 +1,743 @@
+//! `fovea report`: error against run time. For each scene it renders (or takes from the cache) a converged
+//! uniform reference, then the paper's configurations (uniform 32 spp, foveated 32/16/8, 32/8/4, 32/2/1,
+//! 32/16/8 with halved radii), uniform at equal time and a uniform spp sweep, and reports per configuration
+//! the median render time, the primary samples, the speed-up over uniform and the error against the
+//! reference (mean FLIP and relMSE over the whole image and each foveation region).
+mod configs;
+mod metrics;
+mod plot;
+mod reference_cache;
+mod write;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use fovea_core::camera::Camera;
+use fovea_core::foveation::blocks::count_samples;
+use fovea_core::foveation::display::{
+    eccentricity_to_radius_px, pixels_per_degree, DisplayGeometry,
+};
+use fovea_core::foveation::fill::{FILL_BILINEAR, FILL_REPLICATE};
+use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
+use fovea_core::integrator::{FrameParams, IntegratorSettings};
+use fovea_cpu::FrameImage;
+use fovea_scene::environment::Environment;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::args::{Fill, ReportArgs};
+use crate::backend::Renderer;
+use crate::error::{FoveaError, Result};
+use crate::output::{regions_overlay, tonemapped_rgb8, write_png};
+use crate::parse::{self, MAX_SPP};
+use crate::scene_setup::{choose_camera, default_scene_path, prepare_scene, DEFAULT_SKY};
+
+use configs::{ConfigKind, ConfigSpec, UNIFORM_SPP};
+use metrics::{RegionMap, RegionMeans};
+use reference_cache::CacheEntry;
+
+/// The reference's seed is the test seed XOR this, so its noise is independent of the test renders'
+/// (the random numbers are keyed by block, frame, sample and seed: with the same seed, uniform 32 spp would
+/// be the reference's first 32 samples and its error would be underestimated).
+const REFERENCE_SEED_XOR: u32 = 0x5eed_cafe;
+
+/// One measured configuration.
+#[derive(Clone, Debug)]
+pub struct ConfigResult {
+    pub spec: ConfigSpec,
+    /// Median render time over the runs, in ms, as the backend reports it.
+    pub render_ms: f64,
+    pub runs_ms: Vec<f64>,
+    pub primary_samples: u64,
+    pub samples_per_region: [u64; 3],
+    /// Uniform 32 spp render time / this one.
+    pub speedup: f64,
+    /// Uniform 32 spp primary samples / this configuration's.
+    pub sample_ratio: f64,
+    pub flip: RegionMeans,
+    pub rel_mse: RegionMeans,
+    /// Tone-mapped PNG and FLIP map, relative to the scene's output folder.
+    pub image: String,
+    pub flip_map: String,
+}
+
+/// Everything the outputs of one scene are written from.
+pub struct SceneReport {
+    pub scene: String,
+    pub scene_name: String,
+    pub backend: &'static str,
+    pub device: String,
+    pub resolution: [u32; 2],
+    pub gaze: [f32; 2],
+    pub radii_px: [f32; 2],
+    pub display_cm: [f32; 2],
+    pub distance_cm: f32,
+    pub ppd: f32,
+    pub reference: String,
+    pub reference_spp: u32,
+    pub reference_cache: PathBuf,
+    pub reference_cached: bool,
+    pub reference_render_ms: Option<f64>,
+    pub regions: String,
+    pub region_pixels: [u64; 3],
+    pub runs: u32,
+    pub seed: u32,
+    pub equal_time_spp: Option<u32>,
+    /// The sweep line's unrounded spp at the 32/16/8 time (NaN when too few sweep points).
+    pub equal_time_fit: f64,
+    pub wall_ms: f64,
+    pub configs: Vec<ConfigResult>,
+}
+
+/// The options, checked, with `--quick` applied.
+struct Plan {
+    resolution: [u32; 2],
+    gaze: [f32; 2],
+    runs: u32,
+    reference_spp: u32,
+    sweep_max: u32,
+    display: DisplayGeometry,
+    radii_px: [f32; 2],
+    ppd: f32,
+    fill_mode: u32,
+    integrator: IntegratorSettings,
+    eye: Option<[f32; 3]>,
+    target: Option<[f32; 3]>,
+    up: [f32; 3],
+    cache_dir: PathBuf,
+}
+
+fn positive(option: &'static str, value: u32, max: u32) -> Result<u32> {
+    if value == 0 || value > max {
+        return Err(FoveaError::option(
+            option,
+            format!("must be 1 to {max}, got {value}"),
+        ));
+    }
+    Ok(value)
+}
+
+fn plan(args: &ReportArgs) -> Result<Plan> {
+    let resolution = parse::resolution(args.resolution.as_deref().unwrap_or(if args.quick {
+        "320x180"
+    } else {
+        "3840x2160"
+    }))?;
+    let [w, h] = resolution;
+    let gaze = match &args.gaze {
+        Some(text) => {
+            let g: [f32; 2] = parse::floats("--gaze", text, ',')?;
+            if g.iter().any(|v| v.abs() > 1.0e6) {
+                return Err(FoveaError::option(
+                    "--gaze",
+                    format!("{g:?} is absurdly far off the image"),
+                ));
+            }
+            g
+        }
+        None => [0.5 * w as f32, 0.5 * h as f32],
+    };
+    let runs = positive(
+        "--runs",
+        args.runs.unwrap_or(if args.quick { 1 } else { 3 }),
+        1000,
+    )?;
+    let reference_spp = positive(
+        "--reference-spp",
+        args.reference_spp
+            .unwrap_or(if args.quick { 256 } else { 1024 }),
+        MAX_SPP,
+    )?;
+    let sweep_max = positive(
+        "--sweep-max",
+        args.sweep_max.unwrap_or(if args.quick { 8 } else { 64 }),
+        MAX_SPP,
+    )?;
+    let display_cm: [f32; 2] =
+        parse::floats("--display-cm", &args.display_cm.to_ascii_lowercase(), 'x')?;
+    if display_cm.iter().any(|&v| v <= 0.0) {
+        return Err(FoveaError::option(
+            "--display-cm",
+            "both sizes must be positive",
+        ));
+    }
+    if !(args.distance_cm.is_finite() && args.distance_cm > 0.0) {
+        return Err(FoveaError::option(
+            "--distance-cm",
+            "the viewing distance must be positive",
+        ));
+    }
+    // The image fills the display whatever its resolution, as in `fovea render`: pixels per centimetre,
+    // radii and pixels per degree all scale with the rendered width.
+    let display = DisplayGeometry {
+        width_cm: display_cm[0],
+        height_cm: display_cm[1],
+        distance_cm: args.distance_cm,
+        resolution,
+    };
+    let e: [f32; 2] = parse::floats("--eccentricity", &args.eccentricity, ',')?;
+    if e[0] < 0.0 || e[1] < e[0] || e[1] >= 180.0 {
+        return Err(FoveaError::option(
+            "--eccentricity",
+            "need 0 <= E1 <= E2 < 180 degrees",
+        ));
+    }
+    let radii_px = [
+        eccentricity_to_radius_px(e[0], &display),
+        eccentricity_to_radius_px(e[1], &display),
+    ];
+    if args.depth > 64 {
+        return Err(FoveaError::option(
+            "--depth",
+            format!("{} bounces is more than the 64 fovea allows", args.depth),
+        ));
+    }
+    if !args.exposure.is_finite() || args.exposure.abs() > 64.0 {
+        return Err(FoveaError::option(
+            "--exposure",
+            "must be a finite EV between -64 and 64",
+        ));
+    }
+    if !(args.env_scale.is_finite() && args.env_scale >= 0.0) {
+        return Err(FoveaError::option(
+            "--env-scale",
+            "must be a finite, non-negative number",
+        ));
+    }
+    if args.sky.is_some() && args.env_map.is_some() {
+        return Err(FoveaError::option(
+            "--sky",
+            "give either --sky or --env-map",
+        ));
+    }
+    let eye = args
+        .eye
+        .as_deref()
+        .map(|t| parse::floats::<3>("--eye", t, ','))
+        .transpose()?;
+    let target = args
+        .target
+        .as_deref()
+        .map(|t| parse::floats::<3>("--target", t, ','))
+        .transpose()?;
+    let up = parse::floats::<3>("--up", &args.up, ',')?;
+    let mut names = std::collections::HashSet::new();
+    for s in &args.scenes {
+        if !s.is_file() {
+            return Err(FoveaError::file(s, "no such scene file"));
+        }
+        if !names.insert(s.clone()) {
+            return Err(FoveaError::option(
+                "SCENE",
+                format!("'{}' is given twice", s.display()),
+            ));
+        }
+    }
+    Ok(Plan {
+        resolution,
+        gaze,
+        runs,
+        reference_spp,
+        sweep_max,
+        ppd: pixels_per_degree(&display),
+        display,
+        radii_px,
+        fill_mode: match args.fill {
+            Fill::Bilinear => FILL_BILINEAR,
+            Fill::Replicate => FILL_REPLICATE,
+        },
+        integrator: IntegratorSettings {
+            max_bounces: args.depth,
+            russian_roulette_start: args.russian_roulette,
+            ..Default::default()
+        },
+        eye,
+        target,
+        up,
+        cache_dir: reference_cache::cache_dir(args.cache_dir.as_deref())?,
+    })
+}
+
+/// Creates `dir` (and its parents).
+fn create_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| FoveaError::file(dir, format!("cannot create the folder: {e}")))
+}
+
+/// Runs `fovea report`.
+pub fn run(args: &ReportArgs) -> Result<()> {
+    let wall = Instant::now();
+    let plan = plan(args)?;
+    let mut renderer = Renderer::new(args.backend, args.device, args.threads, args.quiet)?;
+    let environment_map = match &args.env_map {
+        Some(path) => Some(Environment::load_map(path, [args.env_scale; 3])?),
+        None => None,
+    };
+    let sky = args
+        .sky
+        .as_deref()
+        .map(|t| parse::floats::<3>("--sky", t, ','))
+        .transpose()?;
+    if sky.is_some_and(|c| c.iter().any(|&v| v < 0.0)) {
+        return Err(FoveaError::option("--sky", "radiance must not be negative"));
+    }
+    create_dir(&args.out)?;
+
+    // One entry per scene: its path (None: the bundled default) and its output folder.
+    let scenes: Vec<(Option<PathBuf>, PathBuf)> = if args.scenes.len() <= 1 {
+        vec![(args.scenes.first().cloned(), args.out.clone())]
+    } else {
+        let mut used = std::collections::HashSet::new();
+        args.scenes
+            .iter()
+            .map(|s| {
+                let stem = s
+                    .file_stem()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| "scene".into());
+                let mut name = stem.clone();
+                let mut i = 2;
+                while !used.insert(name.clone()) {
+                    name = format!("{stem}-{i}");
+                    i += 1;
+                }
+                (Some(s.clone()), args.out.join(name))
+            })
+            .collect()
+    };
+
+    let [w, h] = plan.resolution;
+    let paper = FoveationParams::paper(plan.gaze, plan.radii_px[0], plan.radii_px[1]);
+    if paper.validate() != FOVEATION_OK {
+        return Err(FoveaError::option(
+            "--gaze/--eccentricity",
+            "the foveation settings are inconsistent",
+        ));
+    }
+    // Samples of every render known now (the reference and equal time are added when known).
+    let per_scene: u64 = configs::table_configs(&paper)
+        .iter()
+        .map(|c| c.foveation)
+        .chain(
+            configs::sweep_spps(plan.sweep_max)
+                .into_iter()
+                .filter(|&s| s != UNIFORM_SPP)
+                .map(FoveationParams::uniform),
+        )
+        .map(|f| count_samples(w, h, &f).iter().sum::<u64>())
+        .sum::<u64>()
+        * u64::from(plan.runs);
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new(per_scene * scenes.len() as u64);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:30} {percent:>3}% {msg} ({eta} left)",
+            )
+            .expect("static progress template is valid"),
+        );
+        bar
+    };
+
+    let mut markdown = Vec::new();
+    for (scene_path, out_dir) in &scenes {
+        create_dir(out_dir)?;
+        let environment = match (&sky, &environment_map) {
+            (Some(c), _) => Environment::Constant(*c),
+            (None, Some(map)) => map.clone(),
+            (None, None) if scene_path.is_none() => Environment::Constant(DEFAULT_SKY),
+            (None, None) => Environment::None,
+        };
+        let env_text = match (&sky, &args.env_map) {
+            (Some(c), _) => format!("constant {c:?}"),
+            (None, Some(p)) => format!("map {} scale {}", p.display(), args.env_scale.to_bits()),
+            (None, None) if scene_path.is_none() => format!("constant {DEFAULT_SKY:?}"),
+            (None, None) => "none".into(),
+        };
+        let scene_start = Instant::now();
+        let mut report = run_scene(
+            args,
+            &plan,
+            &mut renderer,
+            &bar,
+            scene_path.as_deref(),
+            &environment,
+            &env_text,
+            out_dir,
+        )?;
+        report.wall_ms = scene_start.elapsed().as_secs_f64() * 1e3;
+        let md = write::report_md(&report);
+        write::write_text(
+            &out_dir.join("report.md"),
+            &format!("# Error against run time (`fovea report`)\n\n{md}"),
+        )?;
+        let json = write::report_json(&report);
+        crate::stats::write_json(&out_dir.join("report.json"), &json)?;
+        write::write_text(&out_dir.join("report.csv"), &write::report_csv(&report))?;
+        let svg =
+            plot::plot_svg(&report).map_err(|e| FoveaError::file(out_dir.join("plot.svg"), e))?;
+        write::write_text(&out_dir.join("plot.svg"), &svg)?;
+        markdown.push((out_dir.clone(), md));
+    }
+    bar.finish_and_clear();
+    if scenes.len() > 1 {
+        let mut text = String::from("# Error against run time (`fovea report`)\n\n");
+        for (dir, md) in &markdown {
+            let rel = dir.strip_prefix(&args.out).unwrap_or(dir);
+            text.push_str(&md.replace(
+                "`reference.png`",
+                &format!("`{}/reference.png`", rel.display()),
+            ));
+            text.push('\n');
+        }
+        write::write_text(&args.out.join("report.md"), &text)?;
+    }
+    if !args.quiet {
+        eprintln!(
+            "fovea: report of {} scene{} in {:.1} s -> {}",
+            scenes.len(),
+            if scenes.len() == 1 { "" } else { "s" },
+            wall.elapsed().as_secs_f64(),
+            args.out.join("report.md").display()
+        );
+    }
+    Ok(())
+}
+
+/// Prints a status line above the progress bar (nothing with `--quiet`).
+fn note(bar: &ProgressBar, quiet: bool, message: &str) {
+    if !quiet {
+        bar.suspend(|| eprintln!("{message}"));
+    }
+}
+
+/// Renders and measures one scene; writes its images.
+#[allow(clippy::too_many_arguments)]
+fn run_scene(
+    args: &ReportArgs,
+    plan: &Plan,
+    renderer: &mut Renderer,
+    bar: &ProgressBar,
+    scene_path: Option<&Path>,
+    environment: &Environment,
+    env_text: &str,
+    out_dir: &Path,
+) -> Result<SceneReport> {
+    let [w, h] = plan.resolution;
+    let file = scene_path
+        .map(Path::to_path_buf)
+        .unwrap_or_else(default_scene_path);
+    let scene_name = file
+        .file_stem()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    bar.set_message(format!("{scene_name}: loading"));
+    let scene = prepare_scene(scene_path, None, environment)?;
+    if scene.packed.lights.is_empty() {
+        note(
+            bar,
+            false,
+            &format!(
+                "warning: {scene_name} has no light and no sky: every image will be black \
+                 (add --sky R,G,B)"
+            ),
+        );
+    }
+    let camera: Camera = choose_camera(
+        &scene,
+        plan.eye,
+        plan.target,
+        plan.up,
+        args.fov,
+        w as f32 / h as f32,
+    )?;
+    renderer.set_scene(&scene.packed)?;
+    let frame = |foveation: FoveationParams, seed: u32| FrameParams {
+        camera,
+        foveation,
+        integrator: plan.integrator,
+        width: w,
+        height: h,
+        frame_index: 0,
+        seed,
+    };
+    let paper = FoveationParams::paper(plan.gaze, plan.radii_px[0], plan.radii_px[1]);
+    let regions = RegionMap::new(w, h, &paper);
+
+    // The reference: from the cache, or rendered and stored.
+    let scene_bytes = std::fs::read(&file).map_err(|e| FoveaError::file(&file, e))?;
+    let reference_frame = frame(
+        FoveationParams::uniform(plan.reference_spp),
+        args.seed ^ REFERENCE_SEED_XOR,
+    );
+    let entry = CacheEntry::new(
+        &plan.cache_dir,
+        reference_cache::reference_key_text(
+            reference_cache::fnv1a64(&scene_bytes),
+            &scene.packed,
+            env_text,
+            &reference_frame,
+            plan.fill_mode,
+        ),
+    );
+    let cached = if args.no_cache {
+        None
+    } else {
+        entry.load(w, h)
+    };
+    let reference_cached = cached.is_some();
+    let (reference, reference_render_ms) = match cached {
+        Some(image) => {
+            note(
+                bar,
+                args.quiet,
+                &format!("reference: cached {}", entry.image.display()),
+            );
+            (image, None)
+        }
+        None => {
+            bar.inc_length(u64::from(w) * u64::from(h) * u64::from(plan.reference_spp));
+            bar.set_message(format!(
+                "{scene_name}: reference ({} spp)",
+                plan.reference_spp
+            ));
+            let rendered = renderer.render(
+                &scene.packed,
+                &reference_frame,
+                plan.fill_mode,
+                args.exposure,
+                true,
+                &|n| bar.inc(n),
+            )?;
+            let image = rendered
+                .hdr
+                .ok_or_else(|| FoveaError::Backend("the backend returned no HDR image".into()))?;
+            match entry.store(&image) {
+                Ok(()) => note(
+                    bar,
+                    args.quiet,
+                    &format!("reference: rendered and cached {}", entry.image.display()),
+                ),
+                Err(e) => note(
+                    bar,
+                    false,
+                    &format!("warning: the reference could not be cached: {e}"),
+                ),
+            }
+            (image, Some(rendered.stats.render_ms))
+        }
+    };
+    let reference_rgb8 = tonemapped_rgb8(&reference, args.exposure);
+    write_png(&out_dir.join("reference.png"), w, h, &reference_rgb8)?;
+    write_png(
+        &out_dir.join("regions.png"),
+        w,
+        h,
+        &regions_overlay(&reference_rgb8, w, h, &paper),
+    )?;
+    create_dir(&out_dir.join("images"))?;
+    create_dir(&out_dir.join("flip"))?;
+
+    let measurer = Measurer {
+        args,
+        plan,
+        packed: &scene.packed,
+        bar,
+        scene_name: &scene_name,
+        reference: &reference,
+        reference_rgb8: &reference_rgb8,
+        regions: &regions,
+        out_dir,
+        frame: &frame,
+    };
+    // Uniform results by spp: the sweep's 32 spp and an equal-time spp already measured are reused.
+    let mut uniform_by_spp: HashMap<u32, ConfigResult> = HashMap::new();
+    let mut results = Vec::new();
+    for spec in configs::table_configs(&paper) {
+        let r = measurer.measure(renderer, &spec)?;
+        if spec.kind == ConfigKind::Uniform {
+            uniform_by_spp.insert(spec.foveation.spp[0], r.clone());
+        }
+        results.push(r);
+    }
+    let mut sweep = Vec::new();
+    for spp in configs::sweep_spps(plan.sweep_max) {
+        let spec = configs::uniform(spp, ConfigKind::Sweep);
+        let r = match uniform_by_spp.get(&spp) {
+            Some(done) => ConfigResult {
+                spec,
+                ..done.clone()
+            },
+            None => measurer.measure(renderer, &spec)?,
+        };
+        uniform_by_spp.insert(spp, r.clone());
+        sweep.push(r);
+    }
+    let target_ms = results[1].render_ms;
+    let points: Vec<(u32, f64)> = sweep
+        .iter()
+        .map(|r| (r.spec.foveation.spp[0], r.render_ms))
+        .collect();
+    let (equal_spp, equal_fit) = configs::equal_time_fit(&points, target_ms, MAX_SPP);
+    let spec = configs::uniform(equal_spp, ConfigKind::EqualTime);
+    let equal = match uniform_by_spp.get(&equal_spp) {
+        Some(done) => ConfigResult {
+            spec,
+            ..done.clone()
+        },
+        None => {
+            bar.inc_length(
+                u64::from(w) * u64::from(h) * u64::from(equal_spp) * u64::from(plan.runs),
+            );
+            measurer.measure(renderer, &spec)?
+        }
+    };
+    results.push(equal);
+    results.extend(sweep);
+
+    let (base_ms, base_samples) = (results[0].render_ms, results[0].primary_samples);
+    for r in &mut results {
+        r.speedup = base_ms / r.render_ms;
+        r.sample_ratio = base_samples as f64 / r.primary_samples.max(1) as f64;
+    }
+
+    Ok(SceneReport {
+        scene: file.display().to_string(),
+        scene_name,
+        backend: renderer.name(),
+        device: renderer.device_name(),
+        resolution: plan.resolution,
+        gaze: plan.gaze,
+        radii_px: plan.radii_px,
+        display_cm: [plan.display.width_cm, plan.display.height_cm],
+        distance_cm: plan.display.distance_cm,
+        ppd: plan.ppd,
+        reference: "reference.png".into(),
+        reference_spp: plan.reference_spp,
+        reference_cache: entry.image.clone(),
+        reference_cached,
+        reference_render_ms,
+        regions: "regions.png".into(),
+        region_pixels: regions.pixels,
+        runs: plan.runs,
+        seed: args.seed,
+        equal_time_spp: Some(equal_spp),
+        equal_time_fit: equal_fit,
+        wall_ms: 0.0,
+        configs: results,
+    })
+}
+
+/// What measuring a configuration needs.
+struct Measurer<'a> {
+    args: &'a ReportArgs,
+    plan: &'a Plan,
+    packed: &'a fovea_scene::pack::PackedScene,
+    bar: &'a ProgressBar,
+    scene_name: &'a str,
+    reference: &'a FrameImage,
+    reference_rgb8: &'a [u8],
+    regions: &'a RegionMap,
+    out_dir: &'a Path,
+    frame: &'a dyn Fn(FoveationParams, u32) -> FrameParams,
+}
+
+/// The median of `v` (the mean of the middle two for an even count).
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
+}
+
+impl Measurer<'_> {
+    /// Renders `spec` `runs` times, measures the first image against the reference and writes its PNG
+    /// and FLIP map.
+    fn measure(&self, renderer: &mut Renderer, spec: &ConfigSpec) -> Result<ConfigResult> {
+        let [w, h] = self.plan.resolution;
+        let frame = (self.frame)(spec.foveation, self.args.seed);
+        let mut runs_ms = Vec::new();
+        let mut first: Option<(FrameImage, fovea_cpu::RenderStats)> = None;
+        for run in 0..self.plan.runs {
+            self.bar.set_message(format!(
+                "{}: {} (run {}/{})",
+                self.scene_name,
+                spec.name,
+                run + 1,
+                self.plan.runs
+            ));
+            let rendered = renderer.render(
+                self.packed,
+                &frame,
+                self.plan.fill_mode,
+                self.args.exposure,
+                first.is_none(),
+                &|n| self.bar.inc(n),
+            )?;
+            runs_ms.push(rendered.stats.render_ms);
+            match &first {
+                None => {
+                    let hdr = rendered.hdr.ok_or_else(|| {
+                        FoveaError::Backend("the backend returned no HDR image".into())
+                    })?;
+                    first = Some((hdr, rendered.stats));
+                }
+                Some((_, stats)) if stats.primary_samples != rendered.stats.primary_samples => {
+                    return Err(FoveaError::Backend(format!(
+                        "{}: primary samples differ between runs ({} vs {})",
+                        spec.name, stats.primary_samples, rendered.stats.primary_samples
+                    )));
+                }
+                Some(_) => {}
+            }
+        }
+        let (image, stats) = first.expect("at least one run");
+        self.bar
+            .set_message(format!("{}: {} (error)", self.scene_name, spec.name));
+        let rgb8 = tonemapped_rgb8(&image, self.args.exposure);
+        let flip = metrics::flip_map(self.reference_rgb8, &rgb8, w, h, self.plan.ppd);
+        let rel_mse = metrics::rel_mse_map(&image, self.reference);
+        let image_rel = format!("images/{}.png", spec.slug);
+        let flip_rel = format!("flip/{}.png", spec.slug);
+        write_png(&self.out_dir.join(&image_rel), w, h, &rgb8)?;
+        write_png(
+            &self.out_dir.join(&flip_rel),
+            w,
+            h,
+            &metrics::flip_map_rgb8(&flip, w, h),
+        )?;
+        Ok(ConfigResult {
+            spec: spec.clone(),
+            render_ms: median(&runs_ms),
+            runs_ms,
+            primary_samples: stats.primary_samples,
+            samples_per_region: stats.samples_per_region,
+            speedup: f64::NAN,
+            sample_ratio: f64::NAN,
+            flip: RegionMeans::of(&flip, self.regions),
+            rel_mse: RegionMeans::of(&rel_mse, self.regions),
+            image: image_rel,
+            flip_map: flip_rel,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::median;
+
+    #[test]
+    fn medians() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert_eq!(median(&[7.0]), 7.0);
+        assert!(median(&[]).is_nan());
+    }
+}

@@ -1,0 +1,216 @@
+//! `fovea report --quick` end to end on the Cornell box on the CPU: every file is written, report.json has
+//! the keys the issue specifies with sane values, the fovea's FLIP under foveation is close to uniform's,
+//! the periphery's is larger, primary samples equal the closed count, and a second run reuses the cached
+//! reference.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use fovea_core::foveation::blocks::count_samples;
+use fovea_core::foveation::regions::FoveationParams;
+use serde_json::Value;
+
+fn cornell() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/cornell_box/CornellBox-Original.obj")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("fovea-report-test-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs `fovea report --quick` on the Cornell box; returns stderr.
+fn report(out: &Path, cache: &Path, extra: &[&str]) -> String {
+    let output = Command::new(env!("CARGO_BIN_EXE_fovea"))
+        .arg("report")
+        .arg(cornell())
+        .args(["--eye", "0,1,3.9", "--target", "0,1,0", "--fov", "38"])
+        .args(["--quick", "--resolution", "240x136", "--backend", "cpu"])
+        .arg("--out")
+        .arg(out)
+        .arg("--cache-dir")
+        .arg(cache)
+        .args(extra)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert!(output.status.success(), "fovea report failed: {stderr}");
+    stderr
+}
+
+fn regions(v: &Value) -> [f64; 4] {
+    ["all", "fovea", "intermediate", "periphery"].map(|k| {
+        v[k].as_f64()
+            .unwrap_or_else(|| panic!("{k} is not a number in {v}"))
+    })
+}
+
+#[test]
+fn quick_report_on_the_cornell_box() {
+    let dir = temp_dir("quick");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    let stderr = report(&out, &cache, &[]);
+    assert!(stderr.contains("reference: rendered"), "{stderr}");
+
+    for f in [
+        "report.md",
+        "report.json",
+        "report.csv",
+        "plot.svg",
+        "reference.png",
+        "regions.png",
+    ] {
+        assert!(out.join(f).is_file(), "{f} is missing");
+    }
+    let json: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let ppd = json["ppd"].as_f64().unwrap();
+    // The paper's display (56.76 ppd at 3840 pixels) shown at 240 pixels wide.
+    assert!((ppd - 56.76 * 240.0 / 3840.0).abs() < 0.01, "ppd {ppd}");
+    assert_eq!(json["reference"], "reference.png");
+    let configs = json["configs"].as_array().unwrap();
+    let names: Vec<&str> = configs
+        .iter()
+        .map(|c| c["config"].as_str().unwrap())
+        .collect();
+    for want in [
+        "uniform",
+        "32/16/8",
+        "32/8/4",
+        "32/2/1",
+        "32/16/8 half radii",
+        "uniform 1",
+        "uniform 2",
+        "uniform 4",
+        "uniform 8",
+    ] {
+        assert!(names.contains(&want), "{want} missing from {names:?}");
+    }
+    assert!(names.iter().any(|n| n.starts_with("equal time")));
+
+    let [w, h] = [240u32, 136];
+    let radii: Vec<f32> = json["radii_px"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap() as f32)
+        .collect();
+    let by_name = |n: &str| configs.iter().find(|c| c["config"] == n).unwrap();
+    for c in configs {
+        let name = c["config"].as_str().unwrap();
+        for key in ["image", "flip_map"] {
+            let p = out.join(c[key].as_str().unwrap());
+            assert!(p.is_file(), "{name}: {} missing", p.display());
+        }
+        let ms = c["render_ms"].as_f64().unwrap();
+        assert!(ms.is_finite() && ms > 0.0, "{name}: render_ms {ms}");
+        assert!(c["speedup"].as_f64().unwrap() > 0.0);
+        for v in regions(&c["flip"]) {
+            assert!((0.0..=1.0).contains(&v), "{name}: FLIP {v}");
+        }
+        for v in regions(&c["rel_mse"]) {
+            assert!(v.is_finite() && v >= 0.0, "{name}: relMSE {v}");
+        }
+        // Primary samples: the renderer's count equals the closed count of the configuration.
+        let spp: Vec<u32> = c["spp"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap() as u32)
+            .collect();
+        let params = if c["radii_px"].is_null() {
+            FoveationParams::uniform(spp[0])
+        } else {
+            let r = c["radii_px"].as_array().unwrap();
+            let mut p = FoveationParams::paper(
+                [w as f32 * 0.5, h as f32 * 0.5],
+                r[0].as_f64().unwrap() as f32,
+                r[1].as_f64().unwrap() as f32,
+            );
+            p.spp = [spp[0], spp[1], spp[2], 0];
+            p
+        };
+        let expected: u64 = count_samples(w, h, &params).iter().sum();
+        assert_eq!(
+            c["primary_samples"].as_u64().unwrap(),
+            expected,
+            "{name}: primary samples"
+        );
+    }
+    let uniform = by_name("uniform");
+    assert_eq!(
+        uniform["primary_samples"].as_u64().unwrap(),
+        u64::from(w * h * 32)
+    );
+    assert_eq!(
+        by_name("32/16/8")["radii_px"].as_array().unwrap()[0]
+            .as_f64()
+            .unwrap() as f32,
+        radii[0]
+    );
+
+    // The fovea is rendered as uniform there: its FLIP stays close to uniform's.
+    let u = regions(&uniform["flip"]);
+    let f = regions(&by_name("32/16/8")["flip"]);
+    assert!(
+        (f[1] - u[1]).abs() < 0.05 || f[1] < 1.5 * u[1],
+        "fovea FLIP: 32/16/8 {} vs uniform {}",
+        f[1],
+        u[1]
+    );
+    // 32/2/1 spends almost nothing on the periphery: its error there exceeds the fovea's.
+    let sparse = regions(&by_name("32/2/1")["flip"]);
+    assert!(sparse[3] > sparse[1], "32/2/1 FLIP {sparse:?}");
+    // More samples, less error along the sweep.
+    let e1 = regions(&by_name("uniform 1")["rel_mse"])[0];
+    let e8 = regions(&by_name("uniform 8")["rel_mse"])[0];
+    assert!(e8 < e1, "relMSE uniform 8 {e8} vs uniform 1 {e1}");
+
+    let csv = std::fs::read_to_string(out.join("report.csv")).unwrap();
+    assert_eq!(csv.lines().count(), configs.len() + 1);
+    assert!(csv.starts_with("config,"));
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("| 32/16/8 |"));
+    let svg = std::fs::read_to_string(out.join("plot.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("render time (ms"));
+
+    // Again, smaller: the reference comes from the cache.
+    let out2 = dir.join("out2");
+    let stderr = report(&out2, &cache, &["--sweep-max", "2"]);
+    assert!(stderr.contains("reference: cached"), "{stderr}");
+    let json2: Value =
+        serde_json::from_str(&std::fs::read_to_string(out2.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json2["reference_cached"], true);
+    // Same reference, same renders: the same errors.
+    assert_eq!(json2["configs"][0]["flip"], uniform["flip"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_options_fail_clearly() {
+    let dir = temp_dir("bad");
+    let output = Command::new(env!("CARGO_BIN_EXE_fovea"))
+        .arg("report")
+        .arg(cornell())
+        .args(["--quick", "--runs", "0", "--backend", "cpu"])
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("--runs"), "{stderr}");
+    assert!(!dir.join("out").exists(), "nothing written on bad options");
+    let output = Command::new(env!("CARGO_BIN_EXE_fovea"))
+        .arg("report")
+        .arg(dir.join("missing.obj"))
+        .args(["--quick", "--backend", "cpu"])
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr).contains("missing.obj"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
