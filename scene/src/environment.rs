@@ -7,6 +7,13 @@ use fovea_core::math::color::luminance;
 use glam::{Vec2, Vec3};
 
 use crate::error::SceneError;
+use crate::texture::TextureLimits;
+
+/// Default decoding limits of environment maps: 16384 texels per side, 2 GiB.
+pub const ENVIRONMENT_MAP_LIMITS: TextureLimits = TextureLimits {
+    max_dimension: 16384,
+    max_bytes: 2 << 30,
+};
 
 /// What lights the scene from infinitely far away.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -87,24 +94,63 @@ impl EnvironmentTables {
 }
 
 impl Environment {
-    /// Loads an equirectangular `.hdr` (Radiance) or `.exr` map.
+    /// Loads an equirectangular map in any format the `image` crate is built with here (Radiance `.hdr`,
+    /// OpenEXR `.exr`; PNG, JPEG, TGA and BMP are read as linear values in [0, 1]), decoded under
+    /// [`ENVIRONMENT_MAP_LIMITS`].
     pub fn load_map(path: &Path, scale: [f32; 3]) -> Result<Self, SceneError> {
-        let image = image::ImageReader::open(path)
-            .map_err(|e| SceneError::Io {
-                path: path.to_path_buf(),
-                message: e.to_string(),
-            })?
+        Self::load_map_with_limits(path, scale, &ENVIRONMENT_MAP_LIMITS)
+    }
+
+    /// [`Self::load_map`] with explicit decoding limits (the decoder's allocations and the RGBA32F result
+    /// count against `limits.max_bytes`).
+    pub fn load_map_with_limits(
+        path: &Path,
+        scale: [f32; 3],
+        limits: &TextureLimits,
+    ) -> Result<Self, SceneError> {
+        let bytes = std::fs::read(path).map_err(|e| SceneError::from_io(path, e))?;
+        let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
             .with_guessed_format()
-            .map_err(|e| SceneError::Io {
+            .map_err(|e| SceneError::from_io(path, e))?;
+        if reader.format().is_none() {
+            return Err(SceneError::Texture {
+                path: path.to_path_buf(),
+                message: "unknown or unsupported image format for an environment map".to_owned(),
+            });
+        }
+        let mut l = image::Limits::default();
+        l.max_image_width = Some(limits.max_dimension);
+        l.max_image_height = Some(limits.max_dimension);
+        l.max_alloc = Some(limits.max_bytes);
+        reader.limits(l);
+        let image = reader.decode().map_err(|e| match e {
+            image::ImageError::Limits(e) => SceneError::TextureTooLarge {
+                path: path.to_path_buf(),
+                message: crate::texture::limits_message(&bytes, limits, &e.to_string()),
+            },
+            e => SceneError::Texture {
                 path: path.to_path_buf(),
                 message: e.to_string(),
-            })?
-            .decode()
-            .map_err(|e| SceneError::Texture {
+            },
+        })?;
+        let (width, height) = (image.width(), image.height());
+        let rgba32f_bytes = u64::from(width) * u64::from(height) * 16;
+        if width == 0 || height == 0 {
+            return Err(SceneError::Texture {
                 path: path.to_path_buf(),
-                message: e.to_string(),
-            })?
-            .into_rgba32f();
+                message: format!("image is {width}x{height}"),
+            });
+        }
+        if rgba32f_bytes > limits.max_bytes {
+            return Err(SceneError::TextureTooLarge {
+                path: path.to_path_buf(),
+                message: format!(
+                    "{width}x{height} needs {rgba32f_bytes} bytes as RGBA32F; the limit is {} bytes",
+                    limits.max_bytes
+                ),
+            });
+        }
+        let image = image.into_rgba32f();
         let (width, height) = image.dimensions();
         let texels = image
             .pixels()
@@ -282,5 +328,50 @@ mod sampling_tests {
         // A black texel is never sampled: its pdf is zero.
         let black = environment::uv_to_direction(Vec2::new(3.5 / 16.0, 6.5 / 8.0));
         assert_eq!(environment::pdf(&scene, black), 0.0);
+    }
+}
+
+#[cfg(test)]
+mod load_tests {
+    use super::*;
+
+    #[test]
+    fn exr_and_hdr_maps_load_and_bad_ones_are_errors() {
+        let dir = std::env::temp_dir().join(format!("fovea_env_test_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut img = image::Rgb32FImage::new(4, 2);
+        img.put_pixel(1, 0, image::Rgb([8.0, 4.0, 2.0]));
+        for name in ["m.exr", "m.hdr"] {
+            let file = dir.join(name);
+            image::DynamicImage::ImageRgb32F(img.clone())
+                .save(&file)
+                .unwrap();
+            match Environment::load_map(&file, [1.0; 3]).unwrap_or_else(|e| panic!("{e}")) {
+                Environment::Map {
+                    width,
+                    height,
+                    texels,
+                    ..
+                } => {
+                    assert_eq!((width, height), (4, 2));
+                    assert!((texels[1][0] - 8.0).abs() < 0.1, "{name}: {:?}", texels[1]);
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+        let e = Environment::load_map(&dir.join("none.exr"), [1.0; 3]).unwrap_err();
+        assert!(matches!(e, SceneError::MissingFile { .. }), "{e}");
+        std::fs::write(dir.join("bad.hdr"), b"not an image").unwrap();
+        let e = Environment::load_map(&dir.join("bad.hdr"), [1.0; 3]).unwrap_err();
+        assert!(matches!(e, SceneError::Texture { .. }), "{e}");
+        assert!(e.to_string().contains("bad.hdr"), "{e}");
+        let small = TextureLimits {
+            max_dimension: 2,
+            max_bytes: 1 << 20,
+        };
+        let e =
+            Environment::load_map_with_limits(&dir.join("m.exr"), [1.0; 3], &small).unwrap_err();
+        assert!(matches!(e, SceneError::TextureTooLarge { .. }), "{e}");
+        std::fs::remove_dir_all(dir).ok();
     }
 }

@@ -50,9 +50,13 @@ pub enum SceneError {
     #[error("{}: face index out of range: {message}", .path.display())]
     FaceIndexOutOfRange { path: PathBuf, message: String },
 
+    /// The scene has more vertices or triangles than [`crate::mesh::LoadOptions`] allow.
+    #[error("{}: scene too large: {message}", .path.display())]
+    TooLarge { path: PathBuf, message: String },
+
     /// After validation the scene has no triangle left to render.
-    #[error("{}: the scene has no valid triangles", .path.display())]
-    Empty { path: PathBuf },
+    #[error("{}: the scene has no valid triangles{detail}", .path.display())]
+    Empty { path: PathBuf, detail: String },
 
     /// An image could not be decoded (the image crate's message). `path` is the image file or, for an
     /// image embedded in a glTF file, `scene.glb#image3`.

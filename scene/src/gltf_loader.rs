@@ -41,20 +41,42 @@ use gltf::mesh::Mode;
 
 use crate::error::SceneError;
 use crate::mesh::{CameraDesc, LoadOptions, LoadedScene};
-use crate::texture::{decode_texture_bytes, load_texture_file, TextureLimits};
+use crate::source::{FileSource, Filesystem};
+use crate::texture::{decode_texture_bytes, load_texture_from, TextureLimits, TextureRole};
 
 /// Loads a `.gltf` or `.glb` file.
 pub fn load_gltf(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
-    let bytes = std::fs::read(path).map_err(|e| SceneError::from_io(path, e))?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| SceneError::Gltf {
+    load_gltf_from(&Filesystem, path, options)
+}
+
+/// Loads a `.gltf` or `.glb` file, reading it and its external buffers and images from `source`
+/// (relative URIs are relative to `path`'s folder).
+pub fn load_gltf_from(
+    source: &dyn FileSource,
+    path: &Path,
+    options: &LoadOptions,
+) -> Result<LoadedScene, SceneError> {
+    let bytes = source
+        .read(path)
+        .map_err(|e| SceneError::from_io(path, e))?;
+    let malformed = |message: String| SceneError::Gltf {
         path: path.to_owned(),
-        message: e.to_string(),
-    })?;
+        message,
+    };
+    let gltf =
+        gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| malformed(e.to_string()))?;
     drop(bytes);
     let gltf::Gltf { document, blob } = gltf;
+    // gltf 1.4.1 panics on some JSON its validation accepts (or, for POSITION, on a dangling index while
+    // validating), so check those first, then validate.
+    let mut root = document.into_json();
+    let early_warnings = check_json(&mut root).map_err(malformed)?;
+    let document = gltf::Document::from_json(root).map_err(|e| malformed(e.to_string()))?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let buffers = load_buffers(path, &base, &document, blob)?;
+    let buffers = load_buffers(source, path, &base, &document, blob)?;
     let mut loader = Loader {
+        source,
+        options,
         path,
         base,
         document: &document,
@@ -68,6 +90,9 @@ pub fn load_gltf(path: &Path, options: &LoadOptions) -> Result<LoadedScene, Scen
     };
     loader.walk()?;
     let mut scene = loader.scene;
+    for w in early_warnings.into_iter().rev() {
+        scene.warnings.insert(0, format!("{}: {w}", path.display()));
+    }
     if let Some(mtl) = &options.mtl_override {
         scene.warnings.push(format!(
             "{}: the MTL override {} applies to OBJ files only; ignored",
@@ -85,8 +110,63 @@ pub fn load_gltf(path: &Path, options: &LoadOptions) -> Result<LoadedScene, Scen
     Ok(scene)
 }
 
+/// Checks (and where harmless repairs) what gltf 1.4.1 would panic on but its validation does not
+/// catch: a primitive's `POSITION` naming a missing accessor, an image with neither `uri` nor
+/// `bufferView`, a camera without the projection object its `type` names. An image in a buffer view
+/// without `mimeType` is accepted (the decoder looks at the bytes) with a warning, returned.
+fn check_json(root: &mut gltf::json::Root) -> Result<Vec<String>, String> {
+    use gltf::json::camera::Type;
+    use gltf::json::validation::Checked;
+    let count = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = Checked::Valid(gltf::Semantic::Positions);
+            if let Some(index) = primitive.attributes.get(&position) {
+                if index.value() >= count {
+                    return Err(format!(
+                        "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {} does not \
+                         exist (there are {count})",
+                        index.value()
+                    ));
+                }
+            }
+        }
+    }
+    let mut warnings = Vec::new();
+    for (i, image) in root.images.iter_mut().enumerate() {
+        match (&image.buffer_view, &image.uri, &image.mime_type) {
+            (None, None, _) => {
+                return Err(format!("images[{i}] has neither a uri nor a bufferView"));
+            }
+            (Some(_), _, None) => {
+                warnings.push(format!(
+                    "images[{i}] is in a buffer view but has no mimeType; the format is guessed"
+                ));
+                image.mime_type = Some(gltf::json::image::MimeType(
+                    "application/octet-stream".to_owned(),
+                ));
+            }
+            _ => {}
+        }
+    }
+    for (i, camera) in root.cameras.iter().enumerate() {
+        let ok = match camera.type_ {
+            Checked::Valid(Type::Perspective) => camera.perspective.is_some(),
+            Checked::Valid(Type::Orthographic) => camera.orthographic.is_some(),
+            Checked::Invalid => true, // the validation reports it
+        };
+        if !ok {
+            return Err(format!(
+                "cameras[{i}] lacks the projection object its type names"
+            ));
+        }
+    }
+    Ok(warnings)
+}
+
 /// Reads every buffer: the GLB `BIN` chunk, a data URI or an external file (relative to the glTF file).
 fn load_buffers(
+    source: &dyn FileSource,
     path: &Path,
     base: &Path,
     document: &gltf::Document,
@@ -102,7 +182,7 @@ fn load_buffers(
                     buffer.index()
                 ),
             })?,
-            gltf::buffer::Source::Uri(uri) => read_uri(path, base, uri)?,
+            gltf::buffer::Source::Uri(uri) => read_uri(source, path, base, uri)?,
         };
         if data.len() < buffer.length() {
             return Err(SceneError::BufferTooShort {
@@ -152,7 +232,12 @@ fn uri_path(base: &Path, uri: &str) -> PathBuf {
 }
 
 /// Reads the bytes a buffer or image URI refers to.
-fn read_uri(path: &Path, base: &Path, uri: &str) -> Result<Vec<u8>, SceneError> {
+fn read_uri(
+    source: &dyn FileSource,
+    path: &Path,
+    base: &Path,
+    uri: &str,
+) -> Result<Vec<u8>, SceneError> {
     if is_data_uri(uri) {
         // The gltf crate decodes base64 data URIs for buffer sources; reuse it for images too.
         gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None)
@@ -168,12 +253,14 @@ fn read_uri(path: &Path, base: &Path, uri: &str) -> Result<Vec<u8>, SceneError> 
         })
     } else {
         let file = uri_path(base, uri);
-        std::fs::read(&file).map_err(|e| SceneError::from_io(file, e))
+        source.read(&file).map_err(|e| SceneError::from_io(file, e))
     }
 }
 
 /// Flattening state.
 struct Loader<'a> {
+    source: &'a dyn FileSource,
+    options: &'a LoadOptions,
     path: &'a Path,
     base: PathBuf,
     document: &'a gltf::Document,
@@ -464,13 +551,25 @@ impl Loader<'_> {
                 )?;
             }
 
+            // Bound the allocations below by the options before making them (a sparse accessor without a
+            // buffer view can declare any count).
+            let index_count = primitive.indices().map_or(pos_acc.count(), |a| a.count());
+            let new_triangles = if mode == Mode::Triangles {
+                index_count / 3
+            } else {
+                index_count.saturating_sub(2)
+            };
+            self.options.check_size(
+                self.path,
+                (self.scene.positions.len() + pos_acc.count()) as u64,
+                (self.scene.triangles.len() + new_triangles) as u64,
+            )?;
+
             let buffers = self.buffers;
             let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-            let short = |what: &str| SceneError::BufferTooShort {
+            let short = |what: &str| SceneError::InvalidAccessor {
                 path: self.path.to_owned(),
-                what: format!("{label} {what}"),
-                needed: 0,
-                available: 0,
+                message: format!("{label} {what} cannot be read from its buffer"),
             };
             let positions: Vec<[f32; 3]> = reader
                 .read_positions()
@@ -488,22 +587,27 @@ impl Loader<'_> {
             );
 
             let mut normals_added = false;
-            if normal_acc.is_some() {
-                let normals: Vec<[f32; 3]> = reader
-                    .read_normals()
-                    .ok_or_else(|| short("NORMAL"))?
-                    .collect();
-                if normals.len() == vertex_count {
-                    self.scene.normals.extend(normals.iter().map(|&n| {
-                        let n = normal_matrix * Vec3::from(n);
-                        n.normalize_or_zero().to_array()
+            if let Some(acc) = &normal_acc {
+                if acc.count() == vertex_count {
+                    let normals = reader.read_normals().ok_or_else(|| short("NORMAL"))?;
+                    self.scene.normals.extend(normals.map(|n| {
+                        let n = Vec3::from(n);
+                        // A non-finite normal stays non-finite, so that validation skips its triangles.
+                        if n.is_finite() {
+                            (normal_matrix * n).normalize_or_zero().to_array()
+                        } else {
+                            n.to_array()
+                        }
                     }));
+                    if self.scene.normals.len() != base + vertex_count {
+                        return Err(short("NORMAL"));
+                    }
                     normals_added = true;
                     self.any_normals = true;
                 } else {
                     self.warn(format!(
                         "{label}: {} normals for {vertex_count} positions; normals ignored",
-                        normals.len()
+                        acc.count()
                     ));
                 }
             }
@@ -511,20 +615,22 @@ impl Loader<'_> {
                 self.scene.normals.resize(base + vertex_count, [0.0; 3]);
             }
             let mut uvs_added = false;
-            if uv_acc.is_some() {
-                let uvs: Vec<[f32; 2]> = reader
-                    .read_tex_coords(0)
-                    .ok_or_else(|| short("TEXCOORD_0"))?
-                    .into_f32()
-                    .collect();
-                if uvs.len() == vertex_count {
+            if let Some(acc) = &uv_acc {
+                if acc.count() == vertex_count {
+                    let uvs = reader
+                        .read_tex_coords(0)
+                        .ok_or_else(|| short("TEXCOORD_0"))?
+                        .into_f32();
                     self.scene.uvs.extend(uvs);
+                    if self.scene.uvs.len() != base + vertex_count {
+                        return Err(short("TEXCOORD_0"));
+                    }
                     uvs_added = true;
                     self.any_uvs = true;
                 } else {
                     self.warn(format!(
                         "{label}: {} texture coordinates for {vertex_count} positions; ignored",
-                        uvs.len()
+                        acc.count()
                     ));
                 }
             }
@@ -718,7 +824,7 @@ impl Loader<'_> {
                 )?)
             }
             gltf::image::Source::Uri { uri, .. } if is_data_uri(uri) => {
-                let bytes = read_uri(self.path, &self.base, uri)?;
+                let bytes = read_uri(self.source, self.path, &self.base, uri)?;
                 Some(decode_texture_bytes(
                     &bytes,
                     &embedded_name,
@@ -728,7 +834,12 @@ impl Loader<'_> {
             }
             gltf::image::Source::Uri { uri, .. } => {
                 let file = uri_path(&self.base, uri);
-                match load_texture_file(&file, srgb, &self.limits) {
+                match load_texture_from(
+                    self.source,
+                    &file,
+                    TextureRole::Color { srgb },
+                    &self.limits,
+                ) {
                     Ok(t) => Some(t),
                     Err(SceneError::MissingFile { path }) => {
                         self.warn(format!(
@@ -1098,6 +1209,92 @@ mod tests {
         let e = load_scene(&dir.join("absent.glb"), &LoadOptions::default()).unwrap_err();
         assert!(matches!(e, SceneError::MissingFile { .. }), "{e}");
         std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// Fuzz regression (gltf crash-0043fc3a): a POSITION attribute naming a missing accessor panicked
+    /// inside gltf-json's validation.
+    #[test]
+    fn json_the_gltf_crate_panics_on_is_an_error_or_repaired() {
+        use crate::mesh::load_scene_from;
+        use crate::source::MemoryFiles;
+        let json = r#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":5}}]}]}"#;
+        let files = MemoryFiles::new().with("d/p.gltf", json);
+        let e =
+            load_scene_from(&files, Path::new("d/p.gltf"), &LoadOptions::default()).unwrap_err();
+        assert!(matches!(e, SceneError::Gltf { .. }), "{e}");
+        assert_eq!(
+            e.to_string(),
+            "d/p.gltf: malformed glTF: meshes[0].primitives[0].attributes.POSITION: accessor 5 does \
+             not exist (there are 0)"
+        );
+        // Fuzz regression (gltf crash-f2e47ac7): an image in a buffer view without a mimeType panicked
+        // in gltf's Image::source; it is now decoded by content, with a warning. Neither uri nor view,
+        // or a camera without its projection object, are errors.
+        let png = {
+            let mut out = std::io::Cursor::new(Vec::new());
+            image::DynamicImage::ImageRgb8(image::RgbImage::new(1, 1))
+                .write_to(&mut out, image::ImageFormat::Png)
+                .unwrap();
+            out.into_inner()
+        };
+        let full: Vec<u8> = TRI.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+        let mut bytes = full.clone();
+        bytes.extend_from_slice(&png);
+        let json = triangle_gltf(TRI, None, "")
+            .replace(&base64_encode(&full), &base64_encode(&bytes))
+            .replace(
+                r#""buffers":[{"byteLength":36"#,
+                &format!(r#""buffers":[{{"byteLength":{}"#, bytes.len()),
+            )
+            .replace(
+                r#""bufferViews":[{"buffer":0,"byteLength":36}]"#,
+                &format!(
+                    r#""bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":{}}}],
+                    "images":[{{"bufferView":1}}],"textures":[{{"source":0}}]"#,
+                    png.len()
+                ),
+            )
+            .replace(
+                r#""baseColorFactor":[1,0.5,0.25,1]"#,
+                r#""baseColorFactor":[1,0.5,0.25,1],"baseColorTexture":{"index":0}"#,
+            );
+        let files = MemoryFiles::new().with("d/i.gltf", json.clone());
+        let s = load_scene_from(&files, Path::new("d/i.gltf"), &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.textures.len(), 1);
+        assert!(
+            s.warnings[0]
+                .starts_with("d/i.gltf: images[0] is in a buffer view but has no mimeType"),
+            "{:?}",
+            s.warnings
+        );
+        let files = MemoryFiles::new().with("d/i.gltf", json.replace(r#"{"bufferView":1}"#, "{}"));
+        let e =
+            load_scene_from(&files, Path::new("d/i.gltf"), &LoadOptions::default()).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("images[0] has neither a uri nor a bufferView"),
+            "{e}"
+        );
+        let json = r#"{"asset":{"version":"2.0"},"cameras":[{"type":"perspective","orthographic":{"xmag":1,"ymag":1,"zfar":10,"znear":1}}]}"#;
+        let files = MemoryFiles::new().with("d/c.gltf", json);
+        let e =
+            load_scene_from(&files, Path::new("d/c.gltf"), &LoadOptions::default()).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("cameras[0] lacks the projection object"),
+            "{e}"
+        );
+        // Other dangling indices are caught by the validation itself.
+        let json = r#"{"asset":{"version":"2.0"},"nodes":[{"mesh":3}]}"#;
+        let files = MemoryFiles::new().with("d/n.gltf", json);
+        let e =
+            load_scene_from(&files, Path::new("d/n.gltf"), &LoadOptions::default()).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("d/n.gltf: malformed glTF: invalid glTF"),
+            "{e}"
+        );
     }
 
     #[test]

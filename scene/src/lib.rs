@@ -15,4 +15,5 @@ pub mod mesh;
 pub mod obj_loader;
 pub mod pack;
 pub mod procedural;
+pub mod source;
 pub mod texture;

@@ -9,6 +9,7 @@ use fovea_core::scene::{Light, Material};
 use glam::Vec3;
 
 use crate::error::SceneError;
+use crate::source::{FileSource, Filesystem};
 pub use crate::texture::Texture;
 use crate::texture::TextureLimits;
 
@@ -36,7 +37,15 @@ pub struct LoadOptions {
     pub max_texture_dimension: u32,
     /// Largest allocation an image decoder may make and largest RGBA8 texture, in bytes (default 1 GiB).
     pub max_texture_bytes: u64,
+    /// Most vertices a scene may have (default 2^28). Checked before the vertex arrays are allocated, so
+    /// that a small file declaring a huge sparse glTF accessor cannot exhaust memory.
+    pub max_vertices: u64,
+    /// Most triangles a scene may have (default 2^28; the BVH needs fewer than 2^31).
+    pub max_triangles: u64,
 }
+
+/// Default of [`LoadOptions::max_vertices`] and [`LoadOptions::max_triangles`].
+pub const DEFAULT_MAX_ELEMENTS: u64 = 1 << 28;
 
 impl Default for LoadOptions {
     fn default() -> Self {
@@ -45,11 +54,32 @@ impl Default for LoadOptions {
             mtl_override: None,
             max_texture_dimension: limits.max_dimension,
             max_texture_bytes: limits.max_bytes,
+            max_vertices: DEFAULT_MAX_ELEMENTS,
+            max_triangles: DEFAULT_MAX_ELEMENTS,
         }
     }
 }
 
 impl LoadOptions {
+    /// [`SceneError::TooLarge`] if `vertices` or `triangles` exceed the limits (or 32-bit indices).
+    pub fn check_size(&self, file: &Path, vertices: u64, triangles: u64) -> Result<(), SceneError> {
+        let max_vertices = self.max_vertices.min(u64::from(u32::MAX));
+        let max_triangles = self.max_triangles.min(u64::from(u32::MAX / 2 - 1));
+        if vertices > max_vertices {
+            return Err(SceneError::TooLarge {
+                path: file.to_owned(),
+                message: format!("{vertices} vertices; the limit is {max_vertices}"),
+            });
+        }
+        if triangles > max_triangles {
+            return Err(SceneError::TooLarge {
+                path: file.to_owned(),
+                message: format!("{triangles} triangles; the limit is {max_triangles}"),
+            });
+        }
+        Ok(())
+    }
+
     /// The texture decoding limits of these options.
     #[must_use]
     pub fn texture_limits(&self) -> TextureLimits {
@@ -129,11 +159,13 @@ impl LoadedScene {
     /// warnings and errors.
     ///
     /// - an index `>= positions.len()` or a material index `>= materials.len()` is an error;
-    /// - triangles with a non-finite vertex position are removed (one warning with the count) and the
-    ///   non-finite positions, now unused, are zeroed;
-    /// - non-finite normals and UVs become zero (one warning each with the count); other normals are
-    ///   normalised;
-    /// - zero-area triangles are kept, but counted in a warning if they are emissive;
+    /// - triangles using a vertex with a non-finite position, normal or texture coordinate are skipped
+    ///   (one warning per kind with the counts) and those attributes, now unused, are zeroed; other
+    ///   normals are normalised;
+    /// - degenerate triangles (zero area, or an area that overflows `f32`) are skipped, with a warning
+    ///   that counts them and how many of them were emitters;
+    /// - non-finite or out-of-range material parameters are replaced by defaults, punctual lights with
+    ///   non-finite or negative values are dropped, and an unusable camera is dropped (warnings);
     /// - a scene without any triangle left is [`SceneError::Empty`].
     pub fn validate(&mut self, file: &Path) -> Result<(), SceneError> {
         let n = self.positions.len();
@@ -174,6 +206,10 @@ impl LoadedScene {
                 ),
             });
         }
+        if self.material_names.len() != self.materials.len() {
+            self.material_names
+                .resize(self.materials.len(), String::new());
+        }
         if !self.normals.is_empty() && self.normals.len() != n {
             self.warnings.push(format!(
                 "{name}: {} normals for {n} vertices; normals ignored",
@@ -188,40 +224,102 @@ impl LoadedScene {
             ));
             self.uvs.clear();
         }
+        self.sanitize_materials(file);
+        self.sanitize_lights_and_camera(file);
+        let total = self.triangles.len();
 
-        // Non-finite positions: drop the triangles that use them, then zero the (now unused) positions.
-        let finite = |p: &[f32; 3]| p.iter().all(|c| c.is_finite());
-        if !self.positions.iter().all(finite) {
-            let before = self.triangles.len();
-            let keep: Vec<bool> = self
-                .triangles
+        // Per vertex: 0 = fine, 1 = non-finite position, 2 = normal, 3 = texture coordinate.
+        let finite3 = |p: &[f32; 3]| p.iter().all(|c| c.is_finite());
+        let mut bad = vec![0u8; n];
+        let mut bad_vertices = [0usize; 4];
+        for (i, flag) in bad.iter_mut().enumerate() {
+            *flag = if !finite3(&self.positions[i]) {
+                1
+            } else if !self.normals.is_empty() && !finite3(&self.normals[i]) {
+                2
+            } else if !self.uvs.is_empty() && !self.uvs[i].iter().all(|c| c.is_finite()) {
+                3
+            } else {
+                0
+            };
+            bad_vertices[*flag as usize] += 1;
+        }
+        let mut skipped = [0usize; 4];
+        let mut degenerate = 0usize;
+        let mut degenerate_emissive = 0usize;
+        let mut keep = Vec::with_capacity(total);
+        for (t, &m) in self.triangles.iter().zip(&self.triangle_materials) {
+            // The worst (lowest non-zero) kind among the three vertices.
+            let kind = t
                 .iter()
-                .map(|t| t.iter().all(|&v| finite(&self.positions[v as usize])))
-                .collect();
+                .map(|&v| bad[v as usize])
+                .filter(|&k| k != 0)
+                .min()
+                .unwrap_or(0);
+            if kind != 0 {
+                skipped[kind as usize] += 1;
+                keep.push(false);
+                continue;
+            }
+            let p0 = Vec3::from(self.positions[t[0] as usize]);
+            let p1 = Vec3::from(self.positions[t[1] as usize]);
+            let p2 = Vec3::from(self.positions[t[2] as usize]);
+            let cross = (p1 - p0).cross(p2 - p0);
+            if cross == Vec3::ZERO || !cross.is_finite() {
+                degenerate += 1;
+                if self.materials[m as usize].is_emissive() {
+                    degenerate_emissive += 1;
+                }
+                keep.push(false);
+                continue;
+            }
+            keep.push(true);
+        }
+        if keep.iter().any(|&k| !k) {
             let mut flags = keep.iter();
             self.triangles.retain(|_| *flags.next().unwrap_or(&false));
             let mut flags = keep.iter();
             self.triangle_materials
                 .retain(|_| *flags.next().unwrap_or(&false));
-            let skipped = before - self.triangles.len();
-            let bad_vertices = self.positions.iter().filter(|p| !finite(p)).count();
-            for p in &mut self.positions {
-                if !finite(p) {
-                    *p = [0.0; 3];
-                }
+        }
+        for (kind, what) in [(1, "positions"), (2, "normals"), (3, "texture coordinates")] {
+            if bad_vertices[kind] > 0 {
+                self.warnings.push(format!(
+                    "{name}: {} vertices with non-finite {what}; {} triangles using them skipped",
+                    bad_vertices[kind], skipped[kind]
+                ));
             }
+        }
+        if degenerate > 0 {
             self.warnings.push(format!(
-                "{name}: {bad_vertices} vertices with non-finite positions; {skipped} triangles using them skipped"
+                "{name}: {degenerate} degenerate triangles (zero or non-finite area) skipped, \
+                 {degenerate_emissive} of them emissive"
             ));
         }
-
-        let mut bad_normals = 0usize;
+        // Zero the non-finite attributes (no kept triangle uses them), normalise the rest.
+        for (i, &flag) in bad.iter().enumerate() {
+            if flag == 0 {
+                continue;
+            }
+            if !finite3(&self.positions[i]) {
+                self.positions[i] = [0.0; 3];
+            }
+            if let Some(nrm) = self.normals.get_mut(i) {
+                if !finite3(nrm) {
+                    *nrm = [0.0; 3];
+                }
+            }
+            if let Some(uv) = self.uvs.get_mut(i) {
+                if !uv.iter().all(|c| c.is_finite()) {
+                    *uv = [0.0; 2];
+                }
+            }
+        }
         for nrm in &mut self.normals {
             let v = Vec3::from(*nrm);
-            if !v.is_finite() {
-                bad_normals += 1;
-                *nrm = [0.0; 3];
-            } else if v != Vec3::ZERO {
+            if v != Vec3::ZERO {
+                // Scale first so that huge or tiny (finite) normals do not overflow or underflow.
+                let v = v / v.abs().max_element();
                 let len = v.length();
                 *nrm = if len > 0.0 && len.is_finite() {
                     (v / len).to_array()
@@ -230,63 +328,133 @@ impl LoadedScene {
                 };
             }
         }
-        if bad_normals > 0 {
-            self.warnings.push(format!(
-                "{name}: {bad_normals} non-finite normals replaced by zero (no normal)"
-            ));
-        }
-        let mut bad_uvs = 0usize;
-        for uv in &mut self.uvs {
-            if !(uv[0].is_finite() && uv[1].is_finite()) {
-                bad_uvs += 1;
-                *uv = [0.0; 2];
-            }
-        }
-        if bad_uvs > 0 {
-            self.warnings.push(format!(
-                "{name}: {bad_uvs} non-finite texture coordinates replaced by zero"
-            ));
-        }
-
-        let degenerate_emissive = self
-            .triangles
-            .iter()
-            .zip(&self.triangle_materials)
-            .filter(|(t, &m)| {
-                if !self.materials[m as usize].is_emissive() {
-                    return false;
-                }
-                let p0 = Vec3::from(self.positions[t[0] as usize]);
-                let p1 = Vec3::from(self.positions[t[1] as usize]);
-                let p2 = Vec3::from(self.positions[t[2] as usize]);
-                (p1 - p0).cross(p2 - p0).length_squared() == 0.0
-            })
-            .count();
-        if degenerate_emissive > 0 {
-            self.warnings.push(format!(
-                "{name}: {degenerate_emissive} emissive triangles have zero area (they emit nothing)"
-            ));
-        }
 
         if self.triangles.is_empty() {
+            let detail = if total == 0 {
+                String::new()
+            } else {
+                format!(
+                    " (all {total} were skipped: {} with non-finite positions, {} normals, \
+                     {} texture coordinates, {degenerate} degenerate)",
+                    skipped[1], skipped[2], skipped[3]
+                )
+            };
             return Err(SceneError::Empty {
                 path: file.to_owned(),
+                detail,
             });
         }
         Ok(())
+    }
+
+    /// Replaces non-finite material parameters by defaults and clamps the others to their ranges (one
+    /// warning per material that needed it).
+    fn sanitize_materials(&mut self, file: &Path) {
+        for (i, m) in self.materials.iter_mut().enumerate() {
+            let mut fixed: Vec<&str> = Vec::new();
+            let mut fix = |v: &mut f32, lo: f32, hi: f32, default: f32, what: &'static str| {
+                if !v.is_finite() {
+                    *v = default;
+                    fixed.push(what);
+                } else if *v < lo || *v > hi {
+                    *v = v.clamp(lo, hi);
+                    fixed.push(what);
+                }
+            };
+            for c in 0..3 {
+                fix(&mut m.base_color[c], 0.0, f32::MAX, 0.8, "base colour");
+                fix(&mut m.emission[c], 0.0, f32::MAX, 0.0, "emission");
+            }
+            fix(&mut m.base_color[3], 0.0, 1.0, 1.0, "opacity");
+            fix(&mut m.metallic, 0.0, 1.0, 0.0, "metallic");
+            fix(&mut m.roughness, 0.0, 1.0, 1.0, "roughness");
+            fix(&mut m.anisotropic, 0.0, 1.0, 0.0, "anisotropic");
+            fix(&mut m.specular, 0.0, 1.0, 0.5, "specular");
+            fix(&mut m.specular_tint, 0.0, 1.0, 0.0, "specular tint");
+            fix(&mut m.sheen, 0.0, 1.0, 0.0, "sheen");
+            fix(&mut m.sheen_tint, 0.0, 1.0, 0.0, "sheen tint");
+            fix(&mut m.clearcoat, 0.0, 1.0, 0.0, "clearcoat");
+            fix(&mut m.clearcoat_gloss, 0.0, 1.0, 0.0, "clearcoat gloss");
+            fix(&mut m.alpha_cutoff, 0.0, 1.0, 0.5, "alpha cutoff");
+            fix(&mut m.normal_scale, -1.0e6, 1.0e6, 1.0, "normal scale");
+            let mut seen = Vec::new();
+            fixed.retain(|w| {
+                let new = !seen.contains(w);
+                seen.push(*w);
+                new
+            });
+            if !fixed.is_empty() {
+                let label = self.material_names.get(i).map_or("", String::as_str);
+                self.warnings.push(format!(
+                    "{}: material {i} ({label:?}): invalid {}; replaced by defaults or clamped",
+                    file.display(),
+                    fixed.join(", ")
+                ));
+            }
+        }
+    }
+
+    /// Drops punctual lights with non-finite or negative values and a camera with a non-finite pose or
+    /// a field of view outside (0, 180) degrees (warnings).
+    fn sanitize_lights_and_camera(&mut self, file: &Path) {
+        let before = self.punctual_lights.len();
+        self.punctual_lights.retain(|l| {
+            let all = l
+                .position
+                .iter()
+                .chain(&l.direction)
+                .chain(&l.intensity)
+                .all(|c| c.is_finite());
+            all && l.intensity[..3].iter().all(|&c| c >= 0.0)
+        });
+        let dropped = before - self.punctual_lights.len();
+        if dropped > 0 {
+            self.warnings.push(format!(
+                "{}: {dropped} lights with non-finite or negative values dropped",
+                file.display()
+            ));
+        }
+        if let Some(c) = &mut self.camera {
+            let finite = c
+                .position
+                .iter()
+                .chain(&c.forward)
+                .chain(&c.up)
+                .all(|v| v.is_finite());
+            let fov_ok = c.yfov_radians > 0.0 && c.yfov_radians < std::f32::consts::PI;
+            if !finite || !fov_ok || Vec3::from(c.forward) == Vec3::ZERO {
+                self.warnings.push(format!(
+                    "{}: the scene camera has a non-finite pose or a field of view outside (0, 180) \
+                     degrees; ignored",
+                    file.display()
+                ));
+                self.camera = None;
+            } else if c.aspect_ratio.is_some_and(|a| !(a > 0.0 && a.is_finite())) {
+                c.aspect_ratio = None;
+            }
+        }
     }
 }
 
 /// Loads a scene file, choosing the loader by extension (case-insensitive): `.gltf` / `.glb` →
 /// [`crate::gltf_loader::load_gltf`], `.obj` → [`crate::obj_loader::load_obj`].
 pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    load_scene_from(&Filesystem, path, options)
+}
+
+/// [`load_scene`] reading the scene file and every file it refers to from `source`.
+pub fn load_scene_from(
+    source: &dyn FileSource,
+    path: &Path,
+    options: &LoadOptions,
+) -> Result<LoadedScene, SceneError> {
     let extension = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     match extension.as_str() {
-        "gltf" | "glb" => crate::gltf_loader::load_gltf(path, options),
-        "obj" => crate::obj_loader::load_obj(path, options),
+        "gltf" | "glb" => crate::gltf_loader::load_gltf_from(source, path, options),
+        "obj" => crate::obj_loader::load_obj_from(source, path, options),
         _ => Err(SceneError::UnknownExtension {
             path: path.to_owned(),
             extension,
@@ -326,20 +494,47 @@ mod tests {
         assert_eq!(s.bounds(), ([0.0, 0.0, 0.0], [1.0, 1.0, 0.0]));
     }
 
-    #[test]
-    fn validate_skips_nan_triangles_and_zeroes_bad_attributes() {
+    /// Two quads side by side: vertices 0-5, triangles 0-3.
+    fn strip_scene() -> LoadedScene {
         let mut s = quad_scene();
-        s.positions[3] = [f32::NAN, 0.0, 0.0];
-        s.normals[1] = [f32::INFINITY, 0.0, 0.0];
-        s.uvs[2] = [f32::NAN, 0.5];
+        s.positions.extend([[2.0, 0.0, 0.0], [2.0, 1.0, 0.0]]);
+        s.normals.extend([[0.0, 0.0, 1.0]; 2]);
+        s.uvs.extend([[0.0, 0.0]; 2]);
+        s.triangles.extend([[1, 4, 5], [1, 5, 2]]);
+        s.triangle_materials.extend([0, 0]);
+        s
+    }
+
+    #[test]
+    fn validate_skips_triangles_with_non_finite_attributes() {
+        let mut s = strip_scene();
+        s.positions[3] = [f32::NAN, 0.0, 0.0]; // triangle 1
+        s.normals[4] = [f32::INFINITY, 0.0, 0.0]; // triangle 2
+        s.uvs[5] = [0.5, f32::NEG_INFINITY]; // triangles 2 and 3 (2 is already counted for its normal)
         s.validate(Path::new("q.obj")).unwrap();
         assert_eq!(s.triangles, vec![[0, 1, 2]]);
         assert_eq!(s.triangle_materials, vec![0]);
         assert_eq!(s.positions[3], [0.0; 3]);
-        assert_eq!(s.normals[1], [0.0; 3]);
-        assert_eq!(s.uvs[2], [0.0; 2]);
+        assert_eq!(s.normals[4], [0.0; 3]);
+        assert_eq!(s.uvs[5], [0.0; 2]);
         assert_eq!(s.warnings.len(), 3, "{:?}", s.warnings);
-        assert!(s.warnings[0].contains("q.obj") && s.warnings[0].contains("1 triangles"));
+        assert_eq!(
+            s.warnings[0],
+            "q.obj: 1 vertices with non-finite positions; 1 triangles using them skipped"
+        );
+        assert_eq!(
+            s.warnings[1],
+            "q.obj: 1 vertices with non-finite normals; 1 triangles using them skipped"
+        );
+        assert_eq!(
+            s.warnings[2],
+            "q.obj: 1 vertices with non-finite texture coordinates; 1 triangles using them skipped"
+        );
+        assert!(s
+            .positions
+            .iter()
+            .chain(&s.normals)
+            .all(|p| p.iter().all(|c| c.is_finite())));
     }
 
     #[test]
@@ -349,25 +544,124 @@ mod tests {
         let e = s.validate(Path::new("q.obj")).unwrap_err();
         assert!(matches!(e, SceneError::FaceIndexOutOfRange { .. }), "{e}");
         let mut s = quad_scene();
+        s.triangle_materials[0] = 1;
+        let e = s.validate(Path::new("q.obj")).unwrap_err();
+        assert!(e.to_string().contains("material 1"), "{e}");
+        let mut s = quad_scene();
         s.positions[0] = [f32::NAN; 3];
         let e = s.validate(Path::new("q.obj")).unwrap_err();
         assert!(matches!(e, SceneError::Empty { .. }), "{e}");
-        assert!(e.to_string().contains("q.obj"));
+        assert_eq!(
+            e.to_string(),
+            "q.obj: the scene has no valid triangles (all 2 were skipped: 2 with non-finite \
+             positions, 0 normals, 0 texture coordinates, 0 degenerate)"
+        );
+        let mut s = LoadedScene::default();
+        let e = s.validate(Path::new("e.gltf")).unwrap_err();
+        assert_eq!(e.to_string(), "e.gltf: the scene has no valid triangles");
     }
 
     #[test]
-    fn degenerate_emissive_triangles_are_counted() {
+    fn degenerate_triangles_and_zero_area_emitters_are_skipped_and_counted() {
         let mut s = quad_scene();
-        s.materials[0].emission = [1.0, 1.0, 1.0, 0.0];
-        s.triangles.push([0, 0, 1]);
-        s.triangle_materials.push(0);
+        s.materials.push(Material {
+            emission: [1.0, 1.0, 1.0, 0.0],
+            ..Material::default()
+        });
+        s.material_names.push("light".into());
+        // Repeated vertex, collinear vertices (an emitter), and an area that overflows f32.
+        s.positions
+            .extend([[2.0, 0.0, 0.0], [3e19, 0.0, 0.0], [0.0, 3e19, 0.0]]);
+        s.normals.extend([[0.0, 0.0, 1.0]; 3]);
+        s.uvs.extend([[0.0; 2]; 3]);
+        s.triangles.extend([[0, 0, 1], [0, 1, 4], [0, 5, 6]]);
+        s.triangle_materials.extend([0, 1, 0]);
         s.validate(Path::new("q.obj")).unwrap();
-        assert_eq!(s.triangle_count(), 3);
-        assert_eq!(s.emissive_triangle_count(), 3);
-        assert!(s
-            .warnings
-            .iter()
-            .any(|w| w.contains("1 emissive triangles have zero area")));
+        assert_eq!(s.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(s.emissive_triangle_count(), 0);
+        assert_eq!(
+            s.warnings,
+            vec![
+                "q.obj: 3 degenerate triangles (zero or non-finite area) skipped, 1 of them emissive"
+                    .to_owned()
+            ]
+        );
+        // Only degenerate triangles: an empty scene that says why.
+        let mut s = quad_scene();
+        s.triangles = vec![[0, 0, 1]];
+        s.triangle_materials = vec![0];
+        let e = s.validate(Path::new("q.obj")).unwrap_err();
+        assert!(e.to_string().contains("1 degenerate"), "{e}");
+    }
+
+    #[test]
+    fn invalid_materials_lights_and_camera_are_repaired_or_dropped() {
+        use fovea_core::scene::LIGHT_POINT;
+        let mut s = quad_scene();
+        s.materials[0].base_color = [f32::NAN, -1.0, 0.5, 2.0];
+        s.materials[0].emission = [f32::INFINITY, 1.0, -3.0, 0.0];
+        s.materials[0].roughness = 7.0;
+        s.punctual_lights = vec![
+            Light {
+                kind: LIGHT_POINT,
+                intensity: [1.0, 1.0, 1.0, 0.0],
+                ..Light::default()
+            },
+            Light {
+                kind: LIGHT_POINT,
+                position: [f32::NAN, 0.0, 0.0, 0.0],
+                intensity: [1.0, 1.0, 1.0, 0.0],
+                ..Light::default()
+            },
+            Light {
+                kind: LIGHT_POINT,
+                intensity: [-1.0, 1.0, 1.0, 0.0],
+                ..Light::default()
+            },
+        ];
+        s.camera = Some(CameraDesc {
+            position: [0.0, 0.0, 5.0],
+            forward: [0.0, 0.0, -1.0],
+            up: [0.0, 1.0, 0.0],
+            yfov_radians: 4.0,
+            aspect_ratio: None,
+        });
+        s.validate(Path::new("q.obj")).unwrap();
+        let m = &s.materials[0];
+        assert_eq!(m.base_color, [0.8, 0.0, 0.5, 1.0]);
+        assert_eq!(&m.emission[..3], &[0.0, 1.0, 0.0]);
+        assert_eq!(m.roughness, 1.0);
+        assert_eq!(s.punctual_lights.len(), 1);
+        assert!(s.camera.is_none());
+        let all = s.warnings.join("\n");
+        assert!(
+            all.contains(
+                "q.obj: material 0 (\"m\"): invalid base colour, emission, opacity, roughness"
+            ),
+            "{all}"
+        );
+        assert!(
+            all.contains("2 lights with non-finite or negative values dropped"),
+            "{all}"
+        );
+        assert!(all.contains("camera"), "{all}");
+    }
+
+    #[test]
+    fn size_limits_are_errors() {
+        let options = LoadOptions {
+            max_vertices: 10,
+            max_triangles: 5,
+            ..LoadOptions::default()
+        };
+        assert!(options.check_size(Path::new("a.obj"), 10, 5).is_ok());
+        let e = options.check_size(Path::new("a.obj"), 11, 1).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "a.obj: scene too large: 11 vertices; the limit is 10"
+        );
+        let e = options.check_size(Path::new("a.obj"), 1, 6).unwrap_err();
+        assert!(matches!(e, SceneError::TooLarge { .. }), "{e}");
     }
 
     #[test]

@@ -30,7 +30,7 @@
 //! as OBJ has no double-sided flag.
 use std::cell::RefCell;
 use std::collections::HashMap;
-use std::io::{BufReader, Cursor, Read};
+use std::io::{Cursor, Read};
 use std::path::{Path, PathBuf};
 
 use fovea_core::scene::{Material, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
@@ -39,7 +39,8 @@ use rayon::prelude::*;
 
 use crate::error::SceneError;
 use crate::mesh::{LoadOptions, LoadedScene};
-use crate::texture::{load_texture_file_as, Texture, TextureRole};
+use crate::source::{FileSource, Filesystem};
+use crate::texture::{load_texture_from, Texture, TextureRole};
 
 /// Rec. 709 luminance.
 #[inline]
@@ -67,10 +68,72 @@ struct MtlLog {
     calls: usize,
 }
 
+/// Checks the colour statements (`Ka`, `Kd`, `Ks`, `Ke`) of an MTL file before tobj parses it: tobj
+/// panics on fewer than three values. One value is the MTL shorthand for grey (`Kd 0.5` = `Kd 0.5 0.5
+/// 0.5`) and is expanded; none or two values are an error naming the line.
+fn check_mtl_colors(text: &str) -> Result<std::borrow::Cow<'_, str>, String> {
+    let is_color = |t: &str| matches!(t, "Ka" | "Kd" | "Ks" | "Ke");
+    let mut expanded: Option<String> = None;
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let key = words.next().unwrap_or("");
+        let values: Vec<&str> = if is_color(key) {
+            words.collect()
+        } else {
+            Vec::new()
+        };
+        let replacement = match values.len() {
+            _ if !is_color(key) => None,
+            0 | 2 => {
+                return Err(format!(
+                    "line {}: {key} needs 3 numbers (or 1 for grey), got {:?}",
+                    i + 1,
+                    line.trim()
+                ))
+            }
+            1 => Some(format!("{key} {0} {0} {0}", values[0])),
+            _ => None,
+        };
+        if replacement.is_some() && expanded.is_none() {
+            // Copy the lines before this one on the first change.
+            let mut out = String::with_capacity(text.len() + 64);
+            for l in text.lines().take(i) {
+                out.push_str(l);
+                out.push('\n');
+            }
+            expanded = Some(out);
+        }
+        if let Some(out) = &mut expanded {
+            out.push_str(replacement.as_deref().unwrap_or(line));
+            out.push('\n');
+        }
+    }
+    Ok(match expanded {
+        Some(s) => std::borrow::Cow::Owned(s),
+        None => std::borrow::Cow::Borrowed(text),
+    })
+}
+
 /// Reads one MTL file for tobj, logging what happened.
-fn read_mtl(file: &Path, log: &RefCell<MtlLog>) -> tobj::MTLLoadResult {
-    let result = match std::fs::File::open(file) {
-        Ok(f) => tobj::load_mtl_buf(&mut BufReader::new(f)),
+fn read_mtl(source: &dyn FileSource, file: &Path, log: &RefCell<MtlLog>) -> tobj::MTLLoadResult {
+    let result = match source.read(file) {
+        Ok(bytes) => {
+            // Not UTF-8 (e.g. Latin-1 names or comments): replace the odd bytes rather than fail.
+            let text = String::from_utf8_lossy(&bytes);
+            match check_mtl_colors(&text) {
+                Ok(text) => tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes())),
+                Err(message) => {
+                    let mut log = log.borrow_mut();
+                    if log.error.is_none() {
+                        log.error = Some(SceneError::Mtl {
+                            path: file.to_owned(),
+                            message,
+                        });
+                    }
+                    return Err(tobj::LoadError::MaterialParseError);
+                }
+            }
+        }
         Err(e) => {
             log.borrow_mut().warnings.push(format!(
                 "{}: material library not found or unreadable ({e}); default materials used",
@@ -96,7 +159,19 @@ fn read_mtl(file: &Path, log: &RefCell<MtlLog>) -> tobj::MTLLoadResult {
 
 /// Loads an `.obj` file and its materials.
 pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
-    let file = std::fs::File::open(path).map_err(|e| SceneError::from_io(path, e))?;
+    load_obj_from(&Filesystem, path, options)
+}
+
+/// Loads an `.obj` file and its materials, reading the OBJ, its MTL libraries and textures from
+/// `source` (paths as for [`load_obj`]: MTL files relative to the OBJ, textures relative to their MTL).
+pub fn load_obj_from(
+    source: &dyn FileSource,
+    path: &Path,
+    options: &LoadOptions,
+) -> Result<LoadedScene, SceneError> {
+    let bytes = source
+        .read(path)
+        .map_err(|e| SceneError::from_io(path, e))?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     // `..Default::default()` keeps this compiling when tobj's optional `merging`/`reordering` features
     // (more fields) are enabled by another crate.
@@ -109,9 +184,18 @@ pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedScene, Scene
         ..Default::default()
     };
     let log = RefCell::new(MtlLog::default());
-    let mut obj_reader = BufReader::with_capacity(1 << 20, file);
+    // Not UTF-8 (e.g. Latin-1 names or comments): replace the odd bytes rather than fail.
+    let text = match String::from_utf8_lossy(&bytes) {
+        std::borrow::Cow::Borrowed(_) => String::from_utf8(bytes).unwrap_or_default(),
+        std::borrow::Cow::Owned(s) => s,
+    };
+    let mut obj_reader = Cursor::new(text.as_bytes());
     let result = match &options.mtl_override {
         Some(mtl) => {
+            // An explicitly requested MTL must exist (one that `mtllib` names is only a warning).
+            if let Err(e) = source.read(mtl) {
+                return Err(SceneError::from_io(mtl, e));
+            }
             // Load the override exactly once, as if the OBJ began with `mtllib <override>`, and ignore the
             // OBJ's own `mtllib` lines.
             let mut reader = Cursor::new(&b"mtllib fovea-mtl-override\n"[..]).chain(obj_reader);
@@ -122,34 +206,42 @@ pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedScene, Scene
                     l.calls == 1
                 };
                 if first {
-                    read_mtl(mtl, &log)
+                    read_mtl(source, mtl, &log)
                 } else {
                     Ok((Vec::new(), Default::default()))
                 }
             })
         }
         None => tobj::load_obj_buf(&mut obj_reader, &load_options, |name| {
-            let name = PathBuf::from(name.to_string_lossy().replace('\\', "/"));
-            read_mtl(&dir.join(name), &log)
+            let name = name.to_string_lossy().replace('\\', "/");
+            if name.trim().is_empty() || name.ends_with('/') {
+                log.borrow_mut().warnings.push(format!(
+                    "{}: `mtllib` without a file name ({name:?}); ignored",
+                    path.display()
+                ));
+                return Err(tobj::LoadError::OpenFileFailed);
+            }
+            read_mtl(source, &dir.join(name), &log)
         }),
     };
     let log = log.into_inner();
-    let (models, materials) = result.map_err(|e| match e {
-        tobj::LoadError::FaceVertexOutOfBounds
-        | tobj::LoadError::FaceNormalOutOfBounds
-        | tobj::LoadError::FaceTexCoordOutOfBounds
-        | tobj::LoadError::FaceColorOutOfBounds => SceneError::FaceIndexOutOfRange {
-            path: path.to_owned(),
-            message: e.to_string(),
-        },
-        tobj::LoadError::ReadError => SceneError::Io {
-            path: path.to_owned(),
-            message: e.to_string(),
-        },
-        _ => SceneError::Obj {
-            path: path.to_owned(),
-            message: e.to_string(),
-        },
+    let (models, materials) = result.map_err(|e| {
+        // tobj does not say where; find the first line that fails the same way.
+        let message = match locate_obj_error(&text, &e) {
+            Some((line, content)) => format!("{e} at line {line}: {content:?}"),
+            None => e.to_string(),
+        };
+        let path = path.to_owned();
+        match e {
+            tobj::LoadError::FaceVertexOutOfBounds
+            | tobj::LoadError::FaceNormalOutOfBounds
+            | tobj::LoadError::FaceTexCoordOutOfBounds
+            | tobj::LoadError::FaceColorOutOfBounds => {
+                SceneError::FaceIndexOutOfRange { path, message }
+            }
+            tobj::LoadError::ReadError => SceneError::Io { path, message },
+            _ => SceneError::Obj { path, message },
+        }
     })?;
     if let Some(e) = log.error {
         return Err(e);
@@ -168,19 +260,14 @@ pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedScene, Scene
     }
     material_files.resize(materials.len(), path.to_owned());
 
-    convert_materials(&materials, &material_files, options, &mut scene)?;
+    convert_materials(source, &materials, &material_files, options, &mut scene)?;
     let default_material = scene.materials.len() as u32;
     let mut default_triangles = 0usize;
 
     // Geometry.
     let total_vertices: usize = models.iter().map(|m| m.mesh.positions.len() / 3).sum();
     let total_triangles: usize = models.iter().map(|m| m.mesh.indices.len() / 3).sum();
-    if total_vertices > u32::MAX as usize {
-        return Err(SceneError::Obj {
-            path: path.to_owned(),
-            message: "more than 2^32 vertices".to_owned(),
-        });
-    }
+    options.check_size(path, total_vertices as u64, total_triangles as u64)?;
     let any_normals = models.iter().any(|m| !m.mesh.normals.is_empty());
     let any_uvs = models.iter().any(|m| !m.mesh.texcoords.is_empty());
     scene.positions.reserve_exact(total_vertices);
@@ -275,6 +362,72 @@ pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedScene, Scene
     Ok(scene)
 }
 
+/// The first line (1-based, with its text) of an OBJ that tobj rejects with `error`, if it can be found
+/// again: a `v`/`vt`/`vn` statement whose numbers do not parse, a face with a malformed vertex, or a
+/// face referring to a vertex, texture coordinate or normal that is not (yet) defined.
+fn locate_obj_error(text: &str, error: &tobj::LoadError) -> Option<(usize, String)> {
+    use tobj::LoadError as E;
+    let numbers_ok = |words: &[&str], counts: &[usize]| {
+        counts.contains(&words.len()) && words.iter().all(|w| w.parse::<f32>().is_ok())
+    };
+    let mut counts = [0usize; 3]; // v, vt, vn defined so far
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let key = words.next().unwrap_or("");
+        let rest: Vec<&str> = words.collect();
+        let bad = match key {
+            "v" => {
+                counts[0] += 1;
+                matches!(error, E::PositionParseError | E::ColorParseError)
+                    && !numbers_ok(&rest, &[3, 4, 6])
+            }
+            "vt" => {
+                counts[1] += 1;
+                matches!(error, E::TexcoordParseError)
+                    && !(rest.len() >= 2 && rest[..2].iter().all(|w| w.parse::<f32>().is_ok()))
+            }
+            "vn" => {
+                counts[2] += 1;
+                matches!(error, E::NormalParseError)
+                    && !numbers_ok(&rest[..rest.len().min(3)], &[3])
+            }
+            "f" | "l" => rest.iter().any(|vertex| {
+                let parts: Vec<&str> = vertex.split('/').collect();
+                if parts.len() > 3 {
+                    return matches!(error, E::FaceParseError);
+                }
+                parts.iter().enumerate().any(|(k, p)| {
+                    if p.is_empty() {
+                        return false;
+                    }
+                    match p.parse::<i64>() {
+                        Err(_) => matches!(error, E::FaceParseError),
+                        Ok(x) => {
+                            let n = counts[k] as i64;
+                            let out = x == 0 || x > n || x < -n;
+                            out && matches!(
+                                (k, error),
+                                (0, E::FaceVertexOutOfBounds | E::FaceColorOutOfBounds)
+                                    | (1, E::FaceTexCoordOutOfBounds)
+                                    | (2, E::FaceNormalOutOfBounds)
+                            )
+                        }
+                    }
+                })
+            }),
+            _ => false,
+        };
+        if bad {
+            let mut content: String = line.trim().chars().take(80).collect();
+            if line.trim().chars().count() > 80 {
+                content.push_str("...");
+            }
+            return Some((i + 1, content));
+        }
+    }
+    None
+}
+
 /// Parses a numeric PBR-extension key (tobj keeps unknown keys as strings).
 fn param(m: &tobj::Material, key: &str, warnings: &mut Vec<String>, mtl: &Path) -> Option<f32> {
     let text = m.unknown_param.get(key)?;
@@ -309,6 +462,7 @@ fn texture_path(dir: &Path, statement: &str) -> PathBuf {
 
 /// Converts tobj materials (see the module table), decoding their textures in parallel.
 fn convert_materials(
+    source: &dyn FileSource,
     materials: &[tobj::Material],
     mtl_files: &[PathBuf],
     options: &LoadOptions,
@@ -341,7 +495,7 @@ fn convert_materials(
     let limits = options.texture_limits();
     let decoded: Vec<Result<Texture, SceneError>> = requests
         .par_iter()
-        .map(|(path, role)| load_texture_file_as(path, *role, &limits))
+        .map(|(path, role)| load_texture_from(source, path, *role, &limits))
         .collect();
     let mut slots: Vec<u32> = Vec::with_capacity(decoded.len());
     for (result, (path, _)) in decoded.into_iter().zip(&requests) {
@@ -681,6 +835,63 @@ mod tests {
         std::fs::remove_dir_all(dir).ok();
     }
 
+    /// Fuzz regression (obj crash-2f838015): tobj 4.0.5 panics on an MTL colour with fewer than three
+    /// values (`parse_float3` unwraps).
+    #[test]
+    fn mtl_fuzz_regressions_are_errors_or_warnings_not_panics() {
+        use crate::mesh::load_scene_from;
+        use crate::source::MemoryFiles;
+        let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+        let load = |mtl: &str| {
+            let files = MemoryFiles::new()
+                .with("d/s.obj", obj)
+                .with("d/m.mtl", mtl.to_owned());
+            load_scene_from(&files, Path::new("d/s.obj"), &LoadOptions::default())
+        };
+        for (mtl, line) in [("newmtl a\nKs\n", 2), ("newmtl a\nKd 1 1 1\n  Ke 0 0\n", 3)] {
+            let e = load(mtl).unwrap_err();
+            assert!(matches!(e, SceneError::Mtl { .. }), "{e}");
+            assert!(
+                e.to_string()
+                    .starts_with(&format!("d/m.mtl: malformed MTL: line {line}: K")),
+                "{e}"
+            );
+        }
+        // Fuzz regression (obj crash-386a6321): `mtllib ` without a name read the OBJ's folder as an MTL.
+        let files = MemoryFiles::new().with("d/e.obj", format!("mtllib \n{obj}"));
+        let s = load_scene_from(&files, Path::new("d/e.obj"), &LoadOptions::default()).unwrap();
+        assert!(
+            s.warnings[0].starts_with("d/e.obj: `mtllib` without a file name"),
+            "{:?}",
+            s.warnings
+        );
+        // One value is grey; Latin-1 bytes in names and comments are tolerated.
+        let s = load("# caf\u{e9}\nnewmtl a\nKd 0.25\nKe 2\n").unwrap();
+        assert_eq!(s.materials[0].base_color, [0.25, 0.25, 0.25, 1.0]);
+        assert_eq!(&s.materials[0].emission[..3], &[2.0, 2.0, 2.0]);
+        let files = MemoryFiles::new().with(
+            "d/l.obj",
+            b"# caf\xe9 (Latin-1)\nv 0 0 0\nv 1 0 0\nv 0 1 0\ng \xe9\nf 1 2 3\n".to_vec(),
+        );
+        let s = load_scene_from(&files, Path::new("d/l.obj"), &LoadOptions::default()).unwrap();
+        assert_eq!(s.triangle_count(), 1);
+    }
+
+    #[test]
+    fn obj_errors_name_the_line() {
+        use tobj::LoadError as E;
+        let text = "v 0 0 0\nv 1 0 0\nvt 0 x\nvn 0 0\nf 1 2 -3\nf 1/5 2/1 1/1\nf 1//2 2//1 1//1\n";
+        let at = |e: E| locate_obj_error(text, &e).map(|(l, _)| l);
+        assert_eq!(at(E::TexcoordParseError), Some(3));
+        assert_eq!(at(E::NormalParseError), Some(4));
+        assert_eq!(at(E::FaceVertexOutOfBounds), Some(5));
+        assert_eq!(at(E::FaceTexCoordOutOfBounds), Some(6));
+        assert_eq!(at(E::FaceNormalOutOfBounds), Some(7));
+        assert_eq!(at(E::FaceParseError), None);
+        let (line, content) = locate_obj_error("f 1 2 3/4/5/6", &E::FaceParseError).unwrap();
+        assert_eq!((line, content.as_str()), (1, "f 1 2 3/4/5/6"));
+    }
+
     #[test]
     fn map_d_from_luminance_and_override_without_mtllib() {
         let dir = temp_dir("mapd");
@@ -709,6 +920,14 @@ mod tests {
         assert_eq!((t.texel(0, 0)[3], t.texel(1, 0)[3]), (0, 255));
         assert!(s.uvs.is_empty() && s.normals.is_empty());
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        // A missing override is an error (a missing `mtllib` only a warning).
+        let missing = LoadOptions {
+            mtl_override: Some(dir.join("absent.mtl")),
+            ..LoadOptions::default()
+        };
+        let e = load_scene(&dir.join("b.obj"), &missing).unwrap_err();
+        assert!(matches!(e, SceneError::MissingFile { .. }), "{e}");
+        assert!(e.to_string().contains("absent.mtl: file not found"), "{e}");
         // A malformed MTL is an error naming it.
         std::fs::write(dir.join("o.mtl"), "newmtl leaf\nKd 0.2 zz\n").unwrap();
         let e = load_scene(&dir.join("b.obj"), &options).unwrap_err();

@@ -55,9 +55,23 @@ pub struct PackedScene {
 }
 
 impl PackedScene {
-    /// The borrowed view every core function takes.
+    /// The optional features the scene uses (derived from its materials, lights, environment and
+    /// vertex arrays; see `fovea_core::scene::features`).
+    pub fn features(&self) -> fovea_core::scene::FeatureFlags {
+        fovea_core::scene::FeatureFlags::of_scene(
+            &self.globals,
+            &self.materials,
+            &self.lights,
+            !self.normals.is_empty(),
+            !self.uvs.is_empty(),
+        )
+    }
+
+    /// The borrowed view every core function takes, with every feature on (the general path; see
+    /// [`SceneView::with_features`] for a specialised one).
     pub fn view(&self) -> SceneView<'_> {
         SceneView {
+            features: fovea_core::scene::FeatureFlags::ALL,
             globals: self.globals,
             nodes: &self.nodes,
             triangles: &self.triangles,
@@ -134,13 +148,16 @@ pub fn pack_scene(
             v2: position(t[2]),
         })
         .collect();
+    // Bounds of the vertices the triangles use (an unused far-away vertex must not move the camera).
     let mut bounds_min = Vec3::splat(f32::MAX);
     let mut bounds_max = Vec3::splat(f32::MIN);
-    for p in &positions {
-        bounds_min = bounds_min.min(Vec3::from(*p));
-        bounds_max = bounds_max.max(Vec3::from(*p));
+    for t in &triangles {
+        for &v in t {
+            bounds_min = bounds_min.min(Vec3::from(positions[v as usize]));
+            bounds_max = bounds_max.max(Vec3::from(positions[v as usize]));
+        }
     }
-    if positions.is_empty() {
+    if triangles.is_empty() {
         bounds_min = Vec3::ZERO;
         bounds_max = Vec3::ZERO;
     }
@@ -369,4 +386,42 @@ fn mean_texture_color(t: &crate::texture::Texture) -> Vec3 {
         sum += c.as_dvec3();
     }
     (sum / t.texels.len() as f64).as_vec3()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::BvhBuildOptions;
+
+    #[test]
+    fn bounds_ignore_unused_vertices_and_lights_are_normalised() {
+        let scene = LoadedScene {
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1e30, -1e30, 1e30],
+            ],
+            triangles: vec![[0, 1, 2]],
+            triangle_materials: vec![0],
+            materials: vec![Material {
+                emission: [2.0, 2.0, 2.0, 0.0],
+                ..Material::default()
+            }],
+            material_names: vec!["light".into()],
+            ..LoadedScene::default()
+        };
+        let packed = pack_scene(
+            scene,
+            &Environment::Constant([0.5; 3]),
+            &BvhBuildOptions::default(),
+        );
+        assert_eq!(packed.bounds_min, Vec3::ZERO);
+        assert_eq!(packed.bounds_max, Vec3::new(1.0, 1.0, 0.0));
+        assert_eq!(packed.lights.len(), 2);
+        let sum: f32 = packed.lights.iter().map(|l| l.pmf).sum();
+        assert!((sum - 1.0).abs() < 1e-6, "{sum}");
+        assert_eq!(packed.light_cdf.len(), 3);
+        assert_eq!(packed.light_cdf[2], 1.0);
+    }
 }

@@ -9,6 +9,7 @@ use std::path::Path;
 use image::{DynamicImage, ImageError, ImageReader};
 
 use crate::error::SceneError;
+use crate::source::{FileSource, Filesystem};
 
 /// A decoded texture, ready to be packed.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -81,11 +82,34 @@ pub enum TextureRole {
     Opacity,
 }
 
-fn decode_error(name: &str, e: ImageError) -> SceneError {
+/// The size an encoded image's header claims, for messages (`None` if it cannot be read).
+#[must_use]
+pub fn claimed_dimensions(bytes: &[u8]) -> Option<(u32, u32)> {
+    ImageReader::new(Cursor::new(bytes))
+        .with_guessed_format()
+        .ok()?
+        .into_dimensions()
+        .ok()
+}
+
+/// The message of a limits error: what the header claims and what the limits are.
+#[must_use]
+pub fn limits_message(bytes: &[u8], limits: &TextureLimits, detail: &str) -> String {
+    let claimed = match claimed_dimensions(bytes) {
+        Some((w, h)) => format!("the header claims {w}x{h} texels; "),
+        None => String::new(),
+    };
+    format!(
+        "{claimed}limits are {} texels per side and {} bytes ({detail})",
+        limits.max_dimension, limits.max_bytes
+    )
+}
+
+fn decode_error(name: &str, e: ImageError, bytes: &[u8], limits: &TextureLimits) -> SceneError {
     match e {
         ImageError::Limits(l) => SceneError::TextureTooLarge {
             path: name.into(),
-            message: l.to_string(),
+            message: limits_message(bytes, limits, &l.to_string()),
         },
         other => SceneError::Texture {
             path: name.into(),
@@ -117,7 +141,9 @@ fn decode_dynamic(
     l.max_image_height = Some(limits.max_dimension);
     l.max_alloc = Some(limits.max_bytes);
     reader.limits(l);
-    let image = reader.decode().map_err(|e| decode_error(name, e))?;
+    let image = reader
+        .decode()
+        .map_err(|e| decode_error(name, e, bytes, limits))?;
     let (w, h) = (image.width(), image.height());
     if w == 0 || h == 0 {
         return Err(SceneError::Texture {
@@ -208,14 +234,27 @@ pub fn decode_texture_bytes(
     decode_texture_bytes_as(bytes, name, TextureRole::Color { srgb }, limits)
 }
 
+/// Reads an image file from `source` and decodes it for `role`. A missing file is
+/// [`SceneError::MissingFile`].
+pub fn load_texture_from(
+    source: &dyn FileSource,
+    path: &Path,
+    role: TextureRole,
+    limits: &TextureLimits,
+) -> Result<Texture, SceneError> {
+    let bytes = source
+        .read(path)
+        .map_err(|e| SceneError::from_io(path, e))?;
+    decode_texture_bytes_as(&bytes, &path.display().to_string(), role, limits)
+}
+
 /// Reads and decodes an image file for `role`. A missing file is [`SceneError::MissingFile`].
 pub fn load_texture_file_as(
     path: &Path,
     role: TextureRole,
     limits: &TextureLimits,
 ) -> Result<Texture, SceneError> {
-    let bytes = std::fs::read(path).map_err(|e| SceneError::from_io(path, e))?;
-    decode_texture_bytes_as(&bytes, &path.display().to_string(), role, limits)
+    load_texture_from(&Filesystem, path, role, limits)
 }
 
 /// Reads and decodes an image file into an RGBA8 colour/data texture.

@@ -246,6 +246,7 @@ mod tests {
 
         fn view(&self) -> SceneView<'_> {
             SceneView {
+                features: fovea_core::scene::FeatureFlags::ALL,
                 globals: SceneGlobals::default(),
                 nodes: &self.bvh.nodes,
                 triangles: &self.triangles,

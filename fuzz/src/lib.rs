@@ -1,0 +1,205 @@
+//! Shared driver of the fuzz targets: split the input into a scene file and the files it refers to, load
+//! it from memory, then build the BVH, pack it and check the packed arrays' invariants and a few rays.
+//!
+//! Input layout: the scene file's bytes, optionally followed by [`SIDE_FILE_SEPARATOR`] and the bytes
+//! every other file the scene asks for (an MTL library, a glTF buffer or image, a texture) reads as.
+//! For OBJ, a second separator splits that tail into the MTL library (first) and every other file.
+use std::io;
+use std::path::{Path, PathBuf};
+
+use fovea_core::bvh::traverse::closest_hit;
+use fovea_core::geometry::Ray;
+use fovea_core::scene::INVALID_INDEX;
+use fovea_scene::bvh::{BvhBuildOptions, MAX_NODE_DEPTH};
+use fovea_scene::environment::Environment;
+use fovea_scene::mesh::{load_scene_from, LoadOptions};
+use fovea_scene::pack::{pack_scene, PackedScene};
+use fovea_scene::source::FileSource;
+use glam::Vec3;
+
+/// Separates the scene file from the files it refers to.
+pub const SIDE_FILE_SEPARATOR: &[u8] = b"\n#%FOVEA-FILE%#\n";
+
+/// Limits small enough that no input can make the pipeline allocate more than a few hundred MiB.
+pub fn fuzz_options() -> LoadOptions {
+    LoadOptions {
+        mtl_override: None,
+        max_texture_dimension: 2048,
+        max_texture_bytes: 32 << 20,
+        max_vertices: 1 << 20,
+        max_triangles: 1 << 20,
+    }
+}
+
+/// Splits `data` at the first `separator`.
+pub fn split<'a>(data: &'a [u8], separator: &[u8]) -> (&'a [u8], Option<&'a [u8]>) {
+    match data.windows(separator.len()).position(|w| w == separator) {
+        Some(i) => (&data[..i], Some(&data[i + separator.len()..])),
+        None => (data, None),
+    }
+}
+
+/// The scene file at a fixed path, MTL libraries (`*.mtl`) and every other file from the input.
+pub struct FuzzFiles<'a> {
+    pub scene_path: PathBuf,
+    pub scene: &'a [u8],
+    pub mtl: Option<&'a [u8]>,
+    pub other: Option<&'a [u8]>,
+}
+
+impl FileSource for FuzzFiles<'_> {
+    fn read(&self, path: &Path) -> io::Result<Vec<u8>> {
+        let not_found = || io::Error::from(io::ErrorKind::NotFound);
+        if path == self.scene_path {
+            return Ok(self.scene.to_vec());
+        }
+        let is_mtl = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("mtl"));
+        let bytes = if is_mtl { self.mtl } else { self.other };
+        bytes.map(<[u8]>::to_vec).ok_or_else(not_found)
+    }
+}
+
+/// Loads `files.scene_path` from `files`, then packs and checks it. Errors are fine; panics and broken
+/// invariants are what the fuzzer looks for.
+pub fn run(files: &FuzzFiles) {
+    let options = fuzz_options();
+    let loaded = match load_scene_from(files, &files.scene_path, &options) {
+        Ok(s) => s,
+        Err(e) => {
+            // Every error names the scene or one of its files (MTL and texture paths may be absolute).
+            let text = e.to_string();
+            assert!(names_a_file(&text), "error without a file name: {text}");
+            return;
+        }
+    };
+    let triangles = loaded.triangles.len();
+    assert!(triangles > 0);
+    for w in &loaded.warnings {
+        assert!(names_a_file(w), "warning without a file name: {w}");
+    }
+    let packed = pack_scene(loaded, &Environment::None, &BvhBuildOptions::default());
+    check_packed(&packed, triangles);
+    cast_rays(&packed);
+}
+
+/// Whether a message starts with a file name: the scene's folder (`fuzz/...`), or an absolute path or
+/// a path relative to the scene's folder that the scene itself named.
+fn names_a_file(message: &str) -> bool {
+    message.starts_with("fuzz/")
+        || message.starts_with('/')
+        || message.contains("fuzz/")
+        || message
+            .split_once(": ")
+            .is_some_and(|(file, _)| !file.trim().is_empty())
+}
+
+fn finite(v: &[f32]) -> bool {
+    v.iter().all(|c| c.is_finite())
+}
+
+/// Invariants every packed scene must satisfy (what the CPU and GPU kernels rely on).
+pub fn check_packed(p: &PackedScene, triangles: usize) {
+    assert_eq!(p.triangles.len(), triangles);
+    assert_eq!(p.triangle_info.len(), triangles);
+    assert!(!p.nodes.is_empty());
+    assert!(p.stats.bvh.max_depth <= MAX_NODE_DEPTH, "{:?}", p.stats.bvh);
+    assert!(finite(&p.bounds_min.to_array()) && finite(&p.bounds_max.to_array()));
+    let vertices = p.normals.len().max(p.uvs.len());
+    for (t, info) in p.triangles.iter().zip(&p.triangle_info) {
+        assert!(finite(&t.v0) && finite(&t.v1) && finite(&t.v2), "{t:?}");
+        assert!((info.material as usize) < p.materials.len());
+        if vertices > 0 {
+            assert!(info.vertices.iter().all(|&v| (v as usize) < vertices));
+        }
+    }
+    for n in &p.normals {
+        assert!(finite(n));
+    }
+    for uv in &p.uvs {
+        assert!(finite(uv));
+    }
+    for m in &p.materials {
+        assert!(finite(&m.base_color) && finite(&m.emission), "{m:?}");
+        assert!(m.emission[..3].iter().all(|&e| e >= 0.0), "{m:?}");
+        assert!(finite(&[
+            m.metallic,
+            m.roughness,
+            m.alpha_cutoff,
+            m.normal_scale,
+            m.clearcoat,
+            m.sheen
+        ]));
+        for t in [
+            m.base_color_texture,
+            m.metallic_roughness_texture,
+            m.normal_texture,
+            m.emission_texture,
+            m.alpha_texture,
+        ] {
+            assert!(t == INVALID_INDEX || (t as usize) < p.textures.len());
+        }
+    }
+    for t in &p.textures {
+        let end = t.offset as u64 + u64::from(t.width) * u64::from(t.height);
+        assert!(t.width > 0 && t.height > 0 && end <= p.texels.len() as u64);
+    }
+    if !p.lights.is_empty() {
+        assert_eq!(p.light_cdf.len(), p.lights.len() + 1);
+        assert!(p.light_cdf.windows(2).all(|w| w[0] <= w[1]));
+        assert_eq!(*p.light_cdf.last().unwrap(), 1.0);
+        let sum: f32 = p.lights.iter().map(|l| l.pmf).sum();
+        assert!(p.lights.iter().all(|l| l.pmf.is_finite() && l.pmf >= 0.0));
+        assert!((sum - 1.0).abs() < 1e-3, "pmf sum {sum}");
+        for l in &p.lights {
+            assert!(finite(&l.position) && finite(&l.direction) && finite(&l.intensity));
+        }
+    }
+    if !p.triangle_light.is_empty() {
+        assert_eq!(p.triangle_light.len(), triangles);
+    }
+}
+
+/// Rays through the scene from outside its bounds and from its centre: traversal must not panic and hits
+/// must be valid.
+pub fn cast_rays(p: &PackedScene) {
+    let view = p.view();
+    let centre = 0.5 * (p.bounds_min + p.bounds_max);
+    let extent = (p.bounds_max - p.bounds_min).max_element().max(1.0);
+    let dirs = [
+        Vec3::X,
+        Vec3::NEG_X,
+        Vec3::Y,
+        Vec3::NEG_Y,
+        Vec3::Z,
+        Vec3::NEG_Z,
+        Vec3::new(1.0, 2.0, 3.0).normalize(),
+        Vec3::new(-3.0, 0.5, -1.0).normalize(),
+    ];
+    let mut rays: Vec<Ray> = Vec::new();
+    for d in dirs {
+        rays.push(Ray::new(centre, d));
+        let outside = centre - d * extent * 2.0;
+        if outside.is_finite() {
+            rays.push(Ray::new(outside, d));
+        }
+    }
+    // A ray at the centroid of a few triangles.
+    let step = (p.triangles.len() / 8).max(1);
+    for t in p.triangles.iter().step_by(step).take(8) {
+        let c = (Vec3::from_slice(&t.v0) + Vec3::from_slice(&t.v1) + Vec3::from_slice(&t.v2)) / 3.0;
+        let origin = c + Vec3::new(0.3, 1.0, 0.7) * extent;
+        let d = (c - origin).normalize_or_zero();
+        if d != Vec3::ZERO && c.is_finite() && origin.is_finite() {
+            rays.push(Ray::new(origin, d));
+        }
+    }
+    for ray in &rays {
+        let hit = closest_hit(&view, ray, f32::INFINITY);
+        if hit.is_hit() {
+            assert!((hit.triangle as usize) < p.triangles.len());
+            assert!(hit.t >= 0.0 && hit.t.is_finite(), "{hit:?}");
+        }
+    }
+}
