@@ -123,13 +123,13 @@ pub struct RenderArgs {
     #[arg(long, value_name = "DEG")]
     pub fov: Option<f32>,
     /// Constant environment ("sky") radiance.
-    #[arg(long, value_name = "R,G,B")]
+    #[arg(long, value_name = "R,G,B", allow_hyphen_values = true)]
     pub sky: Option<String>,
     /// Equirectangular HDR environment map (.hdr or .exr), importance-sampled.
     #[arg(long, value_name = "FILE")]
     pub env_map: Option<PathBuf>,
     /// Scale of --env-map.
-    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    #[arg(long, default_value_t = 1.0, value_name = "S", allow_hyphen_values = true)]
     pub env_scale: f32,
     /// MTL file to use instead of the one the OBJ names (e.g. Lost Empire's torch variant).
     #[arg(long, value_name = "FILE.mtl")]
@@ -155,6 +155,10 @@ pub struct RenderArgs {
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Render with every optional feature on (the general path), instead of leaving out what the scene
+    /// lacks; for comparison (the image is the same).
+    #[arg(long)]
+    pub no_specialize: bool,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -250,13 +254,13 @@ pub struct ReportArgs {
     pub fov: Option<f32>,
     /// Constant environment ("sky") radiance (default: the bundled scene's sky for Lost Empire, none
     /// for other scenes).
-    #[arg(long, value_name = "R,G,B")]
+    #[arg(long, value_name = "R,G,B", allow_hyphen_values = true)]
     pub sky: Option<String>,
     /// Equirectangular HDR environment map (.hdr or .exr).
     #[arg(long, value_name = "FILE")]
     pub env_map: Option<PathBuf>,
     /// Scale of --env-map.
-    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    #[arg(long, default_value_t = 1.0, value_name = "S", allow_hyphen_values = true)]
     pub env_scale: f32,
     /// No progress bar and no summary.
     #[arg(short, long)]

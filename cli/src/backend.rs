@@ -20,9 +20,15 @@ pub struct Rendered {
 
 /// A ready backend.
 pub enum Renderer {
-    Cpu(rayon::ThreadPool),
+    Cpu(CpuRenderer),
     #[cfg(feature = "vulkan")]
     Vulkan(Box<VulkanRenderer>),
+}
+
+/// The CPU host's worker threads and whether it runs the scene's specialised path.
+pub struct CpuRenderer {
+    pool: rayon::ThreadPool,
+    specialize: bool,
 }
 
 /// The Vulkan context and the scene uploaded to it.
@@ -102,7 +108,10 @@ impl Renderer {
             }
         };
         if !want_vulkan {
-            return Ok(Self::Cpu(cpu_pool(threads)?));
+            return Ok(Self::Cpu(CpuRenderer {
+                pool: cpu_pool(threads)?,
+                specialize: true,
+            }));
         }
         Self::vulkan(device, choice == Backend::Auto, threads, quiet)
     }
@@ -141,7 +150,10 @@ impl Renderer {
                 if !quiet {
                     eprintln!("note: rendering on the CPU: Vulkan failed: {e}");
                 }
-                Ok(Self::Cpu(cpu_pool(threads)?))
+                Ok(Self::Cpu(CpuRenderer {
+                    pool: cpu_pool(threads)?,
+                    specialize: true,
+                }))
             }
             Err(e) => Err(FoveaError::Backend(format!("Vulkan backend: {e}"))),
         }
@@ -167,28 +179,34 @@ impl Renderer {
     /// The device for `--stats`: the CPU model and thread count, or the Vulkan device's name.
     pub fn device_name(&self) -> String {
         match self {
-            Self::Cpu(pool) => cpu_device_name(pool.current_num_threads()),
+            Self::Cpu(cpu) => cpu_device_name(cpu.pool.current_num_threads()),
             #[cfg(feature = "vulkan")]
             Self::Vulkan(v) => v.ctx.device_name().to_string(),
         }
     }
 
-    /// Makes `packed` available to the backend (a device upload on Vulkan).
-    pub fn set_scene(&mut self, packed: &PackedScene) -> Result<()> {
+    /// Makes `packed` available to the backend (a device upload on Vulkan). With `specialize`, frames
+    /// leave out the features the scene lacks (the CPU's specialised path, the GPU's specialization
+    /// constant); without, they run with every feature (`--no-specialize`). The images are identical.
+    pub fn set_scene(&mut self, packed: &PackedScene, specialize: bool) -> Result<()> {
         match self {
-            Self::Cpu(_) => {
+            Self::Cpu(cpu) => {
                 let _ = packed;
+                cpu.specialize = specialize;
                 Ok(())
             }
             #[cfg(feature = "vulkan")]
             Self::Vulkan(v) => {
                 let start = std::time::Instant::now();
                 v.scene = None;
-                v.scene = Some(
-                    v.ctx
-                        .upload_scene(packed)
-                        .map_err(|e| FoveaError::Backend(format!("Vulkan backend: {e}")))?,
-                );
+                let mut scene = v
+                    .ctx
+                    .upload_scene(packed)
+                    .map_err(|e| FoveaError::Backend(format!("Vulkan backend: {e}")))?;
+                if !specialize {
+                    scene.features = fovea_core::scene::FeatureFlags::ALL;
+                }
+                v.scene = Some(scene);
                 v.upload_ms = start.elapsed().as_secs_f64() * 1e3;
                 Ok(())
             }
@@ -207,12 +225,17 @@ impl Renderer {
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Rendered> {
         match self {
-            Self::Cpu(pool) => {
+            Self::Cpu(cpu) => {
                 // The CPU host always returns HDR; the CLI tone-maps it (same core function).
                 let _ = (exposure_ev, want_hdr);
-                let view = packed.view();
-                let (image, stats) =
-                    pool.install(|| fovea_cpu::render_frame(&view, frame, fill_mode, progress));
+                let view = if cpu.specialize {
+                    packed.view().with_features(packed.features())
+                } else {
+                    packed.view()
+                };
+                let (image, stats) = cpu
+                    .pool
+                    .install(|| fovea_cpu::render_frame(&view, frame, fill_mode, progress));
                 Ok(Rendered {
                     hdr: Some(image),
                     rgb8: None,

@@ -155,6 +155,20 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
     let output_format = check_output_path(&args.output, "--output", true)?;
     if let Some(p) = &args.regions_overlay {
         check_output_path(p, "--regions-overlay", false)?;
+        if p == &args.output {
+            return Err(FoveaError::option(
+                "--regions-overlay",
+                format!("'{}' is also the --output image", p.display()),
+            ));
+        }
+    }
+    if let Some(p) = &args.stats {
+        if p == &args.output || Some(p) == args.regions_overlay.as_ref() {
+            return Err(FoveaError::option(
+                "--stats",
+                format!("'{}' is also an output image", p.display()),
+            ));
+        }
     }
     if let Some(p) = &args.stats {
         let ext = p
@@ -288,6 +302,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             s.bvh.max_depth,
             s.memory_bytes as f64 / (1024.0 * 1024.0)
         );
+        eprintln!(
+            "features: {}{}",
+            crate::stats::feature_names(scene.packed.features().0).join(", "),
+            if args.no_specialize {
+                " (--no-specialize: rendering with every feature)"
+            } else {
+                ""
+            }
+        );
     } else if !scene.warnings.is_empty() && !args.quiet {
         eprintln!(
             "{} warning(s) while loading the scene (--verbose lists them)",
@@ -302,7 +325,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
     let [w, h] = plan.resolution;
     let camera = choose_camera(&scene, eye, target, up, args.fov, w as f32 / h as f32)?;
-    renderer.set_scene(&scene.packed)?;
+    renderer.set_scene(&scene.packed, !args.no_specialize)?;
     let integrator = IntegratorSettings {
         max_bounces: args.depth,
         russian_roulette_start: args.russian_roulette,

@@ -76,6 +76,8 @@ pub fn build_report(
         "samples_per_region": region_object(first.render.samples_per_region),
         "blocks_per_region": region_object(first.render.blocks_per_region),
         "ideal_speedup": uniform_samples as f64 / first.render.primary_samples.max(1) as f64,
+        "features": feature_names(scene.packed.features().0),
+        "path_features": feature_names(first.render.path_features),
         "triangles": scene.triangle_count,
         "lights": scene.packed.lights.len(),
         "load_ms": scene.load_ms,
@@ -91,6 +93,16 @@ pub fn build_report(
         "warnings": scene.warnings,
         "backend_details": backend_details,
     })
+}
+
+/// The names of the `FEATURE_*` bits set in `mask`.
+pub fn feature_names(mask: u32) -> Vec<&'static str> {
+    fovea_core::scene::features::FEATURE_NAMES
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| mask & (1 << i) != 0)
+        .map(|(_, name)| *name)
+        .collect()
 }
 
 fn region_object(v: [u64; 3]) -> Value {

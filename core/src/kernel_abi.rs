@@ -53,6 +53,10 @@ pub const BINDING_FRAME: u32 = 21;
 /// Number of bindings.
 pub const BINDING_COUNT: u32 = 22;
 
+/// Specialization constant id of `render_samples`' feature mask (`FEATURE_*` bits; default every
+/// feature). The host sets it per scene when it creates the pipeline.
+pub const SPEC_CONSTANT_FEATURES: u32 = 0;
+
 /// One block of a dispatch chunk (16 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]

@@ -1,5 +1,8 @@
-//! Small deterministic random-number generators shared by core's unit tests (test builds only).
+//! Small deterministic random-number generators shared by core's unit tests (test builds only), and the
+//! chi-square goodness-of-fit harness for samplers ([`chi2`]).
 use glam::{Vec2, Vec3};
+
+pub(crate) mod chi2;
 
 /// SplitMix64 (Steele, Lea, Flood 2014).
 pub(crate) struct SplitMix64(pub u64);

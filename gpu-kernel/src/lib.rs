@@ -21,8 +21,9 @@ use fovea_core::glam::Vec3;
 use fovea_core::integrator::{render_block_sample, FrameParams};
 use fovea_core::kernel_abi::{self, GpuBlock, KernelPushConstants, WORKGROUP_SIZE};
 use fovea_core::post::tonemap::tonemap_to_rgba8;
+use fovea_core::scene::features::FEATURES_ALL;
 use fovea_core::scene::{
-    Bvh4Node, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleInfo,
+    Bvh4Node, FeatureFlags, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleInfo,
     TrianglePositions,
 };
 use spirv_std::glam::UVec3;
@@ -56,6 +57,9 @@ const _: () = {
     assert!(kernel_abi::BINDING_PROBE_INPUT == 15);
     assert!(kernel_abi::BINDING_PROBE_OUTPUT == 16);
     assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
+    // `render_samples`' specialization constant: id and default (every feature).
+    assert!(kernel_abi::SPEC_CONSTANT_FEATURES == 0);
+    assert!(FEATURES_ALL == 0xFFFF);
 };
 
 /// The linear invocation index of a (possibly 2D) dispatch of 64-wide workgroups.
@@ -77,9 +81,11 @@ pub fn owned_block(b: &GpuBlock) -> OwnedBlock {
 }
 
 /// Pass 1a: invocation `i < block_count · spp` renders sample `i % spp` of block `i / spp` of the chunk
-/// into `samples[i]` (rgb, w = 0).
+/// into `samples[i]` (rgb, w = 0). `features` is a specialization constant: the host sets the scene's
+/// feature mask when it creates the pipeline, so the driver drops the code of absent features.
 #[spirv(compute(threads(64)))]
 pub fn render_samples(
+    #[spirv(spec_constant(id = 0, default = 65535))] features: u32,
     #[spirv(global_invocation_id)] id: UVec3,
     #[spirv(num_workgroups)] num_workgroups: UVec3,
     #[spirv(push_constant)] pc: &KernelPushConstants,
@@ -109,6 +115,7 @@ pub fn render_samples(
         return;
     }
     let scene = SceneView {
+        features: FeatureFlags(features),
         globals: *globals,
         nodes,
         triangles,

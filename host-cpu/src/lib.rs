@@ -16,5 +16,6 @@
 //! Random numbers are keyed by block, frame and sample, and each block's samples are summed in a fixed
 //! order, so the image does not depend on the number of threads.
 pub mod render;
+pub mod specialize;
 
 pub use render::{render_frame, FrameImage, RenderStats};

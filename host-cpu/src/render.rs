@@ -6,7 +6,9 @@ use fovea_core::foveation::blocks::{owning_block, samples_in_block};
 use fovea_core::foveation::fill::{cell_buffer_len, cell_mean_at, fill_pixel};
 use fovea_core::foveation::regions::REGION_COUNT;
 use fovea_core::integrator::{render_block_sample, FrameParams};
-use fovea_core::scene::SceneView;
+use fovea_core::scene::{Features, SceneView};
+
+use crate::specialize::{dispatch, path_mask, WithScene};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -28,10 +30,16 @@ pub struct RenderStats {
     pub samples_per_region: [u64; 3],
     /// Blocks rendered per region.
     pub blocks_per_region: [u64; 3],
+    /// Feature mask of the compiled path that rendered the samples (see [`crate::specialize`]).
+    pub path_features: u32,
 }
 
 /// Renders one frame of `scene`. `fill_mode` is `FILL_BILINEAR` or `FILL_REPLICATE`. `progress` is called
 /// from worker threads with the number of camera samples just finished.
+///
+/// The samples are traced by the compiled path for `scene.features` ([`crate::specialize`]): pass
+/// `packed.view().with_features(packed.features())` to leave out what the scene lacks, or the plain
+/// view (every feature) for the general path. Both give the same image.
 pub fn render_frame(
     scene: &SceneView,
     frame: &FrameParams,
@@ -41,50 +49,19 @@ pub fn render_frame(
     let start = Instant::now();
     let (width, height) = (frame.width, frame.height);
     let foveation = &frame.foveation;
-    let band = foveation.block_size[2].max(1);
     let mut replicated = vec![[0.0f32; 4]; width as usize * height as usize];
     let counters: [AtomicU64; 6] = Default::default();
 
     // Pass 1: samples, band by band.
-    replicated
-        .par_chunks_mut(width as usize * band as usize)
-        .enumerate()
-        .for_each(|(band_index, rows)| {
-            let y0 = band_index as u32 * band;
-            let rows_in_band = (rows.len() / width as usize) as u32;
-            let mut local = [0u64; 6];
-            for dy in 0..rows_in_band {
-                let y = y0 + dy;
-                for x in 0..width {
-                    let block = owning_block(x, y, foveation);
-                    if block.origin != [x, y] {
-                        continue;
-                    }
-                    let spp = samples_in_block(&block, foveation);
-                    let mut sum = Vec3::ZERO;
-                    for s in 0..spp {
-                        sum += render_block_sample(scene, frame, &block, s);
-                    }
-                    let mean = sum / spp.max(1) as f32;
-                    let value = [mean.x, mean.y, mean.z, 1.0];
-                    let x_end = (block.origin[0] + block.size).min(width);
-                    let y_end = (block.origin[1] + block.size).min(height);
-                    for by in block.origin[1]..y_end {
-                        let row = ((by - y0) * width) as usize;
-                        for bx in block.origin[0]..x_end {
-                            rows[row + bx as usize] = value;
-                        }
-                    }
-                    let region = block.region.min(REGION_COUNT - 1) as usize;
-                    local[region] += spp as u64;
-                    local[3 + region] += 1;
-                    progress(spp as u64);
-                }
-            }
-            for (c, v) in counters.iter().zip(local) {
-                c.fetch_add(v, Ordering::Relaxed);
-            }
-        });
+    dispatch(
+        scene,
+        SamplePass {
+            frame,
+            replicated: &mut replicated,
+            counters: &counters,
+            progress,
+        },
+    );
 
     // Pass 2: the cell-mean grids of every block size above 1, in one buffer.
     let cell_count = cell_buffer_len(width, height, foveation);
@@ -120,6 +97,7 @@ pub fn render_frame(
         primary_samples: loaded[0] + loaded[1] + loaded[2],
         samples_per_region: [loaded[0], loaded[1], loaded[2]],
         blocks_per_region: [loaded[3], loaded[4], loaded[5]],
+        path_features: path_mask(scene.features.bits()),
     };
     (
         FrameImage {
@@ -129,4 +107,67 @@ pub fn render_frame(
         },
         stats,
     )
+}
+
+/// Pass 1 of [`render_frame`]: every block's samples, band by band, written to every pixel of the block.
+struct SamplePass<'a> {
+    frame: &'a FrameParams,
+    replicated: &'a mut [[f32; 4]],
+    counters: &'a [AtomicU64; 6],
+    progress: &'a (dyn Fn(u64) + Sync),
+}
+
+impl WithScene for SamplePass<'_> {
+    type Output = ();
+
+    fn run<F: Features + Sync>(self, scene: &SceneView<'_, F>) {
+        let SamplePass {
+            frame,
+            replicated,
+            counters,
+            progress,
+        } = self;
+        let (width, height) = (frame.width, frame.height);
+        let foveation = &frame.foveation;
+        let band = foveation.block_size[2].max(1);
+        replicated
+            .par_chunks_mut(width as usize * band as usize)
+            .enumerate()
+            .for_each(|(band_index, rows)| {
+                let y0 = band_index as u32 * band;
+                let rows_in_band = (rows.len() / width as usize) as u32;
+                let mut local = [0u64; 6];
+                for dy in 0..rows_in_band {
+                    let y = y0 + dy;
+                    for x in 0..width {
+                        let block = owning_block(x, y, foveation);
+                        if block.origin != [x, y] {
+                            continue;
+                        }
+                        let spp = samples_in_block(&block, foveation);
+                        let mut sum = Vec3::ZERO;
+                        for s in 0..spp {
+                            sum += render_block_sample(scene, frame, &block, s);
+                        }
+                        let mean = sum / spp.max(1) as f32;
+                        let value = [mean.x, mean.y, mean.z, 1.0];
+                        let x_end = (block.origin[0] + block.size).min(width);
+                        let y_end = (block.origin[1] + block.size).min(height);
+                        for by in block.origin[1]..y_end {
+                            let row = ((by - y0) * width) as usize;
+                            for bx in block.origin[0]..x_end {
+                                rows[row + bx as usize] = value;
+                            }
+                        }
+                        let region = block.region.min(REGION_COUNT - 1) as usize;
+                        local[region] += spp as u64;
+                        local[3 + region] += 1;
+                        progress(spp as u64);
+                    }
+                }
+                for (c, v) in counters.iter().zip(local) {
+                    c.fetch_add(v, Ordering::Relaxed);
+                }
+            });
+    }
 }

@@ -6,7 +6,10 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::{AllocationSizes, AllocatorDebugSettings, MemoryLocation};
 
-use fovea_core::kernel_abi::{KernelPushConstants, BINDING_BLOCKS, BINDING_COUNT};
+use fovea_core::kernel_abi::{
+    KernelPushConstants, BINDING_BLOCKS, BINDING_COUNT, SPEC_CONSTANT_FEATURES,
+};
+use fovea_core::scene::features::FEATURES_ALL;
 
 use crate::blocks::{DEFAULT_MAX_CHUNK_SAMPLES, SOFTWARE_MAX_CHUNK_SAMPLES};
 use crate::buffer::GpuBuffer;
@@ -81,6 +84,10 @@ pub struct VulkanContext {
     pub(crate) set_layout: vk::DescriptorSetLayout,
     pub(crate) pipeline_layout: vk::PipelineLayout,
     pub(crate) pipelines: [vk::Pipeline; 5],
+    /// The kernel module, kept for re-specialising `render_samples` per scene.
+    pub(crate) module: vk::ShaderModule,
+    /// The feature mask `pipelines[RENDER_SAMPLES]` was specialised for.
+    pub(crate) render_features: u32,
     /// The `probe` entry point's pipeline, created on first use by [`VulkanContext::run_probe`].
     pub(crate) probe_pipeline: vk::Pipeline,
     pub(crate) descriptor_pool: vk::DescriptorPool,
@@ -274,6 +281,8 @@ impl VulkanContext {
             set_layout: vk::DescriptorSetLayout::null(),
             pipeline_layout: vk::PipelineLayout::null(),
             pipelines: [vk::Pipeline::null(); 5],
+            module: vk::ShaderModule::null(),
+            render_features: FEATURES_ALL,
             probe_pipeline: vk::Pipeline::null(),
             descriptor_pool: vk::DescriptorPool::null(),
             descriptor_set: vk::DescriptorSet::null(),
@@ -378,30 +387,38 @@ impl VulkanContext {
                 )
                 .during("vkAllocateDescriptorSets")?[0];
 
-            let module = device
+            self.module = device
                 .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None)
                 .during("vkCreateShaderModule")?;
             let names: Vec<std::ffi::CString> = ENTRY_POINTS
                 .iter()
                 .map(|n| std::ffi::CString::new(*n).expect("entry point names have no NUL"))
                 .collect();
+            // `render_samples` starts specialised for every feature (its constant's default).
+            let spec_data = FEATURES_ALL.to_ne_bytes();
+            let spec_entries = features_map_entry();
+            let spec = vk::SpecializationInfo::default()
+                .map_entries(&spec_entries)
+                .data(&spec_data);
             let infos: Vec<vk::ComputePipelineCreateInfo> = names
                 .iter()
-                .map(|name| {
+                .enumerate()
+                .map(|(i, name)| {
+                    let mut stage = vk::PipelineShaderStageCreateInfo::default()
+                        .stage(vk::ShaderStageFlags::COMPUTE)
+                        .module(self.module)
+                        .name(name);
+                    if i == pipeline::RENDER_SAMPLES {
+                        stage = stage.specialization_info(&spec);
+                    }
                     vk::ComputePipelineCreateInfo::default()
-                        .stage(
-                            vk::PipelineShaderStageCreateInfo::default()
-                                .stage(vk::ShaderStageFlags::COMPUTE)
-                                .module(module)
-                                .name(name),
-                        )
+                        .stage(stage)
                         .layout(self.pipeline_layout)
                 })
                 .collect();
             let start = std::time::Instant::now();
             let created = device.create_compute_pipelines(vk::PipelineCache::null(), &infos, None);
             self.pipeline_create_ms = start.elapsed().as_secs_f64() * 1e3;
-            device.destroy_shader_module(module, None);
             match created {
                 Ok(p) => self.pipelines.copy_from_slice(&p),
                 Err((p, r)) => {
@@ -628,6 +645,74 @@ fn query_limits(shared: &Shared) -> Limits {
     }
 }
 
+/// The one specialization constant of `render_samples`: the feature mask, a `u32` at offset 0.
+fn features_map_entry() -> [vk::SpecializationMapEntry; 1] {
+    [vk::SpecializationMapEntry::default()
+        .constant_id(SPEC_CONSTANT_FEATURES)
+        .offset(0)
+        .size(4)]
+}
+
+impl VulkanContext {
+    /// Makes `render_samples` the pipeline specialised for the feature mask `features` (its
+    /// specialization constant [`SPEC_CONSTANT_FEATURES`]), so that the driver compiles out the code of
+    /// features the scene lacks. Re-created only when the mask changes; nothing is in flight between
+    /// frames. The next frame warms the new pipeline up again, and [`Self::pipeline_create_ms`] then
+    /// holds this creation's time.
+    pub(crate) fn specialize_render_pipeline(&mut self, features: u32) -> Result<()> {
+        if features == self.render_features {
+            return Ok(());
+        }
+        let device = &self.shared.device;
+        let name = std::ffi::CString::new(ENTRY_POINTS[pipeline::RENDER_SAMPLES])
+            .expect("entry point names have no NUL");
+        let spec_data = features.to_ne_bytes();
+        let spec_entries = features_map_entry();
+        let spec = vk::SpecializationInfo::default()
+            .map_entries(&spec_entries)
+            .data(&spec_data);
+        let create = [vk::ComputePipelineCreateInfo::default()
+            .stage(
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::COMPUTE)
+                    .module(self.module)
+                    .name(&name)
+                    .specialization_info(&spec),
+            )
+            .layout(self.pipeline_layout)];
+        let start = std::time::Instant::now();
+        // SAFETY: the create info and everything it points to live until the call returns; the old
+        // pipeline is not in use (every submission was waited on) and is destroyed only after the new
+        // one exists.
+        unsafe {
+            let created = device.create_compute_pipelines(vk::PipelineCache::null(), &create, None);
+            match created {
+                Ok(p) => {
+                    device.destroy_pipeline(self.pipelines[pipeline::RENDER_SAMPLES], None);
+                    self.pipelines[pipeline::RENDER_SAMPLES] = p[0];
+                }
+                Err((p, r)) => {
+                    for pl in p {
+                        if pl != vk::Pipeline::null() {
+                            device.destroy_pipeline(pl, None);
+                        }
+                    }
+                    return Err(VulkanError::vk("vkCreateComputePipelines", r));
+                }
+            }
+        }
+        self.pipeline_create_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.render_features = features;
+        self.warmed_up = false;
+        Ok(())
+    }
+
+    /// The feature mask the current `render_samples` pipeline was specialised for.
+    pub fn render_features(&self) -> u32 {
+        self.render_features
+    }
+}
+
 impl Drop for VulkanContext {
     fn drop(&mut self) {
         let device = &self.shared.device;
@@ -640,6 +725,7 @@ impl Drop for VulkanContext {
                 device.destroy_pipeline(p, None);
             }
             device.destroy_pipeline(self.probe_pipeline, None);
+            device.destroy_shader_module(self.module, None);
             device.destroy_pipeline_layout(self.pipeline_layout, None);
             device.destroy_descriptor_pool(self.descriptor_pool, None);
             device.destroy_descriptor_set_layout(self.set_layout, None);

@@ -344,6 +344,7 @@ impl VulkanContext {
             res.blocks.write(&block_data)?;
         }
         self.write_descriptors(scene, &sizes);
+        self.specialize_render_pipeline(scene.features.0)?;
         let warmup_ms = if self.warmed_up {
             0.0
         } else {
@@ -378,6 +379,7 @@ impl VulkanContext {
                     blocks[1].len() as u64,
                     blocks[2].len() as u64,
                 ],
+                path_features: scene.features.0,
             },
             idle_invocations: plan.idle_invocations(),
             chunks: plan.chunks.len() as u32,

@@ -1,5 +1,5 @@
 //! [`GpuScene`]: the arrays of a `PackedScene` as device-local storage buffers, uploaded once per scene.
-use fovea_core::scene::INVALID_INDEX;
+use fovea_core::scene::{FeatureFlags, INVALID_INDEX};
 use fovea_scene::pack::PackedScene;
 
 use crate::buffer::GpuBuffer;
@@ -21,6 +21,9 @@ pub struct GpuScene {
     pub(crate) ranges: [u64; SCENE_BINDINGS],
     /// Bytes uploaded.
     pub bytes: u64,
+    /// The features `render_samples` is specialised for when rendering this scene: the scene's own
+    /// (`PackedScene::features`) after upload; set [`FeatureFlags::ALL`] for the general kernel.
+    pub features: FeatureFlags,
 }
 
 impl GpuScene {
@@ -92,6 +95,7 @@ impl GpuScene {
             buffers,
             ranges,
             bytes: total,
+            features: packed.features(),
         })
     }
 }

@@ -153,3 +153,253 @@ pub fn vulkan_context_or_skip(what: &str) -> Option<fovea_vulkan::VulkanContext>
         Err(e) => panic!("cannot create a Vulkan context: {e}"),
     }
 }
+
+/// Helpers of the numerical-stability suite (`tests/tests/stability_*.rs`).
+pub mod stability {
+    use fovea_core::scene::Material;
+    use fovea_scene::bvh::BvhBuildOptions;
+    use fovea_scene::environment::Environment;
+    use fovea_scene::mesh::LoadedScene;
+    use fovea_scene::pack::{pack_scene, PackedScene};
+    use glam::Vec3;
+
+    /// Whether the heavy (nightly / manual) variant runs: `FOVEA_HEAVY=1`.
+    pub fn heavy() -> bool {
+        std::env::var("FOVEA_HEAVY").as_deref() == Ok("1")
+    }
+
+    /// `ci` normally, `heavy` with `FOVEA_HEAVY=1`.
+    pub fn pick<T>(ci: T, heavy_value: T) -> T {
+        if heavy() {
+            heavy_value
+        } else {
+            ci
+        }
+    }
+
+    /// SplitMix64 (Steele, Lea, Flood 2014): a small deterministic generator of test inputs.
+    #[derive(Clone, Debug)]
+    pub struct Rng(pub u64);
+
+    impl Rng {
+        pub fn u64(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+        pub fn u32(&mut self) -> u32 {
+            (self.u64() >> 32) as u32
+        }
+        /// Uniform in [0, 1).
+        pub fn f(&mut self) -> f32 {
+            (self.u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+        }
+        /// Uniform in [0, 1) in double precision.
+        pub fn f64(&mut self) -> f64 {
+            (self.u64() >> 11) as f64 * (1.0 / 9_007_199_254_740_992.0)
+        }
+        pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.f()
+        }
+        /// Uniform integer in `0..n`.
+        pub fn below(&mut self, n: u32) -> u32 {
+            ((u64::from(self.u32()) * u64::from(n)) >> 32) as u32
+        }
+        /// Log-uniform in `[lo, hi]` (both positive).
+        pub fn log_uniform(&mut self, lo: f32, hi: f32) -> f32 {
+            let (a, b) = (f64::from(lo).ln(), f64::from(hi).ln());
+            (a + (b - a) * self.f64()).exp() as f32
+        }
+        /// Random sign.
+        pub fn sign(&mut self) -> f32 {
+            if self.u32() & 1 == 0 {
+                1.0
+            } else {
+                -1.0
+            }
+        }
+        /// A uniform unit vector.
+        pub fn dir(&mut self) -> Vec3 {
+            let z = self.range(-1.0, 1.0);
+            let phi = self.range(0.0, std::f32::consts::TAU);
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        }
+        /// A local-frame direction whose cosine is adversarial: exactly 0 or 1, log-uniform down to
+        /// 1e-7 (either sign: below the horizon too), or uniform; sometimes scaled to a non-unit length
+        /// (1e-6 .. 1e6) or exactly zero.
+        pub fn adversarial_dir(&mut self) -> Vec3 {
+            let z = match self.below(10) {
+                0 => 0.0,
+                1 => 1.0,
+                2 => self.log_uniform(1e-7, 1e-2),
+                3 => -self.log_uniform(1e-7, 1e-2),
+                4 => -self.f(),
+                5 => 1.0 - self.log_uniform(1e-7, 1e-3),
+                _ => self.f(),
+            };
+            let phi = match self.below(8) {
+                0 => 0.0,
+                1 => std::f32::consts::FRAC_PI_2,
+                _ => self.range(0.0, std::f32::consts::TAU),
+            };
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let d = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+            match self.below(12) {
+                0 => d * self.log_uniform(1e-6, 1e6),
+                1 if self.below(8) == 0 => Vec3::ZERO,
+                _ => d,
+            }
+        }
+        /// A parameter in [0, 1]: exactly 0 or 1, within 1e-7 of them, or uniform.
+        pub fn unit_param(&mut self) -> f32 {
+            match self.below(8) {
+                0 | 1 => 0.0,
+                2 | 3 => 1.0,
+                4 => self.log_uniform(1e-7, 1e-3),
+                5 => 1.0 - self.log_uniform(1e-7, 1e-3),
+                _ => self.f(),
+            }
+        }
+        /// A magnitude of random decade in `[10^lo, 10^hi]` with random sign, sometimes exactly 0.
+        pub fn wide(&mut self, lo: f32, hi: f32) -> f32 {
+            if self.below(32) == 0 {
+                return 0.0;
+            }
+            self.sign() * self.log_uniform(10f32.powf(lo), 10f32.powf(hi))
+        }
+    }
+
+    /// A scene of the given vertices, triangles and per-triangle materials, without normals or
+    /// texture coordinates.
+    pub fn loaded_scene(
+        positions: Vec<[f32; 3]>,
+        triangles: Vec<[u32; 3]>,
+        triangle_materials: Vec<u32>,
+        materials: Vec<Material>,
+    ) -> LoadedScene {
+        let names = vec![String::new(); materials.len()];
+        LoadedScene {
+            positions,
+            triangles,
+            triangle_materials,
+            materials,
+            material_names: names,
+            ..Default::default()
+        }
+    }
+
+    /// Packs a loaded scene with the default BVH options.
+    pub fn pack(scene: LoadedScene, environment: &Environment) -> PackedScene {
+        pack_scene(scene, environment, &BvhBuildOptions::default())
+    }
+
+    /// An icosphere of radius `r` around `centre`: the icosahedron subdivided `levels` times, vertices
+    /// shared between triangles (so edges are exactly shared), counter-clockwise seen from outside.
+    pub fn icosphere(centre: Vec3, r: f32, levels: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+        let t = (1.0 + 5f64.sqrt()) / 2.0;
+        let mut v: Vec<[f64; 3]> = vec![
+            [-1.0, t, 0.0],
+            [1.0, t, 0.0],
+            [-1.0, -t, 0.0],
+            [1.0, -t, 0.0],
+            [0.0, -1.0, t],
+            [0.0, 1.0, t],
+            [0.0, -1.0, -t],
+            [0.0, 1.0, -t],
+            [t, 0.0, -1.0],
+            [t, 0.0, 1.0],
+            [-t, 0.0, -1.0],
+            [-t, 0.0, 1.0],
+        ];
+        let norm = |p: [f64; 3]| {
+            let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            [p[0] / l, p[1] / l, p[2] / l]
+        };
+        for p in &mut v {
+            *p = norm(*p);
+        }
+        let mut f: Vec<[u32; 3]> = vec![
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ];
+        for _ in 0..levels {
+            let mut mid = std::collections::HashMap::new();
+            let mut next = Vec::with_capacity(f.len() * 4);
+            let mut midpoint = |a: u32, b: u32, v: &mut Vec<[f64; 3]>| -> u32 {
+                let key = (a.min(b), a.max(b));
+                *mid.entry(key).or_insert_with(|| {
+                    let (p, q) = (v[a as usize], v[b as usize]);
+                    v.push(norm([p[0] + q[0], p[1] + q[1], p[2] + q[2]]));
+                    (v.len() - 1) as u32
+                })
+            };
+            for t in &f {
+                let ab = midpoint(t[0], t[1], &mut v);
+                let bc = midpoint(t[1], t[2], &mut v);
+                let ca = midpoint(t[2], t[0], &mut v);
+                next.push([t[0], ab, ca]);
+                next.push([t[1], bc, ab]);
+                next.push([t[2], ca, bc]);
+                next.push([ab, bc, ca]);
+            }
+            f = next;
+        }
+        let c = centre.as_dvec3();
+        let positions = v
+            .iter()
+            .map(|p| {
+                [
+                    (c.x + f64::from(r) * p[0]) as f32,
+                    (c.y + f64::from(r) * p[1]) as f32,
+                    (c.z + f64::from(r) * p[2]) as f32,
+                ]
+            })
+            .collect();
+        (positions, f)
+    }
+
+    /// Relative mean squared error `mean((x - ref)² / (ref² + eps))` over the luminance of two images.
+    pub fn rel_mse(image: &[[f32; 4]], reference: &[[f32; 4]], eps: f64) -> f64 {
+        assert_eq!(image.len(), reference.len());
+        let lum = |p: &[f32; 4]| {
+            0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+        };
+        let mut sum = 0.0;
+        for (a, b) in image.iter().zip(reference) {
+            let (x, r) = (lum(a), lum(b));
+            sum += (x - r) * (x - r) / (r * r + eps);
+        }
+        sum / image.len() as f64
+    }
+
+    /// The `q`-quantile (0..1) of `values` (sorted in place; nearest rank).
+    pub fn quantile(values: &mut [f32], q: f64) -> f32 {
+        if values.is_empty() {
+            return 0.0;
+        }
+        values.sort_unstable_by(|a, b| a.total_cmp(b));
+        let i = ((values.len() as f64 - 1.0) * q).round() as usize;
+        values[i.min(values.len() - 1)]
+    }
+}

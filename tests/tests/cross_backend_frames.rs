@@ -3,6 +3,10 @@
 //! HDR (fraction of pixels within 1e-3 relative, max abs diff) and with FLIP (nv-flip, 67.02 ppd) on the
 //! tone-mapped images. Prints a per-scene table (`-- --nocapture`).
 //!
+//! Each scene is also rendered with the scene's specialised path (only the features it uses: the CPU's
+//! monomorphised integrator, the GPU's specialization constant) and with the general one (every
+//! feature, `--no-specialize`); on each backend the two must be bit-identical.
+//!
 //! Without a Vulkan device the test prints a note and passes, except with `CI=true`. The validation
 //! layer is on and must stay silent. Scenes missing from `../shared/scenes` are skipped with a note.
 use std::path::PathBuf;
@@ -219,41 +223,70 @@ fn small_scenes_render_alike_on_cpu_and_vulkan() {
         let cam = camera(&case.view, &packed, desc.as_ref());
         let frame = frame_params(cam, foveation(), W, H, 7);
         let (cpu, _) = render(&packed, &frame);
-        let scene = ctx.upload_scene(&packed).expect("upload");
+        let features = packed.features();
+        let specialised_view = packed.view().with_features(features);
+        let (cpu_specialised, _) =
+            fovea_cpu::render_frame(&specialised_view, &frame, FILL_BILINEAR, &|_| {});
+        let mut scene = ctx.upload_scene(&packed).expect("upload");
+        assert_eq!(
+            scene.features, features,
+            "{}: upload specialises",
+            case.name
+        );
         let (gpu, _) = ctx
+            .render_frame(&scene, &frame, FILL_BILINEAR, 0.0, true)
+            .unwrap_or_else(|e| panic!("{}: {e}", case.name));
+        scene.features = fovea_core::scene::FeatureFlags::ALL;
+        let (gpu_general, _) = ctx
             .render_frame(&scene, &frame, FILL_BILINEAR, 0.0, true)
             .unwrap_or_else(|e| panic!("{}: {e}", case.name));
         drop(scene);
         let hdr = gpu.hdr.as_ref().expect("HDR requested");
         let f = compare(&cpu.pixels, &hdr.pixels, &gpu.ldr);
-        rows.push((case.name, f, start.elapsed().as_secs_f64()));
+        let cpu_identical = cpu.pixels == cpu_specialised.pixels;
+        let gpu_identical = gpu.hdr.as_ref().map(|i| &i.pixels)
+            == gpu_general.hdr.as_ref().map(|i| &i.pixels)
+            && gpu.ldr == gpu_general.ldr;
+        rows.push((
+            case.name,
+            f,
+            start.elapsed().as_secs_f64(),
+            features.0,
+            cpu_identical && gpu_identical,
+        ));
     }
 
     eprintln!("\nCPU vs {device}, {W}x{H} foveated (4/2/1 spp), seed 7");
     eprintln!(
-        "| {:<24} | {:>12} | {:>10} | {:>10} | {:>9} | {:>6} |",
-        "scene", "within 1e-3", "max abs", "mean FLIP", "CPU mean", "s"
+        "| {:<24} | {:>12} | {:>10} | {:>10} | {:>9} | {:>6} | {:>8} | {:>12} |",
+        "scene", "within 1e-3", "max abs", "mean FLIP", "CPU mean", "s", "features", "spec==gen"
     );
     eprintln!(
-        "|{:-<26}|{:-<14}|{:-<12}|{:-<12}|{:-<11}|{:-<8}|",
-        "", "", "", "", "", ""
+        "|{:-<26}|{:-<14}|{:-<12}|{:-<12}|{:-<11}|{:-<8}|{:-<10}|{:-<14}|",
+        "", "", "", "", "", "", "", ""
     );
-    for (name, f, s) in &rows {
+    for (name, f, s, features, identical) in &rows {
         eprintln!(
-            "| {:<24} | {:>11.4}% | {:>10.3e} | {:>10.3e} | {:>9.3e} | {:>6.2} |",
+            "| {:<24} | {:>11.4}% | {:>10.3e} | {:>10.3e} | {:>9.3e} | {:>6.2} | {:>#8x} | {:>12} |",
             name,
             100.0 * f.within,
             f.max_abs,
             f.mean_flip,
             f.cpu_mean,
-            s
+            s,
+            features,
+            identical
         );
     }
     drop(ctx);
     let messages = log.lock().unwrap().clone();
     assert!(messages.is_empty(), "validation messages: {messages:#?}");
-    for (name, f, _) in &rows {
+    for (name, f, _, _, identical) in &rows {
         assert!(f.cpu_mean > 0.0, "{name}: black image");
+        assert!(
+            *identical,
+            "{name}: specialised and general renders differ (CPU or Vulkan)"
+        );
         // Lost Empire: measured 99.41 % within 1e-3 (41 of 6912 pixels off, max abs 1.2e-3, mean FLIP
         // 1.4e-4). Its 225k axis-aligned block faces put many rays exactly on shared edges and its
         // alpha cut-outs are texture lookups at last-bit-perturbed barycentrics, so a few paths take

@@ -452,7 +452,7 @@ fn run_scene(
         args.fov,
         w as f32 / h as f32,
     )?;
-    renderer.set_scene(&scene.packed)?;
+    renderer.set_scene(&scene.packed, true)?;
     let frame = |foveation: FoveationParams, seed: u32| FrameParams {
         camera,
         foveation,

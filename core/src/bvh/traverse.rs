@@ -24,7 +24,8 @@ use glam::{Vec3, Vec4};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
 use crate::material::alpha::is_cut_out;
-use crate::scene::{Bvh4Node, SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
+use crate::scene::features::FEATURE_ALPHA_CUTOUT;
+use crate::scene::{Bvh4Node, Features, SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
 
 /// Entries of the traversal stack. A node visit pushes its (up to four) hit children and pops the nearest,
 /// so while a node of depth `j` (root = 0) is visited the stack holds at most `3 j` entries, and at most
@@ -176,10 +177,14 @@ fn near_far(min: [f32; 4], max: [f32; 4], negative: bool) -> (Vec4, Vec4) {
     }
 }
 
-/// Whether a candidate hit on `triangle` lies in a cut-out hole. Opaque materials cost one flag test.
+/// Whether a candidate hit on `triangle` lies in a cut-out hole. Opaque materials cost one flag test;
+/// scenes without cut-outs (by their feature set) none.
 #[inline]
 #[must_use]
-fn hit_is_cut_out(scene: &SceneView, triangle: u32, b1: f32, b2: f32) -> bool {
+fn hit_is_cut_out<F: Features>(scene: &SceneView<F>, triangle: u32, b1: f32, b2: f32) -> bool {
+    if !scene.features.has(FEATURE_ALPHA_CUTOUT) {
+        return false;
+    }
     let material = scene.triangle_info[triangle as usize].material;
     scene.materials[material as usize].flags & MATERIAL_ALPHA_CUTOUT != 0
         && is_cut_out(scene, triangle, b1, b2)
@@ -207,7 +212,7 @@ fn lowest_slot(mask: u32) -> usize {
 // Index loops over local arrays: rust-gpu does not compile iterators over them.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn traverse(scene: &SceneView, ray: &Ray, t_max: f32, any: bool) -> Hit {
+fn traverse<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32, any: bool) -> Hit {
     let mut best = Hit::miss();
     if scene.nodes.is_empty() {
         return best;
@@ -310,14 +315,14 @@ fn entry_of(node: &Bvh4Node, index: u32, i: usize) -> u32 {
 /// The closest hit of `ray` with `0 < t < t_max` over the scene's BVH, skipping alpha cut-out holes;
 /// [`Hit::miss`] if there is none or the scene has no nodes.
 #[must_use]
-pub fn closest_hit(scene: &SceneView, ray: &Ray, t_max: f32) -> Hit {
+pub fn closest_hit<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32) -> Hit {
     traverse(scene, ray, t_max, false)
 }
 
 /// Whether anything (other than alpha cut-out holes) blocks the open segment `(0, t_max)` of `ray`; for
 /// shadow rays. Stops at the first hit found.
 #[must_use]
-pub fn any_hit(scene: &SceneView, ray: &Ray, t_max: f32) -> bool {
+pub fn any_hit<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32) -> bool {
     traverse(scene, ray, t_max, true).is_hit()
 }
 
@@ -345,6 +350,7 @@ mod tests {
         materials: &'a [Material],
     ) -> SceneView<'a> {
         SceneView {
+            features: crate::scene::FeatureFlags::ALL,
             globals: SceneGlobals::default(),
             nodes,
             triangles,

@@ -14,14 +14,28 @@ pub const FLOAT_SCALE: f32 = 1.0 / 65536.0;
 /// The offset in ulps (times the normal) of the other coordinates.
 pub const INT_SCALE: f32 = 256.0;
 
+/// Where a shadow ray `origin + t (target - origin)` towards an offset target stops: 2^-16 short of the
+/// target (pbrt-v4 uses `1 - 1e-4`, its `ShadowEpsilon`).
+///
+/// The target is offset from its surface by up to 256 ulps of *its own* coordinates, but the hit
+/// distance `t` of a segment is only known to a few ulps of 1, i.e. a few times 6e-8 of the segment's
+/// length: when the segment is much longer than the target's coordinates are large (an origin far from
+/// a light near the world origin), the target's own surface can be found at `t = 1 - 1 ulp` and block
+/// the ray. Stopping at `1 - 2^-16` leaves 512 ulps of `t` to that error; it ignores occluders within
+/// 1.5e-5 of the segment's length of the target.
+pub const SHADOW_RAY_T_MAX: f32 = 1.0 - 1.0 / 65536.0;
+
 /// One coordinate of [`offset_ray_origin`].
 #[inline]
 #[must_use]
 fn offset_component(p: f32, n: f32) -> f32 {
+    // A unit normal's components lie in [-1, 1]; clamping keeps the float-to-int cast below in range for
+    // any input (an out-of-range `OpConvertFToS` is undefined on the GPU).
+    let n = n.clamp(-1.0, 1.0);
     if p.abs() < ORIGIN {
         p + FLOAT_SCALE * n
     } else {
-        // |INT_SCALE * n| <= 256 for a unit normal; the cast truncates towards zero.
+        // |INT_SCALE * n| <= 256; the cast truncates towards zero.
         let ulps = (INT_SCALE * n) as i32;
         // Integer steps on the bit pattern move away from zero for positive steps, so flip the sign of
         // the step for negative coordinates.

@@ -31,8 +31,8 @@ pub struct FrameParams {
 /// Renders sample `sample` of `block`: a jittered camera ray over the block's footprint traced by the
 /// path integrator. The random numbers depend only on (block origin, frame, sample, region, seed).
 #[must_use]
-pub fn render_block_sample(
-    scene: &SceneView,
+pub fn render_block_sample<F: crate::scene::Features>(
+    scene: &SceneView<F>,
     frame: &FrameParams,
     block: &OwnedBlock,
     sample: u32,

@@ -6,11 +6,22 @@
 //! contributes its emission (found by the BSDF-sampled ray from x_N, or by the light sample taken at x_N).
 //! `max_bounces = 0` shows only emitters seen directly; the paper's "depth 3" is `max_bounces = 3`, the
 //! same as Mitsuba's `max_depth = 4`. With Russian roulette off (the default) depth is exact.
+//!
+//! **Numerical guards.** GPU compilers may assume that no NaN or infinity occurs and fold NaN tests
+//! away, so the estimate is kept finite by guarding the *inputs* of every risky operation rather than by
+//! filtering results: every division is by a pdf tested `> 0` first (written `!(pdf > 0)` so a NaN
+//! fails too), directions are normalised with fallbacks ([`crate::sampling::ggx_vndf::normalize_or_zero`],
+//! `normalize_or`), cosines are tested against the shading and geometric normals before use, and MIS
+//! weights are total ([`power_heuristic`]). The one remaining output guard is the final one at the end of
+//! [`trace_path`]: a non-finite estimate becomes 0 and a finite one is capped at [`RADIANCE_LIMIT`]; it
+//! is a bit test ([`is_finite3`]), which no compiler can fold away. `tests/tests/stability_*.rs` prove
+//! that the guarded functions are finite without it, on the CPU and on the GPU
+//! ([`INTEGRATOR_FLAG_NO_FINAL_GUARD`] switches it off).
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use crate::bvh::traverse::{any_hit, closest_hit};
-use crate::geometry::offset::offset_ray_origin;
+use crate::geometry::offset::{offset_ray_origin, SHADOW_RAY_T_MAX};
 use crate::geometry::Ray;
 use crate::lights::{
     environment, power_heuristic, sample_light, triangle::emitted_radiance,
@@ -29,6 +40,10 @@ pub const STRATEGY_LIGHT_ONLY: u32 = 1;
 /// [`IntegratorSettings::strategy`]: BSDF sampling alone (no shadow rays; delta lights are never found).
 pub const STRATEGY_BSDF_ONLY: u32 = 2;
 
+/// [`IntegratorSettings::flags`]: return the raw estimate, without the final guard of [`trace_path`]
+/// (a diagnostic for the stability tests, which prove that the estimate is finite without it).
+pub const INTEGRATOR_FLAG_NO_FINAL_GUARD: u32 = 1;
+
 /// Integrator settings (16 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -39,7 +54,8 @@ pub struct IntegratorSettings {
     pub russian_roulette_start: u32,
     /// `STRATEGY_*`.
     pub strategy: u32,
-    pub _pad: u32,
+    /// `INTEGRATOR_FLAG_*` bits; 0 by default.
+    pub flags: u32,
 }
 
 impl Default for IntegratorSettings {
@@ -48,19 +64,19 @@ impl Default for IntegratorSettings {
             max_bounces: 3,
             russian_roulette_start: 0,
             strategy: STRATEGY_MIS,
-            _pad: 0,
+            flags: 0,
         }
     }
 }
 
 /// Largest radiance a single sample may return, a guard against overflow (not a clamp of fireflies:
 /// real estimates stay far below it).
-const RADIANCE_LIMIT: f32 = 1.0e30;
+pub const RADIANCE_LIMIT: f32 = 1.0e30;
 
 /// Traces one camera path and returns its radiance estimate.
 #[must_use]
-pub fn trace_path(
-    scene: &SceneView,
+pub fn trace_path<F: crate::scene::Features>(
+    scene: &SceneView<F>,
     camera_ray: Ray,
     rng: &mut SampleRng,
     settings: &IntegratorSettings,
@@ -149,7 +165,7 @@ pub fn trace_path(
             let ls = sample_light(scene, surface.position, u_select, u_light);
             if ls.pdf > 0.0 && ls.direction.dot(ng) > 0.0 {
                 let wi = frame.to_local(ls.direction);
-                let (f, pdf_b) = bsdf.eval_and_pdf(wo, wi);
+                let (f, pdf_b) = bsdf.eval_and_pdf_with(scene.features, wo, wi);
                 if wi.z > 0.0 && f != Vec3::ZERO {
                     let shadow = if ls.is_infinite {
                         Ray::new(origin, ls.direction)
@@ -159,7 +175,7 @@ pub fn trace_path(
                     let t_max = if ls.is_infinite {
                         INFINITE_DISTANCE
                     } else {
-                        1.0
+                        SHADOW_RAY_T_MAX
                     };
                     if !any_hit(scene, &shadow, t_max) {
                         let weight = if ls.is_delta || !mis {
@@ -178,7 +194,7 @@ pub fn trace_path(
         }
 
         // BSDF sampling for the next segment.
-        let s = bsdf.sample(wo, rng.next_3d());
+        let s = bsdf.sample_with(scene.features, wo, rng.next_3d());
         if !(s.pdf > 0.0) {
             break;
         }
@@ -187,8 +203,10 @@ pub fn trace_path(
             // Below the geometric surface although above the shading one: the sample would leak.
             break;
         }
+        // `s.pdf > 0` and `0 < s.wi.z <= 1` (unit, above the surface), so the factor is finite unless the
+        // pdf is denormal; no finiteness test here (see the module documentation, "Numerical guards").
         throughput *= s.f * (s.wi.z / s.pdf);
-        if !is_finite3(throughput) || throughput == Vec3::ZERO {
+        if throughput == Vec3::ZERO {
             break;
         }
         bsdf_pdf = s.pdf;
@@ -204,7 +222,9 @@ pub fn trace_path(
         ray = Ray::new(origin, wi_world);
         bounce += 1;
     }
-    if is_finite3(radiance) {
+    if settings.flags & INTEGRATOR_FLAG_NO_FINAL_GUARD != 0 {
+        radiance
+    } else if is_finite3(radiance) {
         radiance.min(Vec3::splat(RADIANCE_LIMIT))
     } else {
         Vec3::ZERO

@@ -13,8 +13,13 @@ pub mod triangle;
 use glam::{Vec2, Vec3};
 
 use crate::sampling::distribution::sample_cdf;
+use crate::scene::features::{
+    FEATURE_EMISSIVE_TRIANGLES, FEATURE_ENVIRONMENT_CONSTANT, FEATURE_ENVIRONMENT_MAP,
+    FEATURE_PUNCTUAL_LIGHTS,
+};
 use crate::scene::{
-    SceneView, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
+    Features, SceneView, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT,
+    LIGHT_TRIANGLE,
 };
 
 /// Farthest distance a shadow ray towards an infinitely distant light travels.
@@ -59,20 +64,31 @@ impl LightSample {
 /// Picks a light with probability proportional to its power (`u_select`) and samples it from the shading
 /// point `p` (`u`).
 #[must_use]
-pub fn sample_light(scene: &SceneView, p: Vec3, u_select: f32, u: Vec2) -> LightSample {
+pub fn sample_light<F: Features>(
+    scene: &SceneView<F>,
+    p: Vec3,
+    u_select: f32,
+    u: Vec2,
+) -> LightSample {
     let count = scene.globals.light_count;
     if count == 0 {
         return LightSample::none();
     }
     let choice = sample_cdf(scene.light_cdf, 0, count, u_select);
     let light = scene.lights[choice.index as usize];
-    let mut sample = if light.kind == LIGHT_TRIANGLE {
+    // Light kinds the scene lacks (by its feature set) are never tested for.
+    let features = scene.features;
+    let mut sample = if features.has(FEATURE_EMISSIVE_TRIANGLES) && light.kind == LIGHT_TRIANGLE {
         triangle::sample(scene, light.index, p, u)
-    } else if light.kind == LIGHT_ENVIRONMENT {
+    } else if features.has(FEATURE_ENVIRONMENT_CONSTANT | FEATURE_ENVIRONMENT_MAP)
+        && light.kind == LIGHT_ENVIRONMENT
+    {
         environment::sample(scene, u)
-    } else if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT {
+    } else if features.has(FEATURE_PUNCTUAL_LIGHTS)
+        && (light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT)
+    {
         punctual::sample_point_or_spot(&light, p)
-    } else if light.kind == LIGHT_DIRECTIONAL {
+    } else if features.has(FEATURE_PUNCTUAL_LIGHTS) && light.kind == LIGHT_DIRECTIONAL {
         punctual::sample_directional(&light)
     } else {
         LightSample::none()

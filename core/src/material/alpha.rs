@@ -2,14 +2,15 @@
 use glam::Vec2;
 
 use super::texture::sample_texture;
-use crate::scene::{SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
+use crate::scene::features::{FEATURE_ALPHA_CUTOUT, FEATURE_UVS};
+use crate::scene::{Features, SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
 
 /// Interpolated texture coordinates of `triangle` at barycentrics (`b1`, `b2`); zero when the scene has no
 /// texture coordinates.
 #[inline]
 #[must_use]
-pub fn interpolate_uv(scene: &SceneView, triangle: u32, b1: f32, b2: f32) -> Vec2 {
-    if scene.uvs.is_empty() {
+pub fn interpolate_uv<F: Features>(scene: &SceneView<F>, triangle: u32, b1: f32, b2: f32) -> Vec2 {
+    if !scene.features.has(FEATURE_UVS) || scene.uvs.is_empty() {
         return Vec2::ZERO;
     }
     let v = scene.triangle_info[triangle as usize].vertices;
@@ -22,9 +23,9 @@ pub fn interpolate_uv(scene: &SceneView, triangle: u32, b1: f32, b2: f32) -> Vec
 /// Whether the point at barycentrics (`b1`, `b2`) of `triangle` is cut out (its opacity is below the
 /// material's cutoff). Materials without [`MATERIAL_ALPHA_CUTOUT`] are never cut out.
 #[must_use]
-pub fn is_cut_out(scene: &SceneView, triangle: u32, b1: f32, b2: f32) -> bool {
+pub fn is_cut_out<F: Features>(scene: &SceneView<F>, triangle: u32, b1: f32, b2: f32) -> bool {
     let material = &scene.materials[scene.triangle_info[triangle as usize].material as usize];
-    if material.flags & MATERIAL_ALPHA_CUTOUT == 0 {
+    if !scene.features.has(FEATURE_ALPHA_CUTOUT) || material.flags & MATERIAL_ALPHA_CUTOUT == 0 {
         return false;
     }
     let mut alpha = material.base_color[3];

@@ -8,7 +8,11 @@ use crate::bsdf::DisneyParams;
 use crate::bvh::traverse::Hit;
 use crate::lights::triangle::{scaled_geometric_normal, triangle_vertices};
 use crate::math::{vec3_from, Frame};
-use crate::scene::{SceneView, INVALID_INDEX};
+use crate::scene::features::{
+    FEATURE_BASE_COLOR_TEXTURE, FEATURE_LOBE_ANISOTROPY, FEATURE_METALLIC_ROUGHNESS_TEXTURE,
+    FEATURE_NORMAL_TEXTURE, FEATURE_SHADING_NORMALS, FEATURE_UVS,
+};
+use crate::scene::{Features, SceneView, INVALID_INDEX};
 
 /// Everything the integrator needs at a hit point.
 #[derive(Clone, Copy, Debug)]
@@ -25,7 +29,7 @@ pub struct SurfacePoint {
 
 /// Builds the shading point for `hit` (which must be a hit).
 #[must_use]
-pub fn surface_point(scene: &SceneView, hit: &Hit) -> SurfacePoint {
+pub fn surface_point<F: Features>(scene: &SceneView<F>, hit: &Hit) -> SurfacePoint {
     let triangle = hit.triangle;
     let (b1, b2) = (hit.b1, hit.b2);
     let b0 = 1.0 - b1 - b2;
@@ -38,7 +42,7 @@ pub fn surface_point(scene: &SceneView, hit: &Hit) -> SurfacePoint {
 
     // Interpolated vertex normal, if the scene has them for all three vertices.
     let mut ns = ng;
-    if !scene.normals.is_empty() {
+    if scene.features.has(FEATURE_SHADING_NORMALS) && !scene.normals.is_empty() {
         let n0 = vec3_from(scene.normals[info.vertices[0] as usize]);
         let n1 = vec3_from(scene.normals[info.vertices[1] as usize]);
         let n2 = vec3_from(scene.normals[info.vertices[2] as usize]);
@@ -48,9 +52,14 @@ pub fn surface_point(scene: &SceneView, hit: &Hit) -> SurfacePoint {
         }
     }
 
-    // Tangent from the texture parameterisation (pbrt-v4 §6.5.3); used by normal maps and anisotropy.
+    // Tangent from the texture parameterisation (pbrt-v4 §6.5.3), for the materials that need one: normal
+    // maps and anisotropy. Others are isotropic, so any tangent serves and the normal's own frame is
+    // used (cheaper, and independent of whether the scene has texture coordinates).
+    let needs_tangent = (scene.features.has(FEATURE_NORMAL_TEXTURE)
+        && material.normal_texture != INVALID_INDEX)
+        || (scene.features.has(FEATURE_LOBE_ANISOTROPY) && !(material.anisotropic == 0.0));
     let mut tangent = Vec3::ZERO;
-    if !scene.uvs.is_empty() {
+    if needs_tangent && scene.features.has(FEATURE_UVS) && !scene.uvs.is_empty() {
         let t0 = Vec2::from(scene.uvs[info.vertices[0] as usize]);
         let t1 = Vec2::from(scene.uvs[info.vertices[1] as usize]);
         let t2 = Vec2::from(scene.uvs[info.vertices[2] as usize]);
@@ -58,12 +67,19 @@ pub fn surface_point(scene: &SceneView, hit: &Hit) -> SurfacePoint {
         let duv2 = t2 - t0;
         let det = duv1.x * duv2.y - duv1.y * duv2.x;
         if det.abs() > 1e-20 {
-            tangent = ((v[1] - v[0]) * duv2.y - (v[2] - v[0]) * duv1.y) / det;
+            // Only the direction is used: multiply by the determinant's sign and normalise instead of
+            // dividing by it, which overflows for tiny determinants (zero if the length over- or
+            // underflows, and then the frame falls back to `Frame::from_normal`).
+            tangent = (((v[1] - v[0]) * duv2.y - (v[2] - v[0]) * duv1.y) * det.signum())
+                .normalize_or_zero();
         }
     }
 
     let mut frame = Frame::from_normal_tangent(ns, tangent);
-    if material.normal_texture != INVALID_INDEX && tangent != Vec3::ZERO {
+    if scene.features.has(FEATURE_NORMAL_TEXTURE)
+        && material.normal_texture != INVALID_INDEX
+        && tangent != Vec3::ZERO
+    {
         let t = sample_texture(scene, material.normal_texture, uv);
         let m = Vec3::new(
             (2.0 * t.x - 1.0) * material.normal_scale,
@@ -76,12 +92,16 @@ pub fn surface_point(scene: &SceneView, hit: &Hit) -> SurfacePoint {
     }
 
     let mut base_color = vec3_from(material.base_color);
-    if material.base_color_texture != INVALID_INDEX {
+    if scene.features.has(FEATURE_BASE_COLOR_TEXTURE)
+        && material.base_color_texture != INVALID_INDEX
+    {
         base_color *= sample_texture(scene, material.base_color_texture, uv).truncate();
     }
     let mut metallic = material.metallic;
     let mut roughness = material.roughness;
-    if material.metallic_roughness_texture != INVALID_INDEX {
+    if scene.features.has(FEATURE_METALLIC_ROUGHNESS_TEXTURE)
+        && material.metallic_roughness_texture != INVALID_INDEX
+    {
         let t = sample_texture(scene, material.metallic_roughness_texture, uv);
         roughness *= t.y;
         metallic *= t.z;
@@ -104,5 +124,74 @@ pub fn surface_point(scene: &SceneView, hit: &Hit) -> SurfacePoint {
         frame,
         uv,
         params,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::pack_vec3;
+    use crate::scene::{Material, SceneGlobals, TriangleInfo, TrianglePositions};
+
+    /// Tangent frames stay finite and orthonormal for texture parameterisations whose determinant is
+    /// tiny (just above the 1e-20 cut-off) next to large edges, where the squared length of
+    /// `edge / det` overflows `f32` (which left a zero tangent axis before).
+    #[test]
+    fn tangent_frame_is_finite_for_tiny_uv_determinants() {
+        let scale = 1.0e10f32;
+        let tri = TrianglePositions {
+            v0: pack_vec3(Vec3::ZERO, 0.0),
+            v1: pack_vec3(Vec3::new(scale, 0.0, 0.0), 0.0),
+            v2: pack_vec3(Vec3::new(0.0, scale, 0.0), 0.0),
+        };
+        let info = TriangleInfo {
+            vertices: [0, 1, 2],
+            material: 0,
+        };
+        let materials = [Material {
+            anisotropic: 0.9,
+            ..Material::default()
+        }];
+        for d in [1e-19f32, 1.2e-10, 1e-3, 1.0] {
+            // det = duv1.x * duv2.y - duv1.y * duv2.x = d * d.
+            let uvs = [[0.0, 0.0], [d, 0.0], [0.0, d]];
+            let view = SceneView {
+                features: crate::scene::FeatureFlags::ALL,
+                globals: SceneGlobals::default(),
+                nodes: &[],
+                triangles: core::slice::from_ref(&tri),
+                triangle_info: core::slice::from_ref(&info),
+                normals: &[],
+                uvs: &uvs,
+                materials: &materials,
+                textures: &[],
+                texels: &[],
+                lights: &[],
+                light_cdf: &[],
+                triangle_light: &[],
+                environment_texels: &[],
+                environment_marginal_cdf: &[],
+                environment_conditional_cdf: &[],
+            };
+            let hit = Hit {
+                t: 1.0,
+                triangle: 0,
+                b1: 0.25,
+                b2: 0.25,
+            };
+            let s = surface_point(&view, &hit);
+            let f = s.frame;
+            for v in [f.x, f.y, f.z] {
+                assert!(
+                    v.is_finite() && (v.length() - 1.0).abs() < 1e-5,
+                    "{d}: {f:?}"
+                );
+            }
+            assert!(f.x.dot(f.y).abs() < 1e-5 && f.x.dot(f.z).abs() < 1e-5);
+            // For a proper parameterisation the tangent follows +u (here +x).
+            if d * d > 1e-20 {
+                assert!(f.x.dot(Vec3::X) > 0.999, "{d}: {f:?}");
+            }
+        }
     }
 }

@@ -26,7 +26,12 @@ fn wrap(i: i32, size: u32) -> u32 {
 }
 
 #[inline]
-fn fetch(scene: &SceneView, info: &TextureInfo, x: i32, y: i32) -> Vec4 {
+fn fetch<F: crate::scene::Features>(
+    scene: &SceneView<F>,
+    info: &TextureInfo,
+    x: i32,
+    y: i32,
+) -> Vec4 {
     let xi = wrap(x, info.width);
     let yi = wrap(y, info.height);
     let index = info.offset + yi * info.width + xi;
@@ -36,7 +41,11 @@ fn fetch(scene: &SceneView, info: &TextureInfo, x: i32, y: i32) -> Vec4 {
 /// Samples texture `texture` at `uv` with bilinear filtering; sRGB textures come back linear (alpha stays
 /// linear). `uv` (0, 0) is the top-left corner of the image, as in glTF.
 #[must_use]
-pub fn sample_texture(scene: &SceneView, texture: u32, uv: Vec2) -> Vec4 {
+pub fn sample_texture<F: crate::scene::Features>(
+    scene: &SceneView<F>,
+    texture: u32,
+    uv: Vec2,
+) -> Vec4 {
     let info = scene.textures[texture as usize];
     let fx = uv.x * info.width as f32 - 0.5;
     let fy = uv.y * info.height as f32 - 0.5;

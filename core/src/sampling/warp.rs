@@ -235,4 +235,26 @@ mod tests {
         // 127 degrees of freedom: mean 127, a 5-sigma bound is about 207.
         assert!(chi2 < 220.0, "chi2 = {chi2}");
     }
+
+    /// Chi-square test of the cosine-hemisphere warp against `cosine_hemisphere_pdf` on a 32 × 64
+    /// (cos θ, φ) grid of the hemisphere (see [`crate::test_support::chi2`]); also `z >= 0` always.
+    #[test]
+    fn chi2_cosine_hemisphere() {
+        use crate::test_support::chi2::{chi2_test, family_share, sample_count, Grid};
+        assert_eq!(family_share("cosine hemisphere"), 1);
+        let n = sample_count(1_000_000, 10_000_000);
+        let grid = Grid::hemisphere(32, 64).clip(Vec3::Z);
+        chi2_test(
+            "cosine hemisphere",
+            &grid,
+            n,
+            0xC05,
+            |rng| {
+                let u = Vec2::new(rng.uniform(), rng.uniform());
+                Some(square_to_cosine_hemisphere(u))
+            },
+            |w| cosine_hemisphere_pdf(w.z) as f64,
+        )
+        .check();
+    }
 }

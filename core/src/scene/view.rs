@@ -1,12 +1,19 @@
 //! [`SceneView`]: borrowed slices of the packed scene, the one argument every traversal and shading
 //! function takes. The CPU host builds it from `Vec`s, the GPU kernel from storage buffers.
+use super::features::{FeatureFlags, Features};
 use super::layout::{
     Bvh4Node, Light, Material, SceneGlobals, TextureInfo, TriangleInfo, TrianglePositions,
 };
 
 /// The packed scene as borrowed slices. Arrays a scene does not need are empty.
+///
+/// `F` is the set of optional features the shading code may meet (see [`super::features`]): the
+/// default [`FeatureFlags`] is a run-time mask, [`super::StaticFeatures`] a compile-time one for the
+/// CPU's specialised paths.
 #[derive(Clone, Copy)]
-pub struct SceneView<'a> {
+pub struct SceneView<'a, F: Features = FeatureFlags> {
+    /// Which optional features may occur; a superset of the scene's own (tested, never required).
+    pub features: F,
     pub globals: SceneGlobals,
     /// 4-wide BVH nodes, root first (see [`Bvh4Node`]); empty for an empty scene.
     pub nodes: &'a [Bvh4Node],
@@ -35,4 +42,30 @@ pub struct SceneView<'a> {
     pub environment_marginal_cdf: &'a [f32],
     /// Environment importance sampling: one CDF per row (`height * (width + 1)` entries).
     pub environment_conditional_cdf: &'a [f32],
+}
+
+impl<'a, F: Features> SceneView<'a, F> {
+    /// The same arrays with another feature set, which must include every feature the scene uses.
+    #[inline]
+    #[must_use]
+    pub fn with_features<G: Features>(&self, features: G) -> SceneView<'a, G> {
+        SceneView {
+            features,
+            globals: self.globals,
+            nodes: self.nodes,
+            triangles: self.triangles,
+            triangle_info: self.triangle_info,
+            normals: self.normals,
+            uvs: self.uvs,
+            materials: self.materials,
+            textures: self.textures,
+            texels: self.texels,
+            lights: self.lights,
+            light_cdf: self.light_cdf,
+            triangle_light: self.triangle_light,
+            environment_texels: self.environment_texels,
+            environment_marginal_cdf: self.environment_marginal_cdf,
+            environment_conditional_cdf: self.environment_conditional_cdf,
+        }
+    }
 }
