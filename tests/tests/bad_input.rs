@@ -649,3 +649,53 @@ fn cli_png_is_byte_identical_with_one_and_two_threads() {
     );
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// With no Vulkan driver at all (the loader pointed at a missing ICD file), `--backend vulkan` fails
+/// with a message that says so and writes nothing, and `--backend auto` notes it and renders on the CPU.
+#[test]
+fn cli_without_a_vulkan_driver_fails_clearly_or_falls_back() {
+    let Some(bin) = fovea_binary() else {
+        return;
+    };
+    let dir = temp_dir("no-vulkan");
+    let scene = fovea_tests::cornell_box_path();
+    let scene = scene.to_str().unwrap();
+    let no_driver = |backend: &str, out: &Path| {
+        Command::new(&bin)
+            .arg("render")
+            .arg(scene)
+            .args([
+                "--backend",
+                backend,
+                "--resolution",
+                "32x24",
+                "--spp",
+                "1,1,1",
+            ])
+            .arg("-o")
+            .arg(out)
+            .env("VK_ICD_FILENAMES", dir.join("missing-icd.json"))
+            .env("VK_DRIVER_FILES", dir.join("missing-icd.json"))
+            .output()
+            .unwrap()
+    };
+    let vulkan_png = dir.join("vulkan.png");
+    let out = no_driver("vulkan", &vulkan_png);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("Vulkan")
+            && (stderr.contains("no Vulkan device") || stderr.contains("loader")),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(!vulkan_png.exists());
+
+    let auto_png = dir.join("auto.png");
+    let out = no_driver("auto", &auto_png);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("rendering on the CPU"), "{stderr}");
+    assert!(auto_png.is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
