@@ -129,7 +129,12 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub env_map: Option<PathBuf>,
     /// Scale of --env-map.
-    #[arg(long, default_value_t = 1.0, value_name = "S", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "S",
+        allow_hyphen_values = true
+    )]
     pub env_scale: f32,
     /// MTL file to use instead of the one the OBJ names (e.g. Lost Empire's torch variant).
     #[arg(long, value_name = "FILE.mtl")]
@@ -260,7 +265,12 @@ pub struct ReportArgs {
     #[arg(long, value_name = "FILE")]
     pub env_map: Option<PathBuf>,
     /// Scale of --env-map.
-    #[arg(long, default_value_t = 1.0, value_name = "S", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "S",
+        allow_hyphen_values = true
+    )]
     pub env_scale: f32,
     /// No progress bar and no summary.
     #[arg(short, long)]
