@@ -1,20 +1,19 @@
 //! The CPU's specialised render paths: the per-sample integrator monomorphised over a handful of
 //! compile-time feature masks ([`StaticFeatures`]), one chosen per scene at render time.
 //!
-//! A path exists for every combination of three feature groups that scenes tend to have or lack together
-//! (textures and cut-outs; environment maps and punctual lights; the extra Disney lobes), always with the
-//! features nearly every scene has (emissive triangles, a constant sky, the specular lobe, shading
-//! normals). A scene runs the smallest path that covers its features, so only the groups it lacks are
-//! compiled out; eight copies of the integrator keep the build time and binary size in check.
-//! `FeatureFlags::ALL` (the `--no-specialize` view) selects the path with every group.
+//! A path exists for every combination of three feature groups that scenes tend to have or lack together:
+//! textures and cut-outs; glossy reflection (the GGX specular lobe, metals); and the rarer features
+//! (environment maps, punctual lights, sheen, clearcoat, anisotropy). Every path keeps the features
+//! nearly every scene has (emissive triangles, a constant sky, shading normals). A scene runs the
+//! smallest path that covers its features, so only the groups it lacks are compiled out; eight copies of
+//! the integrator keep the build time and binary size in check. `FeatureFlags::ALL` (the
+//! `--no-specialize` view) selects the path with every group.
 use fovea_core::scene::features::*;
 use fovea_core::scene::{Features, SceneView, StaticFeatures};
 
 /// Features every path keeps.
-pub const GROUP_BASE: u32 = FEATURE_EMISSIVE_TRIANGLES
-    | FEATURE_ENVIRONMENT_CONSTANT
-    | FEATURE_LOBE_SPECULAR
-    | FEATURE_SHADING_NORMALS;
+pub const GROUP_BASE: u32 =
+    FEATURE_EMISSIVE_TRIANGLES | FEATURE_ENVIRONMENT_CONSTANT | FEATURE_SHADING_NORMALS;
 /// Textures, alpha cut-outs and the texture coordinates they read.
 pub const GROUP_TEXTURES: u32 = FEATURE_BASE_COLOR_TEXTURE
     | FEATURE_METALLIC_ROUGHNESS_TEXTURE
@@ -22,20 +21,23 @@ pub const GROUP_TEXTURES: u32 = FEATURE_BASE_COLOR_TEXTURE
     | FEATURE_EMISSION_TEXTURE
     | FEATURE_ALPHA_CUTOUT
     | FEATURE_UVS;
-/// Lights beyond emissive triangles and a constant sky.
-pub const GROUP_LIGHTS: u32 = FEATURE_ENVIRONMENT_MAP | FEATURE_PUNCTUAL_LIGHTS;
-/// Disney lobes beyond diffuse and specular.
-pub const GROUP_LOBES: u32 =
-    FEATURE_LOBE_SHEEN | FEATURE_LOBE_CLEARCOAT | FEATURE_LOBE_ANISOTROPY | FEATURE_LOBE_METALLIC;
+/// Glossy reflection: the GGX specular lobe and metals.
+pub const GROUP_GLOSSY: u32 = FEATURE_LOBE_SPECULAR | FEATURE_LOBE_METALLIC;
+/// The rarer features: environment maps, punctual lights, and the sheen, clearcoat and anisotropy lobes.
+pub const GROUP_RARE: u32 = FEATURE_ENVIRONMENT_MAP
+    | FEATURE_PUNCTUAL_LIGHTS
+    | FEATURE_LOBE_SHEEN
+    | FEATURE_LOBE_CLEARCOAT
+    | FEATURE_LOBE_ANISOTROPY;
 
 const V0: u32 = GROUP_BASE;
 const V1: u32 = GROUP_BASE | GROUP_TEXTURES;
-const V2: u32 = GROUP_BASE | GROUP_LIGHTS;
-const V3: u32 = GROUP_BASE | GROUP_TEXTURES | GROUP_LIGHTS;
-const V4: u32 = GROUP_BASE | GROUP_LOBES;
-const V5: u32 = GROUP_BASE | GROUP_TEXTURES | GROUP_LOBES;
-const V6: u32 = GROUP_BASE | GROUP_LIGHTS | GROUP_LOBES;
-const V7: u32 = GROUP_BASE | GROUP_TEXTURES | GROUP_LIGHTS | GROUP_LOBES;
+const V2: u32 = GROUP_BASE | GROUP_GLOSSY;
+const V3: u32 = GROUP_BASE | GROUP_TEXTURES | GROUP_GLOSSY;
+const V4: u32 = GROUP_BASE | GROUP_RARE;
+const V5: u32 = GROUP_BASE | GROUP_TEXTURES | GROUP_RARE;
+const V6: u32 = GROUP_BASE | GROUP_GLOSSY | GROUP_RARE;
+const V7: u32 = GROUP_BASE | GROUP_TEXTURES | GROUP_GLOSSY | GROUP_RARE;
 
 /// The feature mask of the path that renders a scene with features `mask`: the smallest compiled one
 /// that contains it.
@@ -45,11 +47,11 @@ pub fn path_mask(mask: u32) -> u32 {
     if mask & GROUP_TEXTURES != 0 {
         path |= GROUP_TEXTURES;
     }
-    if mask & GROUP_LIGHTS != 0 {
-        path |= GROUP_LIGHTS;
+    if mask & GROUP_GLOSSY != 0 {
+        path |= GROUP_GLOSSY;
     }
-    if mask & GROUP_LOBES != 0 {
-        path |= GROUP_LOBES;
+    if mask & GROUP_RARE != 0 {
+        path |= GROUP_RARE;
     }
     path
 }
@@ -81,7 +83,7 @@ mod tests {
     #[test]
     fn every_feature_belongs_to_a_group_and_paths_cover_their_scenes() {
         assert_eq!(
-            GROUP_BASE | GROUP_TEXTURES | GROUP_LIGHTS | GROUP_LOBES,
+            GROUP_BASE | GROUP_TEXTURES | GROUP_GLOSSY | GROUP_RARE,
             FEATURES_ALL
         );
         for mask in 0..=FEATURES_ALL {

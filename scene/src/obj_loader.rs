@@ -24,7 +24,9 @@
 //! | `map_Bump`, `bump`, `norm` | ignored with a warning (no bump-to-normal conversion) |
 //! | `map_Ka`, `Ka`, `Ni`, `illum`, `Tf`, `Tr` | ignored |
 //!
-//! `specular` is 0.5 and `specular_tint` 0 for every material. Faces without a (known) material get a
+//! `specular` is 0.5 (an index of refraction of 1.5), except 0 when the material gives `Ks 0 0 0`
+//! explicitly and no `Pm` (no specular reflection at all: a pure diffuse material, as Mitsuba's `diffuse`
+//! for the same MTL); `specular_tint` is 0 for every material. Faces without a (known) material get a
 //! default grey diffuse material named `default`. Texture paths are relative to the MTL file; MTL texture
 //! options (`-bm 1 file.png`) are skipped by taking the last token. Emission is single-sided (front face),
 //! as OBJ has no double-sided flag.
@@ -520,6 +522,8 @@ fn convert_materials(
         let mut warnings = Vec::new();
         let kd = m.diffuse.unwrap_or([0.8; 3]);
         let ks = m.specular.unwrap_or([0.0; 3]);
+        // `Ks 0 0 0` given explicitly (and no PBR `Pm`): the material has no specular reflection.
+        let no_specular = m.specular == Some([0.0; 3]) && m.unknown_param.get("Pm").is_none();
         let base_texture = kd_tex.map_or(INVALID_INDEX, |i| slots[i]);
         let alpha_texture = d_tex.map_or(INVALID_INDEX, |i| slots[i]);
         let pm = param(m, "Pm", &mut warnings, mtl);
@@ -550,7 +554,7 @@ fn convert_materials(
             emission: [e[0].max(0.0), e[1].max(0.0), e[2].max(0.0), 0.0],
             metallic,
             roughness,
-            specular: 0.5,
+            specular: if no_specular { 0.0 } else { 0.5 },
             base_color_texture: base_texture,
             ..Material::default()
         };

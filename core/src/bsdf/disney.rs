@@ -36,6 +36,7 @@ use crate::sampling::ggx_vndf::{ggx_d, normalize_or_zero, sample_ggx_vndf, smith
 use crate::sampling::warp::square_to_cosine_hemisphere;
 use crate::scene::features::{
     FEATURE_LOBE_ANISOTROPY, FEATURE_LOBE_CLEARCOAT, FEATURE_LOBE_METALLIC, FEATURE_LOBE_SHEEN,
+    FEATURE_LOBE_SPECULAR,
 };
 use crate::scene::{FeatureFlags, Features};
 use glam::{Vec2, Vec3};
@@ -175,6 +176,13 @@ struct Lobes {
     ax: f32,
     ay: f32,
     cspec0: Vec3,
+    /// Grazing Fresnel reflectance of the specular lobe: `min(1, 50 · max(cspec0))` (Schüler 2009,
+    /// adopted by Frostbite, Lagarde & de Rousiers 2014): 1 for every real dielectric or metal (F0 >= 2%),
+    /// fading to 0 for `specular` 0 (an index of refraction of 1 reflects nothing, not even at grazing
+    /// angles, which canonical Schlick with F0 = 0 would still do).
+    f90: f32,
+    /// Whether the specular lobe can be non-zero (feature set and `cspec0`); else it is skipped.
+    specular_on: bool,
     clearcoat: f32,
     cc_alpha: f32,
     /// Whether the feature set allows sheen / clearcoat at all (else `sheen` / `clearcoat` are zero and
@@ -198,7 +206,10 @@ impl Lobes {
     #[inline]
     #[must_use]
     fn spec_albedo(&self, mu: f32) -> Vec3 {
-        (self.cspec0 + (Vec3::ONE - self.cspec0) * schlick_weight(mu)).min(Vec3::ONE)
+        if !self.specular_on {
+            return Vec3::ZERO;
+        }
+        (self.cspec0 + (Vec3::splat(self.f90) - self.cspec0) * schlick_weight(mu)).min(Vec3::ONE)
     }
 
     /// Ê_cc(w) = 0.25 · clearcoat · Schlick(0.04, cos θ): an upper bound of the clearcoat albedo (its
@@ -281,8 +292,14 @@ impl DisneyParams {
             Vec3::ONE
         };
         let specular_tint = self.specular_tint.clamp(0.0, 1.0);
-        let cspec0 = (Vec3::ONE.lerp(tint, specular_tint) * (0.08 * self.specular.clamp(0.0, 1.0)))
-            .lerp(base, metallic);
+        let specular_on = features.has(FEATURE_LOBE_SPECULAR);
+        let cspec0 = if specular_on {
+            (Vec3::ONE.lerp(tint, specular_tint) * (0.08 * self.specular.clamp(0.0, 1.0)))
+                .lerp(base, metallic)
+        } else {
+            Vec3::ZERO
+        };
+        let f90 = (50.0 * cspec0.max_element()).min(1.0);
         let sheen_on = features.has(FEATURE_LOBE_SHEEN);
         let sheen = if sheen_on {
             Vec3::ONE.lerp(tint, self.sheen_tint.clamp(0.0, 1.0)) * self.sheen.clamp(0.0, 1.0)
@@ -311,6 +328,8 @@ impl DisneyParams {
             ax: alphas.x,
             ay: alphas.y,
             cspec0,
+            f90,
+            specular_on: specular_on && f90 > 0.0,
             clearcoat,
             cc_alpha,
             sheen_on,
@@ -416,13 +435,20 @@ impl DisneyParams {
         }
         let f_base = f_base * (1.0 / norm);
 
-        // Specular: D F G1(wo) G1(wi) / (4 cos θo cos θi), with G1 / (2 cos) kept together.
-        let d_s = ggx_d(h, lobes.ax, lobes.ay);
-        let g_o = smith_g1_over_2cos(wo, lobes.ax, lobes.ay);
-        let g_i = smith_g1_over_2cos(wi, lobes.ax, lobes.ay);
-        let f_s = lobes.cspec0 + (Vec3::ONE - lobes.cspec0) * fh;
-        let t_spec = Vec3::ONE - lobes.spec_albedo_o.max(lobes.spec_albedo(wi.z));
-        let mut f = f_s * (d_s * g_o * g_i) + t_spec * f_base;
+        // Specular: D F G1(wo) G1(wi) / (4 cos θo cos θi), with G1 / (2 cos) kept together. Without a
+        // specular lobe (F0 = F90 = 0) it and its pdf are exactly zero and are skipped.
+        let mut f = f_base;
+        let mut pdf_s = 0.0;
+        if lobes.specular_on {
+            let d_s = ggx_d(h, lobes.ax, lobes.ay);
+            let g_o = smith_g1_over_2cos(wo, lobes.ax, lobes.ay);
+            let g_i = smith_g1_over_2cos(wi, lobes.ax, lobes.ay);
+            let f_s = lobes.cspec0 + (Vec3::splat(lobes.f90) - lobes.cspec0) * fh;
+            let t_spec = Vec3::ONE - lobes.spec_albedo_o.max(lobes.spec_albedo(wi.z));
+            f = f_s * (d_s * g_o * g_i) + t_spec * f_base;
+            // D_wo(h) / (4 wo·h) = G1(wo) D(h) / (4 wo.z) = g_o D / 2.
+            pdf_s = 0.5 * g_o * d_s;
+        }
 
         // Clearcoat: 0.25 · clearcoat · GTR1 · Schlick(0.04) · G(0.25) / (4 cos θo cos θi), on top.
         // GTR1 needs a logarithm: skip it for the (common) materials without clearcoat, whose clearcoat
@@ -437,10 +463,8 @@ impl DisneyParams {
             f = f * t_cc + Vec3::splat(0.25 * lobes.clearcoat * d_c * f_c * g_c);
         }
 
-        // Lobe pdfs. Specular: D_wo(h) / (4 wo·h) = G1(wo) D(h) / (4 wo.z) = g_o D / 2.
-        // Clearcoat: D(h) cos θh / (4 wo·h).
+        // Lobe pdfs (specular above). Clearcoat: D(h) cos θh / (4 wo·h).
         let pdf_d = wi.z * INV_PI;
-        let pdf_s = 0.5 * g_o * d_s;
         let pdf_c = d_c * h.z / (4.0 * cos_d);
         (f, Vec3::new(pdf_d, pdf_s, pdf_c))
     }
@@ -690,11 +714,13 @@ mod tests {
         let norm = base_albedo[0].max(base_albedo[1]).max(1.0);
         let cc_albedo = |mu: f64| 0.25 * p.clearcoat as f64 * mix(0.04, 1.0, schlick(mu));
         let t_cc = 1.0 - cc_albedo(ndotv).max(cc_albedo(ndotl));
+        // Grazing reflectance min(1, 50 max F0) (Schüler 2009).
+        let f90 = (50.0 * cspec0[0].max(cspec0[1]).max(cspec0[2])).min(1.0);
         let mut out = [0.0; 3];
         for c in 0..3 {
-            let fs = mix(cspec0[c], 1.0, fh);
+            let fs = mix(cspec0[c], f90, fh);
             let fsheen = fh * csheen[c];
-            let spec_albedo = |mu: f64| mix(cspec0[c], 1.0, schlick(mu)).min(1.0);
+            let spec_albedo = |mu: f64| mix(cspec0[c], f90, schlick(mu)).min(1.0);
             let t_spec = 1.0 - spec_albedo(ndotv).max(spec_albedo(ndotl));
             let f_base = ((1.0 / pi) * fd * base[c] + fsheen) * (1.0 - p.metallic as f64) / norm;
             out[c] =

@@ -40,7 +40,8 @@ pub const FEATURE_LOBE_SHEEN: u32 = 1 << 9;
 pub const FEATURE_LOBE_CLEARCOAT: u32 = 1 << 10;
 /// Some material has `anisotropic != 0`.
 pub const FEATURE_LOBE_ANISOTROPY: u32 = 1 << 11;
-/// Some material has a specular reflection (`specular > 0` or `metallic > 0`): the GGX lobe.
+/// Some material has a specular (GGX) reflection: `specular > 0` or `metallic > 0`. With both zero the
+/// Disney specular lobe vanishes (F0 = 0 and, with the F90 fade of `bsdf::disney`, no grazing Fresnel).
 pub const FEATURE_LOBE_SPECULAR: u32 = 1 << 12;
 /// Some material has `metallic > 0` (or a metallic-roughness texture).
 pub const FEATURE_LOBE_METALLIC: u32 = 1 << 13;
