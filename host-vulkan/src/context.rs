@@ -100,6 +100,8 @@ pub struct VulkanContext {
     pub(crate) timestamp_mask: u64,
     pub(crate) frame: Option<FrameResources>,
     pub(crate) poisoned: bool,
+    /// A failure the next submission reports instead of submitting ([`Self::inject_fault`]).
+    pub(crate) injected_fault: Option<vk::Result>,
     /// Bound on the samples of one `render_samples` dispatch (and one submission):
     /// [`DEFAULT_MAX_CHUNK_SAMPLES`], or [`SOFTWARE_MAX_CHUNK_SAMPLES`] on a software driver.
     pub max_chunk_samples: u32,
@@ -295,6 +297,7 @@ impl VulkanContext {
             },
             frame: None,
             poisoned: false,
+            injected_fault: None,
             max_chunk_samples: if info.device_type == "cpu" {
                 SOFTWARE_MAX_CHUNK_SAMPLES
             } else {
@@ -482,6 +485,14 @@ impl VulkanContext {
         self.shared.instance.log.clone()
     }
 
+    /// Fault injection for tests: the next submission fails with `fault` (e.g.
+    /// `vk::Result::ERROR_DEVICE_LOST` or `ERROR_OUT_OF_DEVICE_MEMORY`) as if the driver had returned it,
+    /// so the error paths that a real device loss takes can be tested on any device.
+    #[doc(hidden)]
+    pub fn inject_fault(&mut self, fault: vk::Result) {
+        self.injected_fault = Some(fault);
+    }
+
     /// Fails if an earlier device loss or timeout left the device in an unknown state.
     pub(crate) fn check_usable(&self) -> Result<()> {
         if self.poisoned {
@@ -527,6 +538,10 @@ impl VulkanContext {
                 .and_then(|()| {
                     record(device, cb);
                     device.end_command_buffer(cb).during("vkEndCommandBuffer")
+                })
+                .and_then(|()| match self.injected_fault.take() {
+                    Some(fault) => Err(VulkanError::vk("vkQueueSubmit (injected fault)", fault)),
+                    None => Ok(()),
                 })
                 .and_then(|()| {
                     let cbs = [cb];

@@ -26,6 +26,8 @@ pub mod probe;
 pub mod scene;
 pub mod spirv;
 
+/// The `ash` Vulkan types (result codes for [`VulkanContext::inject_fault`]).
+pub use ash::vk;
 pub use context::{validation_requested, ContextOptions, VulkanContext};
 pub use error::VulkanError;
 pub use frame::{GpuFrame, GpuRenderStats};

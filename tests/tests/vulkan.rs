@@ -301,3 +301,40 @@ fn oversized_buffers_name_the_limit() {
     );
     assert!(ctx.check_size("a small buffer", 1 << 16).is_ok());
 }
+
+/// A device loss reported by the driver (injected at the next submission) gives a clear error, not a hang
+/// or a panic, and the context then refuses further work at once; running out of device memory gives a
+/// clear error too and leaves the context usable.
+#[test]
+fn device_loss_and_out_of_memory_are_clear_errors() {
+    use fovea_vulkan::vk;
+    let Some(mut ctx) = vulkan_context_or_skip("the Vulkan test") else {
+        return;
+    };
+    let packed = load_packed(&cornell_box_path(), &Environment::None);
+    let scene = ctx.upload_scene(&packed).expect("upload");
+    let frame = frame_params(cornell_camera(W, H), foveation(), W, H, 3);
+
+    ctx.inject_fault(vk::Result::ERROR_OUT_OF_DEVICE_MEMORY);
+    let err = ctx
+        .render_frame(&scene, &frame, FILL_BILINEAR, 0.0, false)
+        .expect_err("injected out-of-memory");
+    assert!(
+        matches!(err, VulkanError::OutOfDeviceMemory { .. }),
+        "{err}"
+    );
+    assert!(err.to_string().contains("out of device memory"), "{err}");
+    ctx.render_frame(&scene, &frame, FILL_BILINEAR, 0.0, false)
+        .expect("the context stays usable after running out of memory");
+
+    ctx.inject_fault(vk::Result::ERROR_DEVICE_LOST);
+    let err = ctx
+        .render_frame(&scene, &frame, FILL_BILINEAR, 0.0, false)
+        .expect_err("injected device loss");
+    assert!(matches!(err, VulkanError::DeviceLost(_)), "{err}");
+    assert!(err.to_string().contains("device lost"), "{err}");
+    let again = ctx
+        .render_frame(&scene, &frame, FILL_BILINEAR, 0.0, false)
+        .expect_err("a lost device is not used again");
+    assert!(matches!(again, VulkanError::Poisoned), "{again}");
+}
