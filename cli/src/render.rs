@@ -153,6 +153,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
     }
 
     let output_format = check_output_path(&args.output, "--output", true)?;
+    refuse_overwriting_inputs(args)?;
     if let Some(p) = &args.regions_overlay {
         check_output_path(p, "--regions-overlay", false)?;
         if p == &args.output {
@@ -457,4 +458,40 @@ mod tests {
             PathBuf::from("out/a_00012.png")
         );
     }
+}
+
+/// Fails if an output (`--output`, `--regions-overlay`, `--stats`) names one of the run's input files (the
+/// scene, `--mtl`, `--env-map`, `--gaze-trace`): fovea never overwrites its input.
+fn refuse_overwriting_inputs(args: &RenderArgs) -> Result<()> {
+    let inputs: Vec<&Path> = [
+        args.scene.as_deref(),
+        args.mtl.as_deref(),
+        args.env_map.as_deref(),
+        args.gaze_trace.as_deref(),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    };
+    let outputs = [
+        ("--output", Some(args.output.as_path())),
+        ("--regions-overlay", args.regions_overlay.as_deref()),
+        ("--stats", args.stats.as_deref()),
+    ];
+    for (option, output) in outputs {
+        let Some(output) = output else { continue };
+        if let Some(input) = inputs.iter().find(|i| same(i, output)) {
+            return Err(FoveaError::option(
+                option,
+                format!(
+                    "'{}' is an input of this run; fovea never overwrites its input",
+                    input.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }

@@ -699,3 +699,25 @@ fn cli_without_a_vulkan_driver_fails_clearly_or_falls_back() {
     assert!(auto_png.is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An output that names one of the run's inputs (here the environment map) is refused before anything is
+/// read or written: fovea never overwrites its input.
+#[test]
+fn cli_refuses_to_overwrite_an_input() {
+    let Some(bin) = fovea_binary() else {
+        return;
+    };
+    let dir = temp_dir("overwrite-input");
+    let map = dir.join("sky.exr");
+    let scene = fovea_tests::cornell_box_path();
+    let mut args: Vec<&str> = vec![scene.to_str().unwrap()];
+    args.extend_from_slice(&SMALL);
+    args.extend_from_slice(&[
+        "--env-map",
+        map.to_str().unwrap(),
+        "-o",
+        map.to_str().unwrap(),
+    ]);
+    expect_cli_failure(&bin, &args, "never overwrites its input", &map);
+    let _ = std::fs::remove_dir_all(&dir);
+}
