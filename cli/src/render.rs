@@ -447,19 +447,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn frame_paths_number_the_frames() {
-        assert_eq!(
-            frame_path(Path::new("out/a.png"), 12),
-            PathBuf::from("out/a_00012.png")
-        );
-    }
-}
-
 /// Fails if an output (`--output`, `--regions-overlay`, `--stats`) names one of the run's input files (the
 /// scene, `--mtl`, `--env-map`, `--gaze-trace`): fovea never overwrites its input.
 fn refuse_overwriting_inputs(args: &RenderArgs) -> Result<()> {
@@ -494,4 +481,17 @@ fn refuse_overwriting_inputs(args: &RenderArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_paths_number_the_frames() {
+        assert_eq!(
+            frame_path(Path::new("out/a.png"), 12),
+            PathBuf::from("out/a_00012.png")
+        );
+    }
 }
