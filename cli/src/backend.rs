@@ -61,7 +61,8 @@ fn auto_vulkan_refusal() -> Option<String> {
     }
 }
 
-fn cpu_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+/// The CPU host's worker threads (`--threads`, default all cores).
+pub fn cpu_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
         if n == 0 || n > 1024 {

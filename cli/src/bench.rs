@@ -62,16 +62,7 @@ pub enum BenchCommand {
 
 /// Runs `fovea bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
-    let mut pool = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = args.threads {
-        if n == 0 || n > 1024 {
-            return Err(FoveaError::option("--threads", "must be 1 to 1024"));
-        }
-        pool = pool.num_threads(n);
-    }
-    let pool = pool
-        .build()
-        .map_err(|e| FoveaError::Backend(format!("cannot start worker threads: {e}")))?;
+    let pool = crate::backend::cpu_pool(args.threads)?;
     let figures = pool.install(|| match &args.what {
         BenchCommand::Build { scene, runs } => bench_build(scene.as_deref(), *runs),
         BenchCommand::Scale {

@@ -56,6 +56,53 @@ pub fn resolution(text: &str) -> Result<[u32; 2]> {
     Ok([w, h])
 }
 
+/// The display from `--display-cm WxH` and `--distance-cm D`, filled by an image of `resolution` (so
+/// pixels per centimetre, radii and pixels per degree scale with the rendered width).
+pub fn display_geometry(
+    display_cm: &str,
+    distance_cm: f32,
+    resolution: [u32; 2],
+) -> Result<fovea_core::foveation::display::DisplayGeometry> {
+    let size: [f32; 2] = floats("--display-cm", &display_cm.to_ascii_lowercase(), 'x')?;
+    if size.iter().any(|&v| v <= 0.0) {
+        return Err(FoveaError::option(
+            "--display-cm",
+            "both sizes must be positive",
+        ));
+    }
+    if !(distance_cm.is_finite() && distance_cm > 0.0) {
+        return Err(FoveaError::option(
+            "--distance-cm",
+            "the viewing distance must be positive",
+        ));
+    }
+    Ok(fovea_core::foveation::display::DisplayGeometry {
+        width_cm: size[0],
+        height_cm: size[1],
+        distance_cm,
+        resolution,
+    })
+}
+
+/// The region radii in pixels from `--eccentricity E1,E2` (degrees) on `display`.
+pub fn eccentricity_radii(
+    text: &str,
+    display: &fovea_core::foveation::display::DisplayGeometry,
+) -> Result<[f32; 2]> {
+    use fovea_core::foveation::display::eccentricity_to_radius_px;
+    let e: [f32; 2] = floats("--eccentricity", text, ',')?;
+    if e[0] < 0.0 || e[1] < e[0] || e[1] >= 180.0 {
+        return Err(FoveaError::option(
+            "--eccentricity",
+            "need 0 <= E1 <= E2 < 180 degrees",
+        ));
+    }
+    Ok([
+        eccentricity_to_radius_px(e[0], display),
+        eccentricity_to_radius_px(e[1], display),
+    ])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

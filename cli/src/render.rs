@@ -4,7 +4,6 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use fovea_core::foveation::blocks::count_samples;
-use fovea_core::foveation::display::{eccentricity_to_radius_px, DisplayGeometry};
 use fovea_core::foveation::fill::{FILL_BILINEAR, FILL_REPLICATE};
 use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
 use fovea_core::integrator::{FrameParams, IntegratorSettings};
@@ -61,27 +60,8 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
             ),
         ));
     }
-    let display_cm: [f32; 2] =
-        parse::floats("--display-cm", &args.display_cm.to_ascii_lowercase(), 'x')?;
-    if display_cm.iter().any(|&v| v <= 0.0) {
-        return Err(FoveaError::option(
-            "--display-cm",
-            "both sizes must be positive",
-        ));
-    }
-    if !(args.distance_cm.is_finite() && args.distance_cm > 0.0) {
-        return Err(FoveaError::option(
-            "--distance-cm",
-            "the viewing distance must be positive",
-        ));
-    }
     // The image fills the display, so pixels per centimetre come from the rendered width.
-    let display = DisplayGeometry {
-        width_cm: display_cm[0],
-        height_cm: display_cm[1],
-        distance_cm: args.distance_cm,
-        resolution,
-    };
+    let display = parse::display_geometry(&args.display_cm, args.distance_cm, resolution)?;
     let radii_px = match &args.radii {
         Some(text) => {
             let r: [f32; 2] = parse::floats("--radii", text, ',')?;
@@ -90,19 +70,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
             }
             r
         }
-        None => {
-            let e: [f32; 2] = parse::floats("--eccentricity", &args.eccentricity, ',')?;
-            if e[0] < 0.0 || e[1] < e[0] || e[1] >= 180.0 {
-                return Err(FoveaError::option(
-                    "--eccentricity",
-                    "need 0 <= E1 <= E2 < 180 degrees",
-                ));
-            }
-            [
-                eccentricity_to_radius_px(e[0], &display),
-                eccentricity_to_radius_px(e[1], &display),
-            ]
-        }
+        None => parse::eccentricity_radii(&args.eccentricity, &display)?,
     };
 
     let mut foveation_template = if args.uniform {

@@ -420,19 +420,9 @@ impl VulkanContext {
                 })
                 .collect();
             let start = std::time::Instant::now();
-            let created = device.create_compute_pipelines(vk::PipelineCache::null(), &infos, None);
+            let created = create_compute_pipelines(device, &infos)?;
             self.pipeline_create_ms = start.elapsed().as_secs_f64() * 1e3;
-            match created {
-                Ok(p) => self.pipelines.copy_from_slice(&p),
-                Err((p, r)) => {
-                    for pl in p {
-                        if pl != vk::Pipeline::null() {
-                            device.destroy_pipeline(pl, None);
-                        }
-                    }
-                    return Err(VulkanError::vk("vkCreateComputePipelines", r));
-                }
-            }
+            self.pipelines.copy_from_slice(&created);
 
             if timestamps {
                 self.query_pool = device
@@ -660,6 +650,31 @@ fn query_limits(shared: &Shared) -> Limits {
     }
 }
 
+/// `vkCreateComputePipelines` for `infos`; on failure the pipelines that were created are destroyed and
+/// the error names the call.
+///
+/// # Safety
+/// Every create info and everything it points to must be valid for `device` until the call returns.
+pub(crate) unsafe fn create_compute_pipelines(
+    device: &ash::Device,
+    infos: &[vk::ComputePipelineCreateInfo],
+) -> Result<Vec<vk::Pipeline>> {
+    // SAFETY: the caller guarantees valid create infos; partially created pipelines are destroyed before
+    // anything else can use them.
+    unsafe {
+        device
+            .create_compute_pipelines(vk::PipelineCache::null(), infos, None)
+            .map_err(|(created, r)| {
+                for p in created {
+                    if p != vk::Pipeline::null() {
+                        device.destroy_pipeline(p, None);
+                    }
+                }
+                VulkanError::vk("vkCreateComputePipelines", r)
+            })
+    }
+}
+
 /// The one specialization constant of `render_samples`: the feature mask, a `u32` at offset 0.
 fn features_map_entry() -> [vk::SpecializationMapEntry; 1] {
     [vk::SpecializationMapEntry::default()
@@ -700,21 +715,9 @@ impl VulkanContext {
         // pipeline is not in use (every submission was waited on) and is destroyed only after the new
         // one exists.
         unsafe {
-            let created = device.create_compute_pipelines(vk::PipelineCache::null(), &create, None);
-            match created {
-                Ok(p) => {
-                    device.destroy_pipeline(self.pipelines[pipeline::RENDER_SAMPLES], None);
-                    self.pipelines[pipeline::RENDER_SAMPLES] = p[0];
-                }
-                Err((p, r)) => {
-                    for pl in p {
-                        if pl != vk::Pipeline::null() {
-                            device.destroy_pipeline(pl, None);
-                        }
-                    }
-                    return Err(VulkanError::vk("vkCreateComputePipelines", r));
-                }
-            }
+            let created = create_compute_pipelines(device, &create)?;
+            device.destroy_pipeline(self.pipelines[pipeline::RENDER_SAMPLES], None);
+            self.pipelines[pipeline::RENDER_SAMPLES] = created[0];
         }
         self.pipeline_create_ms = start.elapsed().as_secs_f64() * 1e3;
         self.render_features = features;

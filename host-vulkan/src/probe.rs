@@ -14,7 +14,7 @@ use fovea_core::kernel_abi::{
 };
 
 use crate::buffer::GpuBuffer;
-use crate::context::{VulkanContext, CHUNK_TIMEOUT};
+use crate::context::{create_compute_pipelines, VulkanContext, CHUNK_TIMEOUT};
 use crate::error::{Result, VkContext, VulkanError};
 use crate::spirv;
 
@@ -187,34 +187,17 @@ impl VulkanContext {
         }
         let device = &self.shared.device;
         let name = std::ffi::CString::new(PROBE_ENTRY_POINT).expect("no NUL in the name");
-        // SAFETY: valid create infos whose pointers live until the calls return; the module is destroyed
-        // after pipeline creation, which Vulkan allows.
-        unsafe {
-            let module = device
-                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)
-                .during("vkCreateShaderModule")?;
-            let create = [vk::ComputePipelineCreateInfo::default()
-                .stage(
-                    vk::PipelineShaderStageCreateInfo::default()
-                        .stage(vk::ShaderStageFlags::COMPUTE)
-                        .module(module)
-                        .name(&name),
-                )
-                .layout(self.pipeline_layout)];
-            let created = device.create_compute_pipelines(vk::PipelineCache::null(), &create, None);
-            device.destroy_shader_module(module, None);
-            match created {
-                Ok(p) => self.probe_pipeline = p[0],
-                Err((p, r)) => {
-                    for pl in p {
-                        if pl != vk::Pipeline::null() {
-                            device.destroy_pipeline(pl, None);
-                        }
-                    }
-                    return Err(VulkanError::vk("vkCreateComputePipelines", r));
-                }
-            }
-        }
+        let create = [vk::ComputePipelineCreateInfo::default()
+            .stage(
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::COMPUTE)
+                    .module(self.module)
+                    .name(&name),
+            )
+            .layout(self.pipeline_layout)];
+        // SAFETY: the create info points at the context's live module, layout and `name`, all valid until
+        // the call returns.
+        self.probe_pipeline = unsafe { create_compute_pipelines(device, &create)? }[0];
         Ok(self.probe_pipeline)
     }
 }

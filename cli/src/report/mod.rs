@@ -15,9 +15,7 @@ use std::time::Instant;
 
 use fovea_core::camera::Camera;
 use fovea_core::foveation::blocks::count_samples;
-use fovea_core::foveation::display::{
-    eccentricity_to_radius_px, pixels_per_degree, DisplayGeometry,
-};
+use fovea_core::foveation::display::{pixels_per_degree, DisplayGeometry};
 use fovea_core::foveation::fill::{FILL_BILINEAR, FILL_REPLICATE};
 use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
 use fovea_core::integrator::{FrameParams, IntegratorSettings};
@@ -153,39 +151,10 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
         args.sweep_max.unwrap_or(if args.quick { 8 } else { 64 }),
         MAX_SPP,
     )?;
-    let display_cm: [f32; 2] =
-        parse::floats("--display-cm", &args.display_cm.to_ascii_lowercase(), 'x')?;
-    if display_cm.iter().any(|&v| v <= 0.0) {
-        return Err(FoveaError::option(
-            "--display-cm",
-            "both sizes must be positive",
-        ));
-    }
-    if !(args.distance_cm.is_finite() && args.distance_cm > 0.0) {
-        return Err(FoveaError::option(
-            "--distance-cm",
-            "the viewing distance must be positive",
-        ));
-    }
     // The image fills the display whatever its resolution, as in `fovea render`: pixels per centimetre,
     // radii and pixels per degree all scale with the rendered width.
-    let display = DisplayGeometry {
-        width_cm: display_cm[0],
-        height_cm: display_cm[1],
-        distance_cm: args.distance_cm,
-        resolution,
-    };
-    let e: [f32; 2] = parse::floats("--eccentricity", &args.eccentricity, ',')?;
-    if e[0] < 0.0 || e[1] < e[0] || e[1] >= 180.0 {
-        return Err(FoveaError::option(
-            "--eccentricity",
-            "need 0 <= E1 <= E2 < 180 degrees",
-        ));
-    }
-    let radii_px = [
-        eccentricity_to_radius_px(e[0], &display),
-        eccentricity_to_radius_px(e[1], &display),
-    ];
+    let display = parse::display_geometry(&args.display_cm, args.distance_cm, resolution)?;
+    let radii_px = parse::eccentricity_radii(&args.eccentricity, &display)?;
     if args.depth > 64 {
         return Err(FoveaError::option(
             "--depth",
