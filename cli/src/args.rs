@@ -125,6 +125,14 @@ pub struct RenderArgs {
     /// Constant environment ("sky") radiance.
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true)]
     pub sky: Option<String>,
+    /// Adds a point light at X,Y,Z with intensity R,G,B in W/sr (repeat for several), e.g. to light a
+    /// scene that has no emitters.
+    #[arg(
+        long = "point-light",
+        value_name = "X,Y,Z,R,G,B",
+        allow_hyphen_values = true
+    )]
+    pub point_lights: Vec<String>,
     /// Equirectangular HDR environment map (.hdr or .exr), importance-sampled.
     #[arg(long, value_name = "FILE")]
     pub env_map: Option<PathBuf>,
@@ -261,6 +269,14 @@ pub struct ReportArgs {
     /// for other scenes).
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true)]
     pub sky: Option<String>,
+    /// Adds a point light at X,Y,Z with intensity R,G,B in W/sr (repeat for several); applies to every
+    /// scene.
+    #[arg(
+        long = "point-light",
+        value_name = "X,Y,Z,R,G,B",
+        allow_hyphen_values = true
+    )]
+    pub point_lights: Vec<String>,
     /// Equirectangular HDR environment map (.hdr or .exr).
     #[arg(long, value_name = "FILE")]
     pub env_map: Option<PathBuf>,

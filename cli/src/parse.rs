@@ -38,6 +38,29 @@ pub fn floats<const N: usize>(option: &'static str, text: &str, sep: char) -> Re
     Ok(v)
 }
 
+/// `--point-light X,Y,Z,R,G,B` values: point lights at world position X,Y,Z with intensity R,G,B in W/sr
+/// (radiant intensity per channel, as KHR_lights_punctual's candela without the photometric factor).
+pub fn point_lights(texts: &[String]) -> Result<Vec<fovea_core::scene::Light>> {
+    texts
+        .iter()
+        .map(|text| {
+            let [x, y, z, r, g, b] = floats::<6>("--point-light", text, ',')?;
+            if [r, g, b].iter().any(|&v| v < 0.0) {
+                return Err(FoveaError::option(
+                    "--point-light",
+                    format!("'{text}': intensity must not be negative"),
+                ));
+            }
+            Ok(fovea_core::scene::Light {
+                kind: fovea_core::scene::LIGHT_POINT,
+                position: [x, y, z, 0.0],
+                intensity: [r, g, b, 0.0],
+                ..Default::default()
+            })
+        })
+        .collect()
+}
+
 /// The largest image edge fovea accepts.
 pub const MAX_IMAGE_EDGE: u32 = 32_768;
 /// The most samples per pixel or block fovea accepts.

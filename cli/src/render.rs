@@ -32,6 +32,7 @@ struct Plan {
     per_frame_outputs: bool,
     fill_mode: u32,
     environment: Environment,
+    point_lights: Vec<fovea_core::scene::Light>,
 }
 
 fn plan(args: &RenderArgs) -> Result<Plan> {
@@ -214,6 +215,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
             Fill::Replicate => FILL_REPLICATE,
         },
         environment,
+        point_lights: parse::point_lights(&args.point_lights)?,
     })
 }
 
@@ -254,6 +256,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         args.scene.as_deref(),
         args.mtl.as_deref(),
         &plan.environment,
+        &plan.point_lights,
     )?;
     if args.verbose {
         for w in &scene.warnings {
@@ -288,7 +291,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     if scene.packed.lights.is_empty() {
         eprintln!(
-            "warning: the scene has no light and no sky: the image will be black (add --sky R,G,B)"
+            "warning: the scene has no light and no sky: the image will be black (add --sky R,G,B \
+             or --point-light X,Y,Z,R,G,B)"
         );
     }
 

@@ -3,6 +3,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use fovea_core::camera::Camera;
+use fovea_core::scene::Light;
 use fovea_scene::bvh::BvhBuildOptions;
 use fovea_scene::environment::Environment;
 use fovea_scene::mesh::{LoadOptions, LoadedScene};
@@ -38,11 +39,13 @@ pub struct PreparedScene {
     pub is_default: bool,
 }
 
-/// Loads `path` (or the default scene), adds `environment` and packs it.
+/// Loads `path` (or the default scene), adds `environment` and the `extra_lights` (point lights from the
+/// command line) and packs it.
 pub fn prepare_scene(
     path: Option<&Path>,
     mtl_override: Option<&Path>,
     environment: &Environment,
+    extra_lights: &[Light],
 ) -> Result<PreparedScene> {
     let is_default = path.is_none();
     let path = path
@@ -53,7 +56,8 @@ pub fn prepare_scene(
         ..Default::default()
     };
     let start = Instant::now();
-    let loaded: LoadedScene = fovea_scene::mesh::load_scene(&path, &options)?;
+    let mut loaded: LoadedScene = fovea_scene::mesh::load_scene(&path, &options)?;
+    loaded.punctual_lights.extend_from_slice(extra_lights);
     let load_ms = start.elapsed().as_secs_f64() * 1e3;
     let camera_desc = loaded.camera;
     let warnings = loaded.warnings.clone();

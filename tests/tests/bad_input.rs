@@ -517,6 +517,26 @@ fn cli_reports_bad_scenes_and_options_without_writing() {
             vec![cornell.into(), "--no-such-option".into()],
             "--no-such-option",
         ),
+        (
+            vec![cornell.into(), "--point-light".into(), "0,1,2".into()],
+            "expected 6 values",
+        ),
+        (
+            vec![
+                cornell.into(),
+                "--point-light".into(),
+                "0,1,2,-1,1,1".into(),
+            ],
+            "intensity must not be negative",
+        ),
+        (
+            vec![
+                cornell.into(),
+                "--point-light".into(),
+                "0,1,nan,1,1,1".into(),
+            ],
+            "non-finite",
+        ),
     ];
     for (args, needle) in cases.drain(..) {
         let mut all: Vec<&str> = args.iter().map(String::as_str).collect();
@@ -577,6 +597,31 @@ fn cli_warns_and_renders_when_it_can() {
     );
     assert!(png.is_file());
     std::fs::remove_file(&png).unwrap();
+    // The same scene lit by a point light from the command line: no warning, and light in the image.
+    let stats = dir.join("stats.json");
+    let mut args = vec![scene.to_str().unwrap()];
+    args.extend(SMALL);
+    args.extend([
+        "--point-light",
+        "0,0,2,4,4,4",
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    args.extend(["-o", o]);
+    let out = run(&bin, &args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("no light"), "{stderr}");
+    let json = std::fs::read_to_string(&stats).unwrap();
+    assert!(json.contains("\"lights\": 1"), "{json}");
+    assert!(json.contains("punctual_lights"), "{json}");
+    let lit = image::open(&png).unwrap().to_rgb8();
+    assert!(
+        lit.pixels().any(|p| p.0[0] > 0),
+        "the point light lights nothing"
+    );
+    std::fs::remove_file(&png).unwrap();
+    std::fs::remove_file(&stats).unwrap();
     // Skipped triangles and missing textures are warnings listed with --verbose.
     for (name, needle) in [
         ("non_finite.obj", "2 triangles using them skipped"),

@@ -250,6 +250,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     if sky.is_some_and(|c| c.iter().any(|&v| v < 0.0)) {
         return Err(FoveaError::option("--sky", "radiance must not be negative"));
     }
+    let point_lights = parse::point_lights(&args.point_lights)?;
     create_dir(&args.out)?;
 
     // One entry per scene: its path (None: the bundled default) and its output folder.
@@ -333,6 +334,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
             scene_path.as_deref(),
             &environment,
             &env_text,
+            &point_lights,
             out_dir,
         )?;
         report.wall_ms = scene_start.elapsed().as_secs_f64() * 1e3;
@@ -391,6 +393,7 @@ fn run_scene(
     scene_path: Option<&Path>,
     environment: &Environment,
     env_text: &str,
+    point_lights: &[fovea_core::scene::Light],
     out_dir: &Path,
 ) -> Result<SceneReport> {
     let [w, h] = plan.resolution;
@@ -402,14 +405,14 @@ fn run_scene(
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
     bar.set_message(format!("{scene_name}: loading"));
-    let scene = prepare_scene(scene_path, None, environment)?;
+    let scene = prepare_scene(scene_path, None, environment, point_lights)?;
     if scene.packed.lights.is_empty() {
         note(
             bar,
             false,
             &format!(
                 "warning: {scene_name} has no light and no sky: every image will be black \
-                 (add --sky R,G,B)"
+                 (add --sky R,G,B or --point-light X,Y,Z,R,G,B)"
             ),
         );
     }

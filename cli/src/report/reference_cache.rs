@@ -62,6 +62,7 @@ pub fn packed_scene_hash(packed: &PackedScene) -> u64 {
     h.write(bytemuck::cast_slice(&packed.textures));
     h.write(bytemuck::cast_slice(&packed.texels));
     h.write(&(packed.lights.len() as u64).to_le_bytes());
+    h.write(bytemuck::cast_slice(&packed.lights));
     h.write(bytemuck::cast_slice(&packed.environment_texels));
     h.write(&(packed.triangles.len() as u64).to_le_bytes());
     for v in [packed.bounds_min, packed.bounds_max] {
