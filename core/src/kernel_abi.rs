@@ -145,8 +145,36 @@ pub const PROBE_CELL_MEAN: u32 = 8;
 /// [`crate::foveation::fill_pixel`] (the bilinear cell weights) over [`BINDING_REPLICATED`] and
 /// [`BINDING_CELL_MEANS`]: `in[0]` = (x, y, fill mode) (bits) → `out[0]` = the filled value.
 pub const PROBE_FILL_PIXEL: u32 = 9;
+/// [`crate::lights::power_heuristic`]: `in[0].xy` = (pdf_a, pdf_b) → `out[0].x` = the weight.
+pub const PROBE_POWER_HEURISTIC: u32 = 10;
 /// Number of probe selectors; any other selector writes zeros.
-pub const PROBE_SELECTOR_COUNT: u32 = 10;
+pub const PROBE_SELECTOR_COUNT: u32 = 11;
+
+// Scene probe selectors: the `probe_scene` entry point evaluates them over the scene bound at
+// `BINDING_GLOBALS ..= BINDING_ENVIRONMENT_CONDITIONAL` (with every feature on), reading
+// [`BINDING_PROBE_INPUT`] and writing [`BINDING_PROBE_OUTPUT`] with the same strides as `probe`
+// ([`probe_scene_eval`]).
+
+/// [`crate::bvh::traverse::closest_hit`]: `in[0]` = (origin xyz, t_max), `in[1].xyz` = direction →
+/// `out[0]` = (t, b1, b2, triangle (bits)); a miss gives t = +inf and triangle `INVALID_INDEX`.
+pub const PROBE_SCENE_CLOSEST_HIT: u32 = 16;
+/// [`crate::bvh::traverse::any_hit`]: inputs as for [`PROBE_SCENE_CLOSEST_HIT`] → `out[0].x` = 1 if
+/// blocked, else 0.
+pub const PROBE_SCENE_ANY_HIT: u32 = 17;
+/// [`crate::lights::sample_light`]: `in[0].xyz` = shading point, `in[1].xyz` = (u_select, u.x, u.y) →
+/// `out[0]` = (direction xyz, pdf), `out[1]` = (radiance rgb, flags (bits): 1 infinite | 2 delta).
+pub const PROBE_SCENE_SAMPLE_LIGHT: u32 = 18;
+/// Emissive triangles: `in[0]` = (shading point xyz, triangle (bits)), `in[1].xy` = u, `in[2].xyz` =
+/// a point q → `out[0]` = [`crate::lights::triangle::sample`]'s (direction xyz, pdf), `out[1]` = (its
+/// radiance rgb, [`crate::lights::triangle::solid_angle_pdf`] of q).
+pub const PROBE_SCENE_TRIANGLE_LIGHT: u32 = 19;
+/// The environment: `in[0].xyz` = a direction d, `in[1].xy` = u → `out[0]` =
+/// ([`crate::lights::environment::radiance`] rgb of d, [`crate::lights::environment::pdf`] of d),
+/// `out[1]` = [`crate::lights::environment::sample`]'s (direction xyz, pdf).
+pub const PROBE_SCENE_ENVIRONMENT: u32 = 20;
+/// One past the last scene selector; scene selectors are `PROBE_SCENE_CLOSEST_HIT ..
+/// PROBE_SCENE_SELECTOR_END`, any other writes zeros.
+pub const PROBE_SCENE_SELECTOR_END: u32 = 21;
 
 /// The Disney parameters of probe input records `in[base .. base + 3]`.
 #[inline]
@@ -284,6 +312,73 @@ pub fn probe_eval(
             r0[2].to_bits(),
         );
         out[0] = v.to_array();
+    } else if selector == PROBE_POWER_HEURISTIC {
+        out[0][0] = crate::lights::power_heuristic(r0[0], r0[1]);
+    }
+    out
+}
+
+/// Evaluates scene probe item `item` with `selector` (one of the `PROBE_SCENE_*` selectors) over
+/// `scene`: reads `inputs[item · PROBE_INPUT_RECORDS ..]` and returns the item's
+/// [`PROBE_OUTPUT_RECORDS`] output records. The GPU `probe_scene` entry point and the CPU side of the
+/// cross-backend tests both call this.
+#[must_use]
+pub fn probe_scene_eval<F: crate::scene::Features>(
+    selector: u32,
+    scene: &crate::scene::SceneView<F>,
+    inputs: &[[f32; 4]],
+    item: u32,
+) -> [[f32; 4]; 2] {
+    let base = (item * PROBE_INPUT_RECORDS) as usize;
+    let r0 = inputs[base];
+    let r1 = inputs[base + 1];
+    let mut out = [[0.0f32; 4]; 2];
+    if selector == PROBE_SCENE_CLOSEST_HIT || selector == PROBE_SCENE_ANY_HIT {
+        let ray = crate::geometry::Ray::new(probe_vec3(r0), probe_vec3(r1));
+        if selector == PROBE_SCENE_CLOSEST_HIT {
+            let hit = crate::bvh::traverse::closest_hit(scene, &ray, r0[3]);
+            out[0] = [hit.t, hit.b1, hit.b2, f32::from_bits(hit.triangle)];
+        } else {
+            let blocked = crate::bvh::traverse::any_hit(scene, &ray, r0[3]);
+            out[0][0] = if blocked { 1.0 } else { 0.0 };
+        }
+    } else if selector == PROBE_SCENE_SAMPLE_LIGHT {
+        let s = crate::lights::sample_light(
+            scene,
+            probe_vec3(r0),
+            r1[0],
+            glam::Vec2::new(r1[1], r1[2]),
+        );
+        let flags = u32::from(s.is_infinite) | (u32::from(s.is_delta) << 1);
+        out[0] = [s.direction.x, s.direction.y, s.direction.z, s.pdf];
+        out[1] = [
+            s.radiance.x,
+            s.radiance.y,
+            s.radiance.z,
+            f32::from_bits(flags),
+        ];
+    } else if selector == PROBE_SCENE_TRIANGLE_LIGHT {
+        let triangle = r0[3].to_bits();
+        if (triangle as usize) < scene.triangles.len() {
+            let p = probe_vec3(r0);
+            let s =
+                crate::lights::triangle::sample(scene, triangle, p, glam::Vec2::new(r1[0], r1[1]));
+            let pdf_q = crate::lights::triangle::solid_angle_pdf(
+                scene,
+                triangle,
+                p,
+                probe_vec3(inputs[base + 2]),
+            );
+            out[0] = [s.direction.x, s.direction.y, s.direction.z, s.pdf];
+            out[1] = [s.radiance.x, s.radiance.y, s.radiance.z, pdf_q];
+        }
+    } else if selector == PROBE_SCENE_ENVIRONMENT {
+        let d = probe_vec3(r0);
+        let le = crate::lights::environment::radiance(scene, d);
+        let pdf = crate::lights::environment::pdf(scene, d);
+        let s = crate::lights::environment::sample(scene, glam::Vec2::new(r1[0], r1[1]));
+        out[0] = [le.x, le.y, le.z, pdf];
+        out[1] = [s.direction.x, s.direction.y, s.direction.z, s.pdf];
     }
     out
 }

@@ -261,3 +261,59 @@ pub fn probe(
     outputs[base] = out[0];
     outputs[base + 1] = out[1];
 }
+
+/// Cross-backend scene probe: item `i < item_count` evaluates scene function `spp` (a `PROBE_SCENE_*`
+/// selector of [`kernel_abi`]: BVH traversal, light and environment sampling and densities) over the
+/// bound scene, with every feature on, and writes its two output records
+/// ([`kernel_abi::probe_scene_eval`]).
+#[spirv(compute(threads(64)))]
+pub fn probe_scene(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] globals: &SceneGlobals,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] nodes: &[Bvh4Node],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] triangles: &[TrianglePositions],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] triangle_info: &[TriangleInfo],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] normals: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] uvs: &[[f32; 2]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] materials: &[Material],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] textures: &[TextureInfo],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] texels: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[Light],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] light_cdf: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] triangle_light: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] environment_texels: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 13)] environment_marginal_cdf: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 14)]
+    environment_conditional_cdf: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] inputs: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] outputs: &mut [[f32; 4]],
+) {
+    let i = invocation_index(id, num_workgroups);
+    if i >= pc.item_count {
+        return;
+    }
+    let scene = SceneView {
+        features: FeatureFlags(FEATURES_ALL),
+        globals: *globals,
+        nodes,
+        triangles,
+        triangle_info,
+        normals,
+        uvs,
+        materials,
+        textures,
+        texels,
+        lights,
+        light_cdf,
+        triangle_light,
+        environment_texels,
+        environment_marginal_cdf,
+        environment_conditional_cdf,
+    };
+    let out = kernel_abi::probe_scene_eval(pc.spp, &scene, inputs, i);
+    let base = (i * kernel_abi::PROBE_OUTPUT_RECORDS) as usize;
+    outputs[base] = out[0];
+    outputs[base + 1] = out[1];
+}

@@ -88,8 +88,9 @@ pub struct VulkanContext {
     pub(crate) module: vk::ShaderModule,
     /// The feature mask `pipelines[RENDER_SAMPLES]` was specialised for.
     pub(crate) render_features: u32,
-    /// The `probe` entry point's pipeline, created on first use by [`VulkanContext::run_probe`].
-    pub(crate) probe_pipeline: vk::Pipeline,
+    /// The pipelines of the `probe` and `probe_scene` entry points, created on first use by
+    /// [`VulkanContext::run_probe`] and [`VulkanContext::run_scene_probe`].
+    pub(crate) probe_pipelines: [vk::Pipeline; 2],
     pub(crate) descriptor_pool: vk::DescriptorPool,
     pub(crate) descriptor_set: vk::DescriptorSet,
     /// Two timestamps per frame; null when the queue has no timestamp bits.
@@ -285,7 +286,7 @@ impl VulkanContext {
             pipelines: [vk::Pipeline::null(); 5],
             module: vk::ShaderModule::null(),
             render_features: FEATURES_ALL,
-            probe_pipeline: vk::Pipeline::null(),
+            probe_pipelines: [vk::Pipeline::null(); 2],
             descriptor_pool: vk::DescriptorPool::null(),
             descriptor_set: vk::DescriptorSet::null(),
             query_pool: vk::QueryPool::null(),
@@ -742,7 +743,9 @@ impl Drop for VulkanContext {
             for p in self.pipelines {
                 device.destroy_pipeline(p, None);
             }
-            device.destroy_pipeline(self.probe_pipeline, None);
+            for p in self.probe_pipelines {
+                device.destroy_pipeline(p, None);
+            }
             device.destroy_shader_module(self.module, None);
             device.destroy_pipeline_layout(self.pipeline_layout, None);
             device.destroy_descriptor_pool(self.descriptor_pool, None);

@@ -17,7 +17,7 @@ use crate::blocks::{
 use crate::buffer::GpuBuffer;
 use crate::context::{pipeline, VulkanContext, CHUNK_TIMEOUT};
 use crate::error::{Result, VulkanError};
-use crate::scene::{GpuScene, SCENE_BINDINGS};
+use crate::scene::GpuScene;
 
 /// A frame read back from the device.
 #[derive(Clone, Debug)]
@@ -287,13 +287,7 @@ impl VulkanContext {
         progress: &dyn Fn(u64),
     ) -> Result<(GpuFrame, GpuRenderStats)> {
         self.check_usable()?;
-        if scene.buffers.len() != SCENE_BINDINGS
-            || !scene.buffers.iter().all(|b| b.same_device(&self.shared))
-        {
-            return Err(VulkanError::Invalid(
-                "the scene was uploaded to another Vulkan context".into(),
-            ));
-        }
+        scene.check_uploaded_to(&self.shared)?;
         let (w, h) = (frame.width, frame.height);
         if w == 0 || h == 0 {
             return Err(VulkanError::Invalid("the image is empty".into()));

@@ -16,10 +16,29 @@ use fovea_core::kernel_abi::{
 use crate::buffer::GpuBuffer;
 use crate::context::{create_compute_pipelines, VulkanContext, CHUNK_TIMEOUT};
 use crate::error::{Result, VkContext, VulkanError};
+use crate::scene::GpuScene;
 use crate::spirv;
 
-/// Name of the entry point.
+/// Name of the entry point of single-function probes.
 pub const PROBE_ENTRY_POINT: &str = "probe";
+/// Name of the entry point of scene probes (traversal, lights).
+pub const PROBE_SCENE_ENTRY_POINT: &str = "probe_scene";
+
+/// Which probe entry point a dispatch runs (index into `VulkanContext::probe_pipelines`).
+#[derive(Clone, Copy)]
+enum ProbeEntry {
+    Functions = 0,
+    Scene = 1,
+}
+
+impl ProbeEntry {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Functions => PROBE_ENTRY_POINT,
+            Self::Scene => PROBE_SCENE_ENTRY_POINT,
+        }
+    }
+}
 
 impl VulkanContext {
     /// Runs the `probe` entry point with `selector` over `inputs.len() / PROBE_INPUT_RECORDS` items
@@ -41,6 +60,64 @@ impl VulkanContext {
         cell_means: &[[f32; 4]],
     ) -> Result<Vec<[f32; 4]>> {
         self.check_usable()?;
+        let record = std::mem::size_of::<[f32; 4]>() as u64;
+        for (what, n) in [
+            ("the probe image", replicated.len()),
+            ("the probe cell means", cell_means.len()),
+        ] {
+            self.check_size(what, n as u64 * record)?;
+        }
+        let host_buffer = |what: &str, data: &[u8]| -> Result<GpuBuffer> {
+            let mut b = GpuBuffer::new(
+                &self.shared,
+                what,
+                data.len() as u64,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::CpuToGpu,
+            )?;
+            b.write(data)?;
+            Ok(b)
+        };
+        let replicated_buf = host_buffer("probe image", bytemuck::cast_slice(replicated))?;
+        let cell_means_buf = host_buffer("probe cell means", bytemuck::cast_slice(cell_means))?;
+        let frame_buf = host_buffer("probe frame parameters", bytemuck::bytes_of(frame))?;
+        let extra = [
+            (BINDING_REPLICATED, replicated_buf.buffer, vk::WHOLE_SIZE),
+            (BINDING_CELL_MEANS, cell_means_buf.buffer, vk::WHOLE_SIZE),
+            (BINDING_FRAME, frame_buf.buffer, vk::WHOLE_SIZE),
+        ];
+        self.dispatch_probe(ProbeEntry::Functions, selector, inputs, &extra)
+    }
+
+    /// Runs the `probe_scene` entry point with `selector` (a `PROBE_SCENE_*` selector) over `scene`, with
+    /// the record layout of [`Self::run_probe`]. The scene must have been uploaded to this context.
+    pub fn run_scene_probe(
+        &mut self,
+        scene: &GpuScene,
+        selector: u32,
+        inputs: &[[f32; 4]],
+    ) -> Result<Vec<[f32; 4]>> {
+        self.check_usable()?;
+        scene.check_uploaded_to(&self.shared)?;
+        let extra: Vec<(u32, vk::Buffer, u64)> = scene
+            .buffers
+            .iter()
+            .zip(scene.ranges)
+            .enumerate()
+            .map(|(b, (buf, range))| (b as u32, buf.buffer, range))
+            .collect();
+        self.dispatch_probe(ProbeEntry::Scene, selector, inputs, &extra)
+    }
+
+    /// Dispatches one probe entry point over `inputs` with its own descriptor set: the inputs and
+    /// outputs plus `extra` bindings (binding, buffer, range); returns the output records.
+    fn dispatch_probe(
+        &mut self,
+        entry: ProbeEntry,
+        selector: u32,
+        inputs: &[[f32; 4]],
+        extra: &[(u32, vk::Buffer, u64)],
+    ) -> Result<Vec<[f32; 4]>> {
         let stride = PROBE_INPUT_RECORDS as usize;
         if !inputs.len().is_multiple_of(stride) {
             return Err(VulkanError::Invalid(format!(
@@ -59,39 +136,22 @@ impl VulkanContext {
         for (what, n) in [
             ("the probe inputs", inputs.len()),
             ("the probe outputs", out_records),
-            ("the probe image", replicated.len()),
-            ("the probe cell means", cell_means.len()),
         ] {
             self.check_size(what, n as u64 * record)?;
         }
-        let pipeline = self.probe_pipeline()?;
+        let pipeline = self.probe_pipeline(entry)?;
 
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let sh = &self.shared;
-        let host_buffer = |what: &str, data: &[[f32; 4]]| -> Result<GpuBuffer> {
-            let mut b = GpuBuffer::new(
-                sh,
-                what,
-                data.len() as u64 * record,
-                storage,
-                MemoryLocation::CpuToGpu,
-            )?;
-            b.write(data)?;
-            Ok(b)
-        };
-        let input_buf = host_buffer("probe inputs", inputs)?;
-        let replicated_buf = host_buffer("probe image", replicated)?;
-        let cell_means_buf = host_buffer("probe cell means", cell_means)?;
-        let mut frame_buf = GpuBuffer::new(
-            sh,
-            "probe frame parameters",
-            std::mem::size_of::<FrameParams>() as u64,
+        let mut input_buf = GpuBuffer::new(
+            &self.shared,
+            "probe inputs",
+            inputs.len() as u64 * record,
             storage,
             MemoryLocation::CpuToGpu,
         )?;
-        frame_buf.write(std::slice::from_ref(frame))?;
+        input_buf.write(inputs)?;
         let mut output_buf = GpuBuffer::new(
-            sh,
+            &self.shared,
             "probe outputs",
             out_records as u64 * record,
             storage,
@@ -99,26 +159,24 @@ impl VulkanContext {
         )?;
 
         let set = ProbeSet::new(self)?;
-        let bindings = [
-            (BINDING_PROBE_INPUT, &input_buf),
-            (BINDING_PROBE_OUTPUT, &output_buf),
-            (BINDING_REPLICATED, &replicated_buf),
-            (BINDING_CELL_MEANS, &cell_means_buf),
-            (BINDING_FRAME, &frame_buf),
+        let mut bindings = vec![
+            (BINDING_PROBE_INPUT, input_buf.buffer, vk::WHOLE_SIZE),
+            (BINDING_PROBE_OUTPUT, output_buf.buffer, vk::WHOLE_SIZE),
         ];
+        bindings.extend_from_slice(extra);
         let infos: Vec<vk::DescriptorBufferInfo> = bindings
             .iter()
-            .map(|(_, b)| {
+            .map(|&(_, buffer, range)| {
                 vk::DescriptorBufferInfo::default()
-                    .buffer(b.buffer)
+                    .buffer(buffer)
                     .offset(0)
-                    .range(vk::WHOLE_SIZE)
+                    .range(range)
             })
             .collect();
         let writes: Vec<vk::WriteDescriptorSet> = bindings
             .iter()
             .zip(&infos)
-            .map(|((binding, _), info)| {
+            .map(|((binding, _, _), info)| {
                 vk::WriteDescriptorSet::default()
                     .dst_set(set.set)
                     .dst_binding(*binding)
@@ -172,21 +230,24 @@ impl VulkanContext {
         output_buf.read::<[f32; 4]>(out_records)
     }
 
-    /// The `probe` pipeline, created on first use (the frame's pipelines do not include it).
-    fn probe_pipeline(&mut self) -> Result<vk::Pipeline> {
-        if self.probe_pipeline != vk::Pipeline::null() {
-            return Ok(self.probe_pipeline);
+    /// The pipeline of a probe entry point, created on first use (the frame's pipelines do not include
+    /// them).
+    fn probe_pipeline(&mut self, entry: ProbeEntry) -> Result<vk::Pipeline> {
+        let slot = entry as usize;
+        if self.probe_pipelines[slot] != vk::Pipeline::null() {
+            return Ok(self.probe_pipelines[slot]);
         }
         let code = spirv::load_kernel()?;
         let info = spirv::module_info(&code);
-        if !info.entry_points.iter().any(|e| e == PROBE_ENTRY_POINT) {
+        let entry_name = entry.name();
+        if !info.entry_points.iter().any(|e| e == entry_name) {
             return Err(VulkanError::KernelNotBuilt(format!(
-                "the SPIR-V module has no entry point '{PROBE_ENTRY_POINT}' (it has {:?})",
+                "the SPIR-V module has no entry point '{entry_name}' (it has {:?})",
                 info.entry_points
             )));
         }
         let device = &self.shared.device;
-        let name = std::ffi::CString::new(PROBE_ENTRY_POINT).expect("no NUL in the name");
+        let name = std::ffi::CString::new(entry_name).expect("no NUL in the name");
         let create = [vk::ComputePipelineCreateInfo::default()
             .stage(
                 vk::PipelineShaderStageCreateInfo::default()
@@ -197,8 +258,8 @@ impl VulkanContext {
             .layout(self.pipeline_layout)];
         // SAFETY: the create info points at the context's live module, layout and `name`, all valid until
         // the call returns.
-        self.probe_pipeline = unsafe { create_compute_pipelines(device, &create)? }[0];
-        Ok(self.probe_pipeline)
+        self.probe_pipelines[slot] = unsafe { create_compute_pipelines(device, &create)? }[0];
+        Ok(self.probe_pipelines[slot])
     }
 }
 

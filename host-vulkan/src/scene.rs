@@ -27,6 +27,22 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
+    /// An error unless this scene's buffers live on the device of `shared` (a scene uploaded to one
+    /// context cannot be bound in another).
+    pub(crate) fn check_uploaded_to(
+        &self,
+        shared: &std::sync::Arc<crate::instance::Shared>,
+    ) -> Result<()> {
+        if self.buffers.len() != SCENE_BINDINGS
+            || !self.buffers.iter().all(|b| b.same_device(shared))
+        {
+            return Err(VulkanError::Invalid(
+                "the scene was uploaded to another Vulkan context".into(),
+            ));
+        }
+        Ok(())
+    }
+
     /// Uploads `packed` to `ctx`'s device. Every array must fit `maxStorageBufferRange` and
     /// `maxMemoryAllocationSize`, and all of them the largest device-local heap.
     ///

@@ -145,7 +145,11 @@ mod tests {
     fn embedded_kernel_has_every_entry_point() {
         let words = words_from_bytes(EMBEDDED_KERNEL).expect("the build embeds a SPIR-V module");
         let info = module_info(&words);
-        for name in ENTRY_POINTS {
+        let probes = [
+            crate::probe::PROBE_ENTRY_POINT,
+            crate::probe::PROBE_SCENE_ENTRY_POINT,
+        ];
+        for name in ENTRY_POINTS.iter().chain(&probes) {
             assert!(
                 info.entry_points.iter().any(|e| e == name),
                 "{name}: {info:?}"

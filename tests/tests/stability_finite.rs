@@ -881,6 +881,221 @@ fn light_sampling_and_mis_weights_are_finite_on_cpu() {
     );
 }
 
+/// The scene inputs of the device test: shading points, random numbers, an emitter and a second point
+/// per item, laid out for every `PROBE_SCENE_*` selector at once (`in[0]` = (p, triangle bits),
+/// `in[1]` = (u_select, u.x, u.y) for `sample_light` and (u.x, u.y) otherwise, `in[2]` = q).
+fn scene_probe_inputs(
+    scene: &SceneView,
+    emissive: &[u32],
+    selector: u32,
+    chunk: usize,
+    items: usize,
+) -> Vec<[f32; 4]> {
+    let mut rng = Rng(0x0005_ce9e ^ (u64::from(selector) << 40) ^ ((chunk as u64) << 20));
+    let mut v = Vec::with_capacity(items * STRIDE);
+    for _ in 0..items {
+        let p = shading_point(&mut rng, scene);
+        let tri = emissive[rng.below(emissive.len() as u32) as usize];
+        let (a, b, c) = (
+            adversarial_u(&mut rng),
+            adversarial_u(&mut rng),
+            adversarial_u(&mut rng),
+        );
+        let q = shading_point(&mut rng, scene);
+        let d = rng.adversarial_dir();
+        match selector {
+            PROBE_SCENE_SAMPLE_LIGHT => push(&mut v, &[rec(p, 0.0), [a, b, c, 0.0]]),
+            PROBE_SCENE_TRIANGLE_LIGHT => push(
+                &mut v,
+                &[rec(p, f32::from_bits(tri)), [a, b, 0.0, 0.0], rec(q, 0.0)],
+            ),
+            PROBE_SCENE_ENVIRONMENT => push(&mut v, &[rec(d, 0.0), [a, b, 0.0, 0.0]]),
+            // Traversal: from a shading point in an adversarial direction, unbounded or to q.
+            _ => {
+                let t_max = if rng.below(2) == 0 {
+                    f32::INFINITY
+                } else {
+                    (q - p).length()
+                };
+                let dir = if rng.below(2) == 0 {
+                    d
+                } else {
+                    (q - p).normalize_or_zero()
+                };
+                push(&mut v, &[rec(p, t_max), rec(dir, 0.0)]);
+            }
+        }
+    }
+    v
+}
+
+/// `Err(why)` unless a light sample's records (direction xyz, pdf), (radiance rgb, _) are valid: a
+/// finite, non-negative pdf and, where it is non-zero, a unit direction and finite, non-negative
+/// radiance.
+fn check_light_sample(out: &[[f32; 4]]) -> Result<bool, String> {
+    let (d, pdf) = (Vec3::new(out[0][0], out[0][1], out[0][2]), out[0][3]);
+    let l = Vec3::new(out[1][0], out[1][1], out[1][2]);
+    if !(pdf.is_finite() && pdf >= 0.0) {
+        return Err(format!("pdf {pdf}"));
+    }
+    if pdf > 0.0
+        && !(d.is_finite()
+            && (d.length() - 1.0).abs() < 1e-3
+            && l.is_finite()
+            && l.min_element() >= 0.0)
+    {
+        return Err("invalid sample".into());
+    }
+    Ok(pdf > 0.0)
+}
+
+/// The scene functions of the adversarial scene through the kernel's `probe_scene` entry point (BVH
+/// traversal, light selection and sampling, triangle-light and environment densities), 1 M items per
+/// function (10 M heavy), and the power heuristic over adversarial densities through `probe`.
+#[test]
+fn scene_functions_are_finite_on_vulkan() {
+    let Some(mut ctx) = fovea_tests::vulkan_context_or_skip("the Vulkan scene finite test") else {
+        return;
+    };
+    let log = ctx.validation_log();
+    let device = ctx.device_name().to_string();
+    let total = pick(1usize << 20, 10_000_000);
+    let start = Instant::now();
+    for (env_name, env) in [
+        ("constant sky", Environment::Constant([1.0, 1.0, 1.0])),
+        ("adversarial map", adversarial_map()),
+    ] {
+        let packed = adversarial_scene(&env);
+        let scene = packed.view();
+        let emissive: Vec<u32> = (0..scene.triangles.len() as u32)
+            .filter(|&t| {
+                let m = scene.triangle_info[t as usize].material as usize;
+                scene.materials[m].is_emissive()
+            })
+            .collect();
+        let gpu_scene = ctx.upload_scene(&packed).expect("upload");
+        for selector in [
+            PROBE_SCENE_CLOSEST_HIT,
+            PROBE_SCENE_ANY_HIT,
+            PROBE_SCENE_SAMPLE_LIGHT,
+            PROBE_SCENE_TRIANGLE_LIGHT,
+            PROBE_SCENE_ENVIRONMENT,
+        ] {
+            let (mut done, mut chunk, mut active) = (0, 0, 0usize);
+            let mut bad = Vec::new();
+            while done < total {
+                let items = CHUNK.min(total - done);
+                let inputs = scene_probe_inputs(&scene, &emissive, selector, chunk, items);
+                let out = ctx
+                    .run_scene_probe(&gpu_scene, selector, &inputs)
+                    .unwrap_or_else(|e| panic!("scene probe {selector}: {e}"));
+                for i in 0..items {
+                    let o = &out[i * OUT..(i + 1) * OUT];
+                    let verdict = match selector {
+                        PROBE_SCENE_CLOSEST_HIT => {
+                            let t = o[0][0];
+                            let tri = o[0][3].to_bits();
+                            if t == f32::INFINITY {
+                                Ok(false)
+                            } else if t > 0.0
+                                && t.is_finite()
+                                && (tri as usize) < scene.triangles.len()
+                                && o[0][1].is_finite()
+                                && o[0][2].is_finite()
+                            {
+                                Ok(true)
+                            } else {
+                                Err(format!("hit {:?}", o[0]))
+                            }
+                        }
+                        PROBE_SCENE_ANY_HIT => match o[0][0] {
+                            0.0 => Ok(false),
+                            1.0 => Ok(true),
+                            x => Err(format!("any_hit {x}")),
+                        },
+                        PROBE_SCENE_SAMPLE_LIGHT => check_light_sample(o),
+                        PROBE_SCENE_TRIANGLE_LIGHT => check_light_sample(o).and_then(|a| {
+                            let pdf_q = o[1][3];
+                            if pdf_q.is_finite() && pdf_q >= 0.0 {
+                                Ok(a)
+                            } else {
+                                Err(format!("solid_angle_pdf {pdf_q}"))
+                            }
+                        }),
+                        _ => {
+                            let (le, pdf) = (o[0], o[0][3]);
+                            let sample = [o[1], [1.0, 1.0, 1.0, 0.0]];
+                            if finite4(le) && pdf >= 0.0 && le[..3].iter().all(|&x| x >= 0.0) {
+                                check_light_sample(&sample)
+                            } else {
+                                Err(format!("environment {le:?}"))
+                            }
+                        }
+                    };
+                    match verdict {
+                        Ok(a) => active += usize::from(a),
+                        Err(why) if bad.len() < 5 => bad.push(format!(
+                            "{env_name} selector {selector}: {why}; input {:?}",
+                            &inputs[i * STRIDE..i * STRIDE + 3]
+                        )),
+                        Err(_) => {}
+                    }
+                }
+                done += items;
+                chunk += 1;
+            }
+            eprintln!(
+                "{device} {env_name} scene probe {selector}: {total} items, {:.1} % non-trivial, {} invalid",
+                100.0 * active as f64 / total as f64,
+                bad.len()
+            );
+            assert!(bad.is_empty(), "{bad:#?}");
+            assert!(
+                active > total / 100,
+                "selector {selector}: only {active} items non-trivial"
+            );
+        }
+    }
+    // MIS weights over every pair of adversarial densities, as compiled for the device.
+    let pdfs = [
+        0.0f32,
+        f32::from_bits(1),
+        1e-30,
+        1e-7,
+        1.0,
+        3e7,
+        1e19,
+        1e30,
+        f32::MAX,
+        f32::INFINITY,
+    ];
+    let mut inputs = Vec::new();
+    for &a in &pdfs {
+        for &b in &pdfs {
+            push(&mut inputs, &[[a, b, 0.0, 0.0]]);
+        }
+    }
+    let out = ctx
+        .run_probe(PROBE_POWER_HEURISTIC, &inputs)
+        .expect("power heuristic probe");
+    for (i, pair) in inputs.chunks(STRIDE).enumerate() {
+        let w = out[i * OUT][0];
+        assert!(
+            (0.0..=1.0).contains(&w),
+            "power_heuristic({}, {}) = {w} on {device}",
+            pair[0][0],
+            pair[0][1]
+        );
+    }
+    eprintln!(
+        "scene functions on {device}: 5 x 2 x {total} items, {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+    drop(ctx);
+    let messages = log.lock().unwrap().clone();
+    assert!(messages.is_empty(), "validation messages: {messages:#?}");
+}
+
 /// Traces `count` paths from random origins in random directions through `scene` with the final guard
 /// off; returns the number of non-finite estimates (with examples) and of non-zero ones.
 fn trace_random_paths(
@@ -961,7 +1176,7 @@ fn paths_are_finite_without_the_final_guard_on_cpu() {
 /// Whole frames of the adversarial scene (and of `cornell_stiff` with its light at radiance 1.7e6) on
 /// the device with the final guard off: a non-finite sample anywhere would make its pixel non-finite
 /// (the block mean and the fill propagate NaN and infinity). This covers light sampling, the BVH,
-/// shading and MIS as compiled for the GPU, which the probe cannot reach (it has no scene bindings).
+/// shading and MIS as compiled for the GPU together (the scene probe above checks their parts one by one).
 #[test]
 fn frames_are_finite_without_the_final_guard_on_vulkan() {
     let Some(mut ctx) = fovea_tests::vulkan_context_or_skip("the Vulkan finite-frame test") else {
