@@ -98,6 +98,8 @@ struct Stiff {
     name: &'static str,
     scene: PackedScene,
     camera: Camera,
+    /// The `max_bounces` it is rendered at.
+    depths: &'static [u32],
 }
 
 fn shared(rel: &str) -> Option<PathBuf> {
@@ -123,10 +125,28 @@ fn stiff_scenes() -> Vec<Stiff> {
     let mut out = Vec::new();
     if let Some(p) = shared("cornell_stiff/cornell_stiff.gltf") {
         let loaded = load_scene(&p, &LoadOptions::default()).expect("cornell_stiff");
+        let scene = pack(loaded, &Environment::None);
+        // From above the glossy short box, where its top mirrors the light: the highlight that a
+        // tiny light on a near-specular surface (alpha 1e-3) makes, which light sampling alone renders
+        // with high variance.
+        out.push(Stiff {
+            name: "cornell_stiff (highlight view)",
+            scene: scene.clone(),
+            camera: Camera::look_at(
+                Vec3::new(0.56, 1.57, 0.6),
+                Vec3::new(0.2, 0.45, 0.2),
+                Vec3::Y,
+                30f32.to_radians(),
+                aspect,
+            ),
+            // Direct light only: at 3 bounces this view adds nothing the front view does not test.
+            depths: &[1],
+        });
         out.push(Stiff {
             name: "cornell_stiff",
-            scene: pack(loaded, &Environment::None),
+            scene,
             camera: fovea_tests::cornell_camera(w, h),
+            depths: &[1, 3],
         });
     }
     if let Some(p) = shared("veach_mis_pema99/VeachMIS.glb") {
@@ -144,6 +164,7 @@ fn stiff_scenes() -> Vec<Stiff> {
                 aspect,
             ),
             scene: pack(loaded, &Environment::None),
+            depths: &[1, 3],
         });
     }
     out
@@ -209,7 +230,7 @@ fn reference(name: &str, max_bounces: u32) -> (&'static Render, f64) {
     let all = REFERENCES.get_or_init(|| {
         let mut out = Vec::new();
         for stiff in stiff_scenes() {
-            for depth in [1u32, 3] {
+            for &depth in stiff.depths {
                 let start = Instant::now();
                 let r = render(
                     &stiff.scene,
@@ -266,8 +287,12 @@ const REL_MSE_EPS: f64 = 1e-2;
 /// strategy (the maximum is usually the light seen directly: 1248.5 for cornell_stiff).
 ///
 /// **Asserted:** MIS below BSDF sampling alone everywhere, and below light sampling alone on the Veach
-/// plates (lights of equal power, radiance 1 to 400). **Not asserted:** MIS against light sampling alone
-/// on `cornell_stiff`, where it does not hold at any affordable sample count, for two measured reasons:
+/// plates (lights of equal power, radiance 1 to 400) and on `cornell_stiff` seen from above the glossy
+/// short box (alpha 1e-3), whose top mirrors the tiny light: there BSDF sampling is the better strategy
+/// for the highlight, light sampling for the rest, and MIS wins (measured z = -3.69 against light only,
+/// -4.82 against BSDF only; relMSE mean 0.0015 vs 0.0046 and 24.4). **Not asserted:** MIS against
+/// light sampling alone on `cornell_stiff`'s front view, where it does not hold at any affordable sample
+/// count, for two measured reasons:
 /// - at `max_bounces` 1 the two estimates coincide (relMSE equal to 4 digits): the light is so small that
 ///   the power heuristic gives a BSDF-sampled hit of it a weight of about 1e-7 on every surface the
 ///   camera sees (the mirror does not show the light from this view);
@@ -286,7 +311,10 @@ fn mis_beats_either_strategy_on_stiff_scenes() {
     let ref_spp = reference_spp();
     let spp = 64u32;
     let seeds = pick(16u32, 64);
-    for (stiff, depth) in stiff_scenes().iter().flat_map(|s| [(s, 1u32), (s, 3)]) {
+    for (stiff, depth) in stiff_scenes()
+        .iter()
+        .flat_map(|s| s.depths.iter().map(move |&d| (s, d)))
+    {
         let start = Instant::now();
         let (reference, ref_time) = reference(stiff.name, depth);
         let ref_mean = reference
@@ -357,7 +385,8 @@ fn mis_beats_either_strategy_on_stiff_scenes() {
         }
         for (label, errors, ..) in &results[1..] {
             let z = mann_whitney_z(&results[0].1, errors);
-            // cornell_stiff: light sampling alone is not compared (see the test's documentation).
+            // cornell_stiff's front view: light sampling alone is not compared (see the test's
+            // documentation).
             if stiff.name == "cornell_stiff" && *label == "light only" {
                 eprintln!(
                     "{} max_bounces {depth}: MIS vs {label}: z = {z:.2} (not asserted)",
@@ -413,7 +442,7 @@ fn mann_whitney_z(a: &[f64], b: &[f64]) -> f64 {
 #[test]
 fn f32_accumulation_of_4096_samples_is_precise_enough() {
     let spp = reference_spp();
-    for stiff in stiff_scenes() {
+    for stiff in stiff_scenes().iter().filter(|s| s.depths.contains(&3)) {
         let (r, seconds) = reference(stiff.name, 3);
         let mut max_rel = 0.0f64;
         let mut sum_rel = 0.0f64;
