@@ -120,7 +120,8 @@ pub const PROBE_PCG4D: u32 = 0;
 /// draws) bits → `out[0]` = `next_u32x4` after skipping `draws` draws (bits), `out[1].xy` = the
 /// following `next_2d`.
 pub const PROBE_SAMPLE_RNG: u32 = 1;
-/// [`crate::geometry::offset::offset_ray_origin`]: `in[0].xyz` = p, `in[1].xyz` = n → `out[0].xyz`.
+/// [`crate::geometry::offset::offset_ray_origin`]: `in[0]` = (p xyz, triangle magnitude), `in[1].xyz` =
+/// n → `out[0].xyz`.
 pub const PROBE_OFFSET_RAY_ORIGIN: u32 = 2;
 /// The watertight ray-triangle test ([`crate::geometry::triangle::WatertightRay`]): `in[0]` = (origin
 /// xyz, t_max), `in[1].xyz` = direction, `in[2]`, `in[3]`, `in[4]` = v0, v1, v2 (as packed in
@@ -259,6 +260,7 @@ pub fn probe_eval(
         let p = crate::geometry::offset::offset_ray_origin(
             probe_vec3(r0),
             probe_vec3(inputs[base + 1]),
+            r0[3],
         );
         out[0] = [p.x, p.y, p.z, 0.0];
     } else if selector == PROBE_TRIANGLE {
@@ -479,10 +481,10 @@ mod tests {
         let n = Vec3::new(0.0, 0.6, -0.8);
         let out = probe_one(
             PROBE_OFFSET_RAY_ORIGIN,
-            &[[p.x, p.y, p.z, 0.0], [n.x, n.y, n.z, 0.0]],
+            &[[p.x, p.y, p.z, 0.25], [n.x, n.y, n.z, 0.0]],
             &f,
         );
-        let q = crate::geometry::offset::offset_ray_origin(p, n);
+        let q = crate::geometry::offset::offset_ray_origin(p, n, 0.25);
         assert_eq!(out[0], [q.x, q.y, q.z, 0.0]);
 
         let tri = TrianglePositions {

@@ -33,6 +33,16 @@ pub fn load_packed(path: &Path, environment: &Environment) -> PackedScene {
     pack_scene(loaded, environment, &BvhBuildOptions::default())
 }
 
+/// The indices of a packed scene's emissive triangles.
+pub fn emissive_triangles(packed: &PackedScene) -> Vec<u32> {
+    (0..packed.triangles.len() as u32)
+        .filter(|&t| {
+            let m = packed.triangle_info[t as usize].material as usize;
+            packed.materials[m].is_emissive()
+        })
+        .collect()
+}
+
 /// The camera that views McGuire's Cornell box from the front.
 pub fn cornell_camera(width: u32, height: u32) -> Camera {
     Camera::look_at(

@@ -391,9 +391,11 @@ fn offset_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
             }
             _ => rng.dir(),
         };
+        // The triangle's magnitude: |p| (often below 1, where the near-zero offsets scale with it).
+        let magnitude = p[0].abs().max(p[1].abs()).max(p[2].abs()) * rng.range(1.0, 4.0);
         push_item(
             &mut v,
-            &[[p[0], p[1], p[2], 0.0], [nrm[0], nrm[1], nrm[2], 0.0]],
+            &[[p[0], p[1], p[2], magnitude], [nrm[0], nrm[1], nrm[2], 0.0]],
         );
     }
     v
@@ -600,6 +602,11 @@ const GRAZING_COS: f64 = 0.02;
 /// (measured). Such items are counted, not compared.
 const GRAZING_WO_Z: f32 = 1e-3;
 
+/// Sampled densities above this come from a near-delta lobe (roughness ~0: alpha clamped to its floor),
+/// whose pdf falls by a percent when the direction moves by 1e-5 rad, the order of GLSL.std.450's
+/// sin/cos error: measured 972780.7 against 961547.3 (1.2 %) for a direction 1.5e-5 apart. Not compared.
+const NEAR_DELTA_PDF: f32 = 1e5;
+
 /// A foveated frame of 181 × 97 pixels (odd sizes: partial blocks at the edges).
 fn probe_frame() -> FrameParams {
     let (w, h) = (181, 97);
@@ -758,7 +765,7 @@ fn core_functions_agree_across_backends() {
         if (c[0][3] == 0.0) != (g[0][3] == 0.0) || (0..3).any(|k| (c[0][k] - g[0][k]).abs() > 1e-2)
         {
             Class::Flip
-        } else if wo_z > 0.0 && wo_z < GRAZING_WO_Z {
+        } else if (wo_z > 0.0 && wo_z < GRAZING_WO_Z) || c[0][3].max(g[0][3]) > NEAR_DELTA_PDF {
             Class::IllConditioned
         } else {
             Class::Compare
@@ -1022,12 +1029,7 @@ fn directions_differ(a: [f32; 4], b: [f32; 4], eps: f32) -> bool {
 fn scene_functions_agree_across_backends() {
     let packed = probe_scene_packed();
     let scene = packed.view();
-    let emissive: Vec<u32> = (0..packed.triangles.len() as u32)
-        .filter(|&t| {
-            let m = packed.triangle_info[t as usize].material as usize;
-            packed.materials[m].is_emissive()
-        })
-        .collect();
+    let emissive = fovea_tests::emissive_triangles(&packed);
     assert!(!emissive.is_empty());
     let cpu_eval_scene = |selector: u32, inputs: &[[f32; 4]]| -> Vec<[f32; 4]> {
         (0..inputs.len() / STRIDE)

@@ -287,7 +287,15 @@ fn gen_offset(rng: &mut Rng, v: &mut Vec<[f32; 4]>) {
         2 => Vec3::ZERO,
         _ => rng.dir(),
     };
-    push(v, &[rec(p, 0.0), rec(n, 0.0)]);
+    // The triangle's magnitude: at least |p| (p lies on it), often exactly that, sometimes far larger,
+    // zero or below the smallest normal float.
+    let magnitude = match rng.below(6) {
+        0 => 0.0,
+        1 => f32::from_bits(1),
+        2 => p.abs().max_element(),
+        _ => p.abs().max_element() * rng.log_uniform(1.0, 1e6),
+    };
+    push(v, &[rec(p, magnitude), rec(n, 0.0)]);
 }
 
 fn check_offset(inp: &[[f32; 4]], out: &[[f32; 4]]) -> Result<bool, String> {
@@ -295,13 +303,14 @@ fn check_offset(inp: &[[f32; 4]], out: &[[f32; 4]]) -> Result<bool, String> {
     if !finite4(q) {
         return Err("non-finite offset point".into());
     }
-    // Each coordinate moves by at most 256 ulps or 2^-16.
+    // Each coordinate moves by at most 256 ulps or 2^-16 times the magnitude (clamped to at most 1).
+    let scale = inp[0][3].clamp(fovea_core::geometry::offset::MIN_MAGNITUDE, 1.0);
     for k in 0..3 {
         let p = inp[0][k];
         let ulps = (ordered(q[k]) - ordered(p)).unsigned_abs();
         let step = (q[k] - p).abs();
         // (`p + 2^-16 n` rounds, so allow the step a relative 1e-3 above 2^-16.)
-        if ulps > 256 && step > fovea_core::geometry::offset::FLOAT_SCALE * 1.001 {
+        if ulps > 256 && step > fovea_core::geometry::offset::FLOAT_SCALE * scale * 1.001 {
             return Err(format!("coordinate {k} moved by {step} ({ulps} ulps)"));
         }
     }
@@ -795,12 +804,7 @@ fn light_sampling_and_mis_weights_are_finite_on_cpu() {
     ] {
         let packed = adversarial_scene(&env);
         let scene = packed.view();
-        let emissive: Vec<u32> = (0..scene.triangles.len() as u32)
-            .filter(|&t| {
-                let m = scene.triangle_info[t as usize].material as usize;
-                scene.materials[m].is_emissive()
-            })
-            .collect();
+        let emissive = fovea_tests::emissive_triangles(&packed);
         assert!(emissive.len() >= 6, "{} emitters", emissive.len());
         let failures: Vec<String> = (0..total / 1024)
             .into_par_iter()
@@ -967,12 +971,7 @@ fn scene_functions_are_finite_on_vulkan() {
     ] {
         let packed = adversarial_scene(&env);
         let scene = packed.view();
-        let emissive: Vec<u32> = (0..scene.triangles.len() as u32)
-            .filter(|&t| {
-                let m = scene.triangle_info[t as usize].material as usize;
-                scene.materials[m].is_emissive()
-            })
-            .collect();
+        let emissive = fovea_tests::emissive_triangles(&packed);
         let gpu_scene = ctx.upload_scene(&packed).expect("upload");
         for selector in [
             PROBE_SCENE_CLOSEST_HIT,

@@ -156,7 +156,7 @@ pub fn trace_path<F: crate::scene::Features>(
             break;
         }
         let bsdf = surface.params;
-        let origin = offset_ray_origin(surface.position, ng);
+        let origin = offset_ray_origin(surface.position, ng, surface.magnitude);
 
         // Next-event estimation.
         if use_nee {

@@ -3,7 +3,7 @@
 use glam::{Vec2, Vec3};
 
 use super::LightSample;
-use crate::geometry::offset::offset_ray_origin;
+use crate::geometry::offset::{offset_ray_origin, triangle_magnitude};
 use crate::material::alpha::interpolate_uv;
 use crate::material::texture::sample_texture;
 use crate::math::vec3_from;
@@ -100,7 +100,7 @@ pub fn sample<F: Features>(scene: &SceneView<F>, triangle: u32, p: Vec3, u: Vec2
     let side = if cos_q >= 0.0 { ng } else { -ng };
     LightSample {
         direction: -w,
-        target: offset_ray_origin(q, side),
+        target: offset_ray_origin(q, side, triangle_magnitude(&v)),
         is_infinite: false,
         radiance,
         pdf: dist2 / cos_area,

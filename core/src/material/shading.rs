@@ -19,6 +19,9 @@ use crate::scene::{Features, SceneView, INVALID_INDEX};
 pub struct SurfacePoint {
     /// Position, interpolated from the vertices (more precise than `origin + t · direction`).
     pub position: Vec3,
+    /// The triangle's largest absolute vertex coordinate, which scales the ray offsets
+    /// ([`crate::geometry::offset::offset_ray_origin`]).
+    pub magnitude: f32,
     /// Unit geometric normal of the front face (counter-clockwise winding).
     pub geometric_normal: Vec3,
     /// Shading frame; `z` is the shading normal on the same side as `geometric_normal`.
@@ -35,6 +38,7 @@ pub fn surface_point<F: Features>(scene: &SceneView<F>, hit: &Hit) -> SurfacePoi
     let b0 = 1.0 - b1 - b2;
     let v = triangle_vertices(scene, triangle);
     let position = v[0] * b0 + v[1] * b1 + v[2] * b2;
+    let magnitude = crate::geometry::offset::triangle_magnitude(&v);
     let ng = scaled_geometric_normal(&v).normalize_or(Vec3::Z);
     let info = scene.triangle_info[triangle as usize];
     let material = scene.materials[info.material as usize];
@@ -120,6 +124,7 @@ pub fn surface_point<F: Features>(scene: &SceneView<F>, hit: &Hit) -> SurfacePoi
     };
     SurfacePoint {
         position,
+        magnitude,
         geometric_normal: ng,
         frame,
         uv,
