@@ -73,18 +73,11 @@ pub struct RenderArgs {
     /// Block edge in pixels per region; each must divide the next.
     #[arg(long, default_value = "1,2,4", value_name = "F,I,P")]
     pub blocks: String,
-    /// Eccentricity angles in degrees bounding the fovea and the intermediate region.
-    #[arg(long, default_value = "5.2,17", value_name = "E1,E2")]
-    pub eccentricity: String,
     /// Region radii in pixels (instead of eccentricity angles).
     #[arg(long, value_name = "R1,R2")]
     pub radii: Option<String>,
-    /// Physical display size in centimetres.
-    #[arg(long, default_value = "70.848x39.852", value_name = "WxH")]
-    pub display_cm: String,
-    /// Viewing distance in centimetres.
-    #[arg(long, default_value_t = 60.0, value_name = "D")]
-    pub distance_cm: f32,
+    #[command(flatten)]
+    pub display: DisplayArgs,
     /// Bounces per path (3: camera -> x1 -> x2 -> x3 -> light).
     #[arg(long, default_value_t = 3, value_name = "N")]
     pub depth: u32,
@@ -105,45 +98,10 @@ pub struct RenderArgs {
     /// Frame index (part of the random-number key).
     #[arg(long, default_value_t = 0, value_name = "N")]
     pub frame: u32,
-    /// Camera position (with --target).
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
-    pub eye: Option<String>,
-    /// Camera target point (with --eye).
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
-    pub target: Option<String>,
-    /// Camera up vector.
-    #[arg(
-        long,
-        default_value = "0,1,0",
-        value_name = "X,Y,Z",
-        allow_hyphen_values = true
-    )]
-    pub up: String,
-    /// Vertical field of view in degrees.
-    #[arg(long, value_name = "DEG")]
-    pub fov: Option<f32>,
-    /// Constant environment ("sky") radiance.
-    #[arg(long, value_name = "R,G,B", allow_hyphen_values = true)]
-    pub sky: Option<String>,
-    /// Adds a point light at X,Y,Z with intensity R,G,B in W/sr (repeat for several), e.g. to light a
-    /// scene that has no emitters.
-    #[arg(
-        long = "point-light",
-        value_name = "X,Y,Z,R,G,B",
-        allow_hyphen_values = true
-    )]
-    pub point_lights: Vec<String>,
-    /// Equirectangular HDR environment map (.hdr or .exr), importance-sampled.
-    #[arg(long, value_name = "FILE")]
-    pub env_map: Option<PathBuf>,
-    /// Scale of --env-map.
-    #[arg(
-        long,
-        default_value_t = 1.0,
-        value_name = "S",
-        allow_hyphen_values = true
-    )]
-    pub env_scale: f32,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub lighting: LightingArgs,
     /// MTL file to use instead of the one the OBJ names (e.g. Lost Empire's torch variant).
     #[arg(long, value_name = "FILE.mtl")]
     pub mtl: Option<PathBuf>,
@@ -219,15 +177,8 @@ pub struct ReportArgs {
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
 
-    /// Eccentricity angles in degrees bounding the fovea and the intermediate region.
-    #[arg(long, default_value = "5.2,17", value_name = "E1,E2")]
-    pub eccentricity: String,
-    /// Physical display size in centimetres (the image fills it, whatever --resolution is).
-    #[arg(long, default_value = "70.848x39.852", value_name = "WxH")]
-    pub display_cm: String,
-    /// Viewing distance in centimetres.
-    #[arg(long, default_value_t = 60.0, value_name = "D")]
-    pub distance_cm: f32,
+    #[command(flatten)]
+    pub display: DisplayArgs,
     /// How block pixels are filled.
     #[arg(long, value_enum, default_value = "bilinear")]
     pub fill: Fill,
@@ -248,7 +199,19 @@ pub struct ReportArgs {
     /// Seed of the test renders (the reference uses a different one, so its noise is independent).
     #[arg(long, default_value_t = 0, value_name = "N")]
     pub seed: u32,
-    /// Camera position (with --target); applies to every scene.
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub lighting: LightingArgs,
+    /// No progress bar and no summary.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// The camera (`render` and `report`; `report` applies it to every scene).
+#[derive(Args, Debug, Clone)]
+pub struct CameraArgs {
+    /// Camera position (with --target).
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub eye: Option<String>,
     /// Camera target point (with --eye).
@@ -265,19 +228,24 @@ pub struct ReportArgs {
     /// Vertical field of view in degrees.
     #[arg(long, value_name = "DEG")]
     pub fov: Option<f32>,
+}
+
+/// Light added on the command line (`render` and `report`; `report` applies it to every scene).
+#[derive(Args, Debug, Clone)]
+pub struct LightingArgs {
     /// Constant environment ("sky") radiance (default: the bundled scene's sky for Lost Empire, none
     /// for other scenes).
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true)]
     pub sky: Option<String>,
-    /// Adds a point light at X,Y,Z with intensity R,G,B in W/sr (repeat for several); applies to every
-    /// scene.
+    /// Adds a point light at X,Y,Z with intensity R,G,B in W/sr (repeat for several), e.g. to light a
+    /// scene that has no emitters.
     #[arg(
         long = "point-light",
         value_name = "X,Y,Z,R,G,B",
         allow_hyphen_values = true
     )]
     pub point_lights: Vec<String>,
-    /// Equirectangular HDR environment map (.hdr or .exr).
+    /// Equirectangular HDR environment map (.hdr or .exr), importance-sampled.
     #[arg(long, value_name = "FILE")]
     pub env_map: Option<PathBuf>,
     /// Scale of --env-map.
@@ -288,7 +256,18 @@ pub struct ReportArgs {
         allow_hyphen_values = true
     )]
     pub env_scale: f32,
-    /// No progress bar and no summary.
-    #[arg(short, long)]
-    pub quiet: bool,
+}
+
+/// The display model that turns eccentricity angles into region radii (`render` and `report`).
+#[derive(Args, Debug, Clone)]
+pub struct DisplayArgs {
+    /// Eccentricity angles in degrees bounding the fovea and the intermediate region.
+    #[arg(long, default_value = "5.2,17", value_name = "E1,E2")]
+    pub eccentricity: String,
+    /// Physical display size in centimetres (the image fills it, whatever --resolution is).
+    #[arg(long, default_value = "70.848x39.852", value_name = "WxH")]
+    pub display_cm: String,
+    /// Viewing distance in centimetres.
+    #[arg(long, default_value_t = 60.0, value_name = "D")]
+    pub distance_cm: f32,
 }

@@ -61,6 +61,27 @@ pub fn point_lights(texts: &[String]) -> Result<Vec<fovea_core::scene::Light>> {
         .collect()
 }
 
+/// `--eye`, `--target` and `--up`, parsed (their consistency is checked where the camera is made).
+pub struct CameraOptions {
+    pub eye: Option<[f32; 3]>,
+    pub target: Option<[f32; 3]>,
+    pub up: [f32; 3],
+}
+
+/// Parses the camera options shared by `render` and `report`.
+pub fn camera_options(args: &crate::args::CameraArgs) -> Result<CameraOptions> {
+    let point = |option: &'static str, text: &Option<String>| {
+        text.as_deref()
+            .map(|t| floats::<3>(option, t, ','))
+            .transpose()
+    };
+    Ok(CameraOptions {
+        eye: point("--eye", &args.eye)?,
+        target: point("--target", &args.target)?,
+        up: floats::<3>("--up", &args.up, ',')?,
+    })
+}
+
 /// The largest image edge fovea accepts.
 pub const MAX_IMAGE_EDGE: u32 = 32_768;
 /// The most samples per pixel or block fovea accepts.

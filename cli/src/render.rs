@@ -7,7 +7,6 @@ use fovea_core::foveation::blocks::count_samples;
 use fovea_core::foveation::fill::{FILL_BILINEAR, FILL_REPLICATE};
 use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
 use fovea_core::integrator::{FrameParams, IntegratorSettings};
-use fovea_scene::environment::Environment;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::{Fill, RenderArgs};
@@ -17,7 +16,7 @@ use crate::output::{
     check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png, ImageFormat,
 };
 use crate::parse::{self, MAX_SPP};
-use crate::scene_setup::{choose_camera, prepare_scene, DEFAULT_SKY};
+use crate::scene_setup::{choose_camera, prepare_scene, Lighting};
 use crate::stats::FrameStats;
 use crate::trace::{read_gaze_trace, GazeSample};
 
@@ -31,8 +30,7 @@ struct Plan {
     output_format: ImageFormat,
     per_frame_outputs: bool,
     fill_mode: u32,
-    environment: Environment,
-    point_lights: Vec<fovea_core::scene::Light>,
+    lighting: Lighting,
 }
 
 fn plan(args: &RenderArgs) -> Result<Plan> {
@@ -62,7 +60,11 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         ));
     }
     // The image fills the display, so pixels per centimetre come from the rendered width.
-    let display = parse::display_geometry(&args.display_cm, args.distance_cm, resolution)?;
+    let display = parse::display_geometry(
+        &args.display.display_cm,
+        args.display.distance_cm,
+        resolution,
+    )?;
     let radii_px = match &args.radii {
         Some(text) => {
             let r: [f32; 2] = parse::floats("--radii", text, ',')?;
@@ -71,7 +73,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
             }
             r
         }
-        None => parse::eccentricity_radii(&args.eccentricity, &display)?,
+        None => parse::eccentricity_radii(&args.display.eccentricity, &display)?,
     };
 
     let mut foveation_template = if args.uniform {
@@ -175,32 +177,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         ));
     }
 
-    let environment = match (&args.sky, &args.env_map) {
-        (Some(_), Some(_)) => {
-            return Err(FoveaError::option(
-                "--sky",
-                "give either --sky or --env-map",
-            ))
-        }
-        (Some(text), None) => {
-            let c: [f32; 3] = parse::floats("--sky", text, ',')?;
-            if c.iter().any(|&v| v < 0.0) {
-                return Err(FoveaError::option("--sky", "radiance must not be negative"));
-            }
-            Environment::Constant(c)
-        }
-        (None, Some(path)) => {
-            if !(args.env_scale.is_finite() && args.env_scale >= 0.0) {
-                return Err(FoveaError::option(
-                    "--env-scale",
-                    "must be a finite, non-negative number",
-                ));
-            }
-            Environment::load_map(path, [args.env_scale; 3])?
-        }
-        (None, None) if args.scene.is_none() => Environment::Constant(DEFAULT_SKY),
-        (None, None) => Environment::None,
-    };
+    let lighting = Lighting::from_args(&args.lighting)?;
 
     Ok(Plan {
         resolution,
@@ -214,8 +191,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
             Fill::Bilinear => FILL_BILINEAR,
             Fill::Replicate => FILL_REPLICATE,
         },
-        environment,
-        point_lights: parse::point_lights(&args.point_lights)?,
+        lighting,
     })
 }
 
@@ -240,23 +216,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let mut renderer = Renderer::new(args.backend, args.device, args.threads, args.quiet)?;
     let backend_name = renderer.name();
 
-    let eye = args
-        .eye
-        .as_deref()
-        .map(|t| parse::floats::<3>("--eye", t, ','))
-        .transpose()?;
-    let target = args
-        .target
-        .as_deref()
-        .map(|t| parse::floats::<3>("--target", t, ','))
-        .transpose()?;
-    let up = parse::floats::<3>("--up", &args.up, ',')?;
+    let parse::CameraOptions { eye, target, up } = parse::camera_options(&args.camera)?;
 
     let scene = prepare_scene(
         args.scene.as_deref(),
         args.mtl.as_deref(),
-        &plan.environment,
-        &plan.point_lights,
+        &plan.lighting.environment(args.scene.is_none()),
+        &plan.lighting.point_lights,
     )?;
     if args.verbose {
         for w in &scene.warnings {
@@ -297,7 +263,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
 
     let [w, h] = plan.resolution;
-    let camera = choose_camera(&scene, eye, target, up, args.fov, w as f32 / h as f32)?;
+    let camera = choose_camera(
+        &scene,
+        eye,
+        target,
+        up,
+        args.camera.fov,
+        w as f32 / h as f32,
+    )?;
     renderer.set_scene(&scene.packed, !args.no_specialize)?;
     let integrator = IntegratorSettings {
         max_bounces: args.depth,
@@ -425,7 +398,7 @@ fn refuse_overwriting_inputs(args: &RenderArgs) -> Result<()> {
     let inputs: Vec<&Path> = [
         args.scene.as_deref(),
         args.mtl.as_deref(),
-        args.env_map.as_deref(),
+        args.lighting.env_map.as_deref(),
         args.gaze_trace.as_deref(),
     ]
     .into_iter()

@@ -10,7 +10,9 @@ use fovea_scene::mesh::{LoadOptions, LoadedScene};
 use fovea_scene::pack::{pack_scene, PackedScene};
 use glam::Vec3;
 
+use crate::args::LightingArgs;
 use crate::error::{FoveaError, Result};
+use crate::parse;
 
 /// The bundled default scene: the paper's Lost Empire (CC BY 3.0, see assets/lost_empire/SOURCE.md).
 pub fn default_scene_path() -> PathBuf {
@@ -155,4 +157,80 @@ pub fn choose_camera(
         fov_rad,
         aspect,
     ))
+}
+
+/// The light options of `render` and `report`, checked: a constant sky or an environment map (not both;
+/// neither: the bundled scene's own sky, or none) and point lights.
+pub struct Lighting {
+    sky: Option<[f32; 3]>,
+    /// The loaded map with its path and scale (for the reference cache key).
+    map: Option<(Environment, PathBuf, f32)>,
+    pub point_lights: Vec<Light>,
+}
+
+impl Lighting {
+    /// Parses and checks the options and loads `--env-map`.
+    pub fn from_args(args: &LightingArgs) -> Result<Self> {
+        if args.sky.is_some() && args.env_map.is_some() {
+            return Err(FoveaError::option(
+                "--sky",
+                "give either --sky or --env-map",
+            ));
+        }
+        let sky = match &args.sky {
+            Some(text) => {
+                let c: [f32; 3] = parse::floats("--sky", text, ',')?;
+                if c.iter().any(|&v| v < 0.0) {
+                    return Err(FoveaError::option("--sky", "radiance must not be negative"));
+                }
+                Some(c)
+            }
+            None => None,
+        };
+        if !(args.env_scale.is_finite() && args.env_scale >= 0.0) {
+            return Err(FoveaError::option(
+                "--env-scale",
+                "must be a finite, non-negative number",
+            ));
+        }
+        let point_lights = parse::point_lights(&args.point_lights)?;
+        let map = match &args.env_map {
+            Some(path) => Some((
+                Environment::load_map(path, [args.env_scale; 3])?,
+                path.clone(),
+                args.env_scale,
+            )),
+            None => None,
+        };
+        Ok(Self {
+            sky,
+            map,
+            point_lights,
+        })
+    }
+
+    /// The environment of a scene; `is_default`: the bundled scene, lit by [`DEFAULT_SKY`] unless the
+    /// options say otherwise.
+    #[must_use]
+    pub fn environment(&self, is_default: bool) -> Environment {
+        match (&self.sky, &self.map) {
+            (Some(c), _) => Environment::Constant(*c),
+            (None, Some((map, ..))) => map.clone(),
+            (None, None) if is_default => Environment::Constant(DEFAULT_SKY),
+            (None, None) => Environment::None,
+        }
+    }
+
+    /// A canonical description of [`Self::environment`] (part of the report's reference cache key).
+    #[must_use]
+    pub fn environment_key(&self, is_default: bool) -> String {
+        match (&self.sky, &self.map) {
+            (Some(c), _) => format!("constant {c:?}"),
+            (None, Some((_, path, scale))) => {
+                format!("map {} scale {}", path.display(), scale.to_bits())
+            }
+            (None, None) if is_default => format!("constant {DEFAULT_SKY:?}"),
+            (None, None) => "none".into(),
+        }
+    }
 }

@@ -28,7 +28,7 @@ use crate::backend::Renderer;
 use crate::error::{FoveaError, Result};
 use crate::output::{regions_overlay, tonemapped_rgb8, write_png};
 use crate::parse::{self, MAX_SPP};
-use crate::scene_setup::{choose_camera, default_scene_path, prepare_scene, DEFAULT_SKY};
+use crate::scene_setup::{choose_camera, default_scene_path, prepare_scene, Lighting};
 
 use configs::{ConfigKind, ConfigSpec, UNIFORM_SPP};
 use metrics::{RegionMap, RegionMeans};
@@ -153,8 +153,12 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
     )?;
     // The image fills the display whatever its resolution, as in `fovea render`: pixels per centimetre,
     // radii and pixels per degree all scale with the rendered width.
-    let display = parse::display_geometry(&args.display_cm, args.distance_cm, resolution)?;
-    let radii_px = parse::eccentricity_radii(&args.eccentricity, &display)?;
+    let display = parse::display_geometry(
+        &args.display.display_cm,
+        args.display.distance_cm,
+        resolution,
+    )?;
+    let radii_px = parse::eccentricity_radii(&args.display.eccentricity, &display)?;
     if args.depth > 64 {
         return Err(FoveaError::option(
             "--depth",
@@ -167,29 +171,7 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
             "must be a finite EV between -64 and 64",
         ));
     }
-    if !(args.env_scale.is_finite() && args.env_scale >= 0.0) {
-        return Err(FoveaError::option(
-            "--env-scale",
-            "must be a finite, non-negative number",
-        ));
-    }
-    if args.sky.is_some() && args.env_map.is_some() {
-        return Err(FoveaError::option(
-            "--sky",
-            "give either --sky or --env-map",
-        ));
-    }
-    let eye = args
-        .eye
-        .as_deref()
-        .map(|t| parse::floats::<3>("--eye", t, ','))
-        .transpose()?;
-    let target = args
-        .target
-        .as_deref()
-        .map(|t| parse::floats::<3>("--target", t, ','))
-        .transpose()?;
-    let up = parse::floats::<3>("--up", &args.up, ',')?;
+    let parse::CameraOptions { eye, target, up } = parse::camera_options(&args.camera)?;
     let mut names = std::collections::HashSet::new();
     for s in &args.scenes {
         if !s.is_file() {
@@ -238,19 +220,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     let wall = Instant::now();
     let plan = plan(args)?;
     let mut renderer = Renderer::new(args.backend, args.device, args.threads, args.quiet)?;
-    let environment_map = match &args.env_map {
-        Some(path) => Some(Environment::load_map(path, [args.env_scale; 3])?),
-        None => None,
-    };
-    let sky = args
-        .sky
-        .as_deref()
-        .map(|t| parse::floats::<3>("--sky", t, ','))
-        .transpose()?;
-    if sky.is_some_and(|c| c.iter().any(|&v| v < 0.0)) {
-        return Err(FoveaError::option("--sky", "radiance must not be negative"));
-    }
-    let point_lights = parse::point_lights(&args.point_lights)?;
+    let lighting = Lighting::from_args(&args.lighting)?;
     create_dir(&args.out)?;
 
     // One entry per scene: its path (None: the bundled default) and its output folder.
@@ -313,18 +283,8 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     let mut markdown = Vec::new();
     for (scene_path, out_dir) in &scenes {
         create_dir(out_dir)?;
-        let environment = match (&sky, &environment_map) {
-            (Some(c), _) => Environment::Constant(*c),
-            (None, Some(map)) => map.clone(),
-            (None, None) if scene_path.is_none() => Environment::Constant(DEFAULT_SKY),
-            (None, None) => Environment::None,
-        };
-        let env_text = match (&sky, &args.env_map) {
-            (Some(c), _) => format!("constant {c:?}"),
-            (None, Some(p)) => format!("map {} scale {}", p.display(), args.env_scale.to_bits()),
-            (None, None) if scene_path.is_none() => format!("constant {DEFAULT_SKY:?}"),
-            (None, None) => "none".into(),
-        };
+        let environment = lighting.environment(scene_path.is_none());
+        let env_text = lighting.environment_key(scene_path.is_none());
         let scene_start = Instant::now();
         let mut report = run_scene(
             args,
@@ -334,7 +294,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
             scene_path.as_deref(),
             &environment,
             &env_text,
-            &point_lights,
+            &lighting.point_lights,
             out_dir,
         )?;
         report.wall_ms = scene_start.elapsed().as_secs_f64() * 1e3;
@@ -421,7 +381,7 @@ fn run_scene(
         plan.eye,
         plan.target,
         plan.up,
-        args.fov,
+        args.camera.fov,
         w as f32 / h as f32,
     )?;
     renderer.set_scene(&scene.packed, true)?;
