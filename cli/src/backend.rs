@@ -28,7 +28,9 @@ pub enum Renderer {
 /// The CPU host's worker threads and whether it runs the scene's specialised path.
 pub struct CpuRenderer {
     pool: rayon::ThreadPool,
-    specialize: bool,
+    /// The features the CPU path is specialised for: the scene's, derived once in `set_scene`, or
+    /// every feature (`--no-specialize`).
+    features: fovea_core::scene::FeatureFlags,
 }
 
 /// The Vulkan context and the scene uploaded to it.
@@ -111,7 +113,7 @@ impl Renderer {
         if !want_vulkan {
             return Ok(Self::Cpu(CpuRenderer {
                 pool: cpu_pool(threads)?,
-                specialize: true,
+                features: fovea_core::scene::FeatureFlags::ALL,
             }));
         }
         Self::vulkan(device, choice == Backend::Auto, threads, quiet)
@@ -153,7 +155,7 @@ impl Renderer {
                 }
                 Ok(Self::Cpu(CpuRenderer {
                     pool: cpu_pool(threads)?,
-                    specialize: true,
+                    features: fovea_core::scene::FeatureFlags::ALL,
                 }))
             }
             Err(e) => Err(FoveaError::Backend(format!("Vulkan backend: {e}"))),
@@ -192,8 +194,11 @@ impl Renderer {
     pub fn set_scene(&mut self, packed: &PackedScene, specialize: bool) -> Result<()> {
         match self {
             Self::Cpu(cpu) => {
-                let _ = packed;
-                cpu.specialize = specialize;
+                cpu.features = if specialize {
+                    packed.features()
+                } else {
+                    fovea_core::scene::FeatureFlags::ALL
+                };
                 Ok(())
             }
             #[cfg(feature = "vulkan")]
@@ -229,11 +234,7 @@ impl Renderer {
             Self::Cpu(cpu) => {
                 // The CPU host always returns HDR; the CLI tone-maps it (same core function).
                 let _ = (exposure_ev, want_hdr);
-                let view = if cpu.specialize {
-                    packed.view().with_features(packed.features())
-                } else {
-                    packed.view()
-                };
+                let view = packed.view().with_features(cpu.features);
                 let (image, stats) = cpu
                     .pool
                     .install(|| fovea_cpu::render_frame(&view, frame, fill_mode, progress));

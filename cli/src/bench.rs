@@ -15,7 +15,6 @@ use clap::{Args, Subcommand};
 use fovea_core::camera::Camera;
 use fovea_core::foveation::display::{paper_params_for_display, DisplayGeometry};
 use fovea_core::integrator::{FrameParams, IntegratorSettings};
-use fovea_core::scene::TrianglePositions;
 use fovea_scene::bvh::{build_bvh, BvhBuildOptions};
 use fovea_scene::environment::Environment;
 use fovea_scene::mesh::{load_scene, LoadOptions};
@@ -97,21 +96,7 @@ fn bench_build(scene: Option<&Path>, runs: u32) -> Result<serde_json::Value> {
         .map(Path::to_path_buf)
         .unwrap_or_else(default_scene_path);
     let loaded = load_scene(&path, &LoadOptions::default())?;
-    let triangles: Vec<TrianglePositions> = loaded
-        .triangles
-        .iter()
-        .map(|t| {
-            let p = |i: u32| {
-                let v = loaded.positions[i as usize];
-                [v[0], v[1], v[2], 0.0]
-            };
-            TrianglePositions {
-                v0: p(t[0]),
-                v1: p(t[1]),
-                v2: p(t[2]),
-            }
-        })
-        .collect();
+    let triangles = fovea_scene::pack::triangle_positions(&loaded.positions, &loaded.triangles);
     let mut times = Vec::new();
     let mut nodes = 0;
     for _ in 0..runs {

@@ -117,6 +117,26 @@ impl PackedScene {
     }
 }
 
+/// The vertex positions of every triangle in the layout the BVH builder and the kernels read.
+#[must_use]
+pub fn triangle_positions(
+    positions: &[[f32; 3]],
+    triangles: &[[u32; 3]],
+) -> Vec<TrianglePositions> {
+    let position = |i: u32| -> [f32; 4] {
+        let p = positions[i as usize];
+        [p[0], p[1], p[2], 0.0]
+    };
+    triangles
+        .iter()
+        .map(|t| TrianglePositions {
+            v0: position(t[0]),
+            v1: position(t[1]),
+            v2: position(t[2]),
+        })
+        .collect()
+}
+
 /// Packs `scene` lit additionally by `environment`, building the BVH with `bvh_options`.
 pub fn pack_scene(
     scene: LoadedScene,
@@ -136,18 +156,7 @@ pub fn pack_scene(
         ..
     } = scene;
 
-    let position = |i: u32| -> [f32; 4] {
-        let p = positions[i as usize];
-        [p[0], p[1], p[2], 0.0]
-    };
-    let input_triangles: Vec<TrianglePositions> = triangles
-        .iter()
-        .map(|t| TrianglePositions {
-            v0: position(t[0]),
-            v1: position(t[1]),
-            v2: position(t[2]),
-        })
-        .collect();
+    let input_triangles = triangle_positions(&positions, &triangles);
     // Bounds of the vertices the triangles use (an unused far-away vertex must not move the camera).
     let mut bounds_min = Vec3::splat(f32::MAX);
     let mut bounds_max = Vec3::splat(f32::MIN);
