@@ -332,7 +332,7 @@ mod tests {
 
     use super::*;
     use crate::math::pack_vec3;
-    use crate::scene::{Material, SceneGlobals, TriangleInfo, TrianglePositions};
+    use crate::scene::{Material, TriangleInfo, TrianglePositions};
     use glam::Vec3;
 
     fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
@@ -350,22 +350,11 @@ mod tests {
         materials: &'a [Material],
     ) -> SceneView<'a> {
         SceneView {
-            features: crate::scene::FeatureFlags::ALL,
-            globals: SceneGlobals::default(),
             nodes,
             triangles,
             triangle_info: info,
-            normals: &[],
-            uvs: &[],
             materials,
-            textures: &[],
-            texels: &[],
-            lights: &[],
-            light_cdf: &[],
-            triangle_light: &[],
-            environment_texels: &[],
-            environment_marginal_cdf: &[],
-            environment_conditional_cdf: &[],
+            ..SceneView::empty()
         }
     }
 

@@ -113,7 +113,7 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::math::pack_vec3;
-    use crate::scene::{Material, SceneGlobals, TriangleInfo, TrianglePositions};
+    use crate::scene::{Material, TriangleInfo, TrianglePositions};
     use crate::test_support::chi2::{
         chi2_test, family_share, geometric, join, sample_count, uniform_cos, Grid,
     };
@@ -125,22 +125,10 @@ mod tests {
         materials: &'a [Material],
     ) -> SceneView<'a> {
         SceneView {
-            features: crate::scene::FeatureFlags::ALL,
-            globals: SceneGlobals::default(),
-            nodes: &[],
             triangles,
             triangle_info: info,
-            normals: &[],
-            uvs: &[],
             materials,
-            textures: &[],
-            texels: &[],
-            lights: &[],
-            light_cdf: &[],
-            triangle_light: &[],
-            environment_texels: &[],
-            environment_marginal_cdf: &[],
-            environment_conditional_cdf: &[],
+            ..SceneView::empty()
         }
     }
 

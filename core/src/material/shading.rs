@@ -136,7 +136,7 @@ pub fn surface_point<F: Features>(scene: &SceneView<F>, hit: &Hit) -> SurfacePoi
 mod tests {
     use super::*;
     use crate::math::pack_vec3;
-    use crate::scene::{Material, SceneGlobals, TriangleInfo, TrianglePositions};
+    use crate::scene::{Material, TriangleInfo, TrianglePositions};
 
     /// Tangent frames stay finite and orthonormal for texture parameterisations whose determinant is
     /// tiny (just above the 1e-20 cut-off) next to large edges, where the squared length of
@@ -161,22 +161,11 @@ mod tests {
             // det = duv1.x * duv2.y - duv1.y * duv2.x = d * d.
             let uvs = [[0.0, 0.0], [d, 0.0], [0.0, d]];
             let view = SceneView {
-                features: crate::scene::FeatureFlags::ALL,
-                globals: SceneGlobals::default(),
-                nodes: &[],
                 triangles: core::slice::from_ref(&tri),
                 triangle_info: core::slice::from_ref(&info),
-                normals: &[],
                 uvs: &uvs,
                 materials: &materials,
-                textures: &[],
-                texels: &[],
-                lights: &[],
-                light_cdf: &[],
-                triangle_light: &[],
-                environment_texels: &[],
-                environment_marginal_cdf: &[],
-                environment_conditional_cdf: &[],
+                ..SceneView::empty()
             };
             let hit = Hit {
                 t: 1.0,

@@ -44,6 +44,32 @@ pub struct SceneView<'a, F: Features = FeatureFlags> {
     pub environment_conditional_cdf: &'a [f32],
 }
 
+impl SceneView<'_> {
+    /// A scene without geometry, materials, lights or environment, with every feature on: the base that
+    /// tests fill in with struct update syntax (`SceneView { triangles, ..SceneView::empty() }`).
+    #[must_use]
+    pub fn empty() -> Self {
+        SceneView {
+            features: FeatureFlags::ALL,
+            globals: SceneGlobals::default(),
+            nodes: &[],
+            triangles: &[],
+            triangle_info: &[],
+            normals: &[],
+            uvs: &[],
+            materials: &[],
+            textures: &[],
+            texels: &[],
+            lights: &[],
+            light_cdf: &[],
+            triangle_light: &[],
+            environment_texels: &[],
+            environment_marginal_cdf: &[],
+            environment_conditional_cdf: &[],
+        }
+    }
+}
+
 impl<'a, F: Features> SceneView<'a, F> {
     /// The same arrays with another feature set, which must include every feature the scene uses.
     #[inline]

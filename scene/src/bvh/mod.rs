@@ -157,7 +157,7 @@ mod tests {
     use fovea_core::geometry::triangle::WatertightRay;
     use fovea_core::geometry::Ray;
     use fovea_core::math::{pack_vec3, vec3_from};
-    use fovea_core::scene::{Material, SceneGlobals, SceneView, TriangleInfo};
+    use fovea_core::scene::{Material, SceneView, TriangleInfo};
     use glam::Vec3;
 
     /// SplitMix64 for reproducible test data.
@@ -247,21 +247,11 @@ mod tests {
         fn view(&self) -> SceneView<'_> {
             SceneView {
                 features: fovea_core::scene::FeatureFlags::ALL,
-                globals: SceneGlobals::default(),
                 nodes: &self.bvh.nodes,
                 triangles: &self.triangles,
                 triangle_info: &self.info,
-                normals: &[],
-                uvs: &[],
                 materials: &self.materials,
-                textures: &[],
-                texels: &[],
-                lights: &[],
-                light_cdf: &[],
-                triangle_light: &[],
-                environment_texels: &[],
-                environment_marginal_cdf: &[],
-                environment_conditional_cdf: &[],
+                ..SceneView::empty()
             }
         }
     }
