@@ -32,6 +32,31 @@ fn height(x: f32, z: f32) -> f32 {
     2.0 * (0.11 * x).sin() * (0.07 * z).cos() + 0.6 * (0.37 * x + 0.23 * z).sin()
 }
 
+/// The 20 faces of the icosahedron of [`icosahedron`] (vertex indices, counter-clockwise seen from
+/// outside); also the base of the tests' subdivided icospheres.
+pub const ICOSAHEDRON_FACES: [[u32; 3]; 20] = [
+    [0, 11, 5],
+    [0, 5, 1],
+    [0, 1, 7],
+    [0, 7, 10],
+    [0, 10, 11],
+    [1, 5, 9],
+    [5, 11, 4],
+    [11, 10, 2],
+    [10, 7, 6],
+    [7, 1, 8],
+    [3, 9, 4],
+    [3, 4, 2],
+    [3, 2, 6],
+    [3, 6, 8],
+    [3, 8, 9],
+    [4, 9, 5],
+    [2, 4, 11],
+    [6, 2, 10],
+    [8, 6, 7],
+    [9, 8, 1],
+];
+
 /// The 20 faces of an icosahedron and its 12 vertices (unit circumradius).
 fn icosahedron() -> ([[f32; 3]; 12], [[u32; 3]; 20]) {
     let t = (1.0 + 5f32.sqrt()) / 2.0;
@@ -51,29 +76,7 @@ fn icosahedron() -> ([[f32; 3]; 12], [[u32; 3]; 20]) {
         [-t, 0.0, 1.0],
     ]
     .map(|p: [f32; 3]| [p[0] / n, p[1] / n, p[2] / n]);
-    let f = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    (v, f)
+    (v, ICOSAHEDRON_FACES)
 }
 
 /// Builds a scene of about `triangles` triangles (at least a few hundred); see the module documentation.
