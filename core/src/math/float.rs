@@ -1,6 +1,11 @@
-//! Scalar float functions through `libm`, which rustc_codegen_spirv maps to GLSL.std.450 instructions on
-//! the GPU and which compiles to native code on the CPU. Core code calls these instead of `f32::sqrt` &c.
-//! (which need `std`).
+//! Scalar float functions for core code on both targets (instead of `f32::sin` &c., which need `std`).
+//!
+//! `sqrt`, `floor` and `abs` go through `libm`, which rustc_codegen_spirv maps to GLSL.std.450
+//! instructions; those are exactly rounded on both backends. The transcendental functions are the
+//! portable polynomials of [`super::transcendental`], so that the CPU and a Vulkan driver agree to the
+//! bit (the GPU's own `Sin`, `Log`, `Pow` differ from `libm` by an ulp here and there).
+
+use super::transcendental;
 
 /// π.
 pub const PI: f32 = core::f32::consts::PI;
@@ -27,50 +32,65 @@ pub fn safe_sqrt(x: f32) -> f32 {
 #[inline]
 #[must_use]
 pub fn sin(x: f32) -> f32 {
-    libm::sinf(x)
+    transcendental::sin_cos(x).0
 }
 
 #[inline]
 #[must_use]
 pub fn cos(x: f32) -> f32 {
-    libm::cosf(x)
+    transcendental::sin_cos(x).1
 }
 
 #[inline]
 #[must_use]
 pub fn tan(x: f32) -> f32 {
-    libm::tanf(x)
+    transcendental::tan(x)
 }
 
 /// `acos` of `x` clamped to [-1, 1].
 #[inline]
 #[must_use]
 pub fn safe_acos(x: f32) -> f32 {
-    libm::acosf(x.clamp(-1.0, 1.0))
+    let x = x.clamp(-1.0, 1.0);
+    transcendental::atan2(safe_sqrt((1.0 - x) * (1.0 + x)), x)
 }
 
 #[inline]
 #[must_use]
 pub fn atan2(y: f32, x: f32) -> f32 {
-    libm::atan2f(y, x)
+    transcendental::atan2(y, x)
 }
 
 #[inline]
 #[must_use]
 pub fn exp(x: f32) -> f32 {
-    libm::expf(x)
+    transcendental::exp(x)
 }
 
 #[inline]
 #[must_use]
 pub fn ln(x: f32) -> f32 {
-    libm::logf(x)
+    transcendental::ln(x)
 }
 
 #[inline]
 #[must_use]
 pub fn powf(x: f32, y: f32) -> f32 {
-    libm::powf(x, y)
+    transcendental::powf(x, y)
+}
+
+/// `2^x`, exact for whole `x`.
+#[inline]
+#[must_use]
+pub fn exp2(x: f32) -> f32 {
+    transcendental::exp2(x)
+}
+
+/// `(sin x, cos x)` with one range reduction.
+#[inline]
+#[must_use]
+pub fn sin_cos(x: f32) -> (f32, f32) {
+    transcendental::sin_cos(x)
 }
 
 #[inline]

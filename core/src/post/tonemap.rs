@@ -8,7 +8,7 @@
 use glam::Vec3;
 
 use crate::math::color::{linear_to_srgb, luminance};
-use crate::math::float::{is_finite, powf};
+use crate::math::float::{exp2, is_finite};
 
 /// Largest channel value tone mapping works with; larger (and `+inf`) inputs are clamped to it. Its
 /// luminance and `1 + L` stay finite in `f32`.
@@ -19,7 +19,7 @@ pub const HDR_MAX: f32 = 1.0e30;
 #[must_use]
 pub fn exposure_scale(ev: f32) -> f32 {
     if is_finite(ev) {
-        powf(2.0, ev)
+        exp2(ev)
     } else {
         1.0
     }
