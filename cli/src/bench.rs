@@ -98,23 +98,27 @@ fn bench_build(scene: Option<&Path>, runs: u32) -> Result<serde_json::Value> {
     let loaded = load_scene(&path, &LoadOptions::default())?;
     let triangles = fovea_scene::pack::triangle_positions(&loaded.positions, &loaded.triangles);
     let mut times = Vec::new();
-    let mut nodes = 0;
+    let mut bvh_stats = None;
     for _ in 0..runs {
         let start = Instant::now();
         let bvh = build_bvh(&triangles, &BvhBuildOptions::default());
         times.push(start.elapsed().as_secs_f64() * 1e3);
-        nodes = bvh.nodes.len();
+        bvh_stats = Some(bvh.stats);
     }
+    let bvh_stats = bvh_stats.unwrap_or_default();
     let ms = median(times.clone());
     let n = triangles.len();
     eprintln!(
-        "BVH build: {n} triangles, median {ms:.1} ms of {runs} -> {:.2} M triangles/s",
-        n as f64 / ms / 1e3
+        "BVH build: {n} triangles, median {ms:.1} ms of {runs} -> {:.2} M triangles/s, SAH cost {:.2}",
+        n as f64 / ms / 1e3,
+        bvh_stats.sah_cost
     );
     Ok(json!({
         "scene": path.display().to_string(),
         "triangles": n,
-        "nodes": nodes,
+        "nodes": bvh_stats.node_count,
+        "sah_cost": bvh_stats.sah_cost,
+        "max_node_depth": bvh_stats.max_depth,
         "build_ms": times,
         "median_build_ms": ms,
         "triangles_per_second": n as f64 / (ms / 1e3),

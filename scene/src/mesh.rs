@@ -61,10 +61,11 @@ impl Default for LoadOptions {
 }
 
 impl LoadOptions {
-    /// [`SceneError::TooLarge`] if `vertices` or `triangles` exceed the limits (or 32-bit indices).
+    /// [`SceneError::TooLarge`] if `vertices` or `triangles` exceed the limits (or 32-bit vertex indices, or
+    /// the BVH builder's [`crate::bvh::MAX_TRIANGLES`]).
     pub fn check_size(&self, file: &Path, vertices: u64, triangles: u64) -> Result<(), SceneError> {
         let max_vertices = self.max_vertices.min(u64::from(u32::MAX));
-        let max_triangles = self.max_triangles.min(u64::from(u32::MAX / 2 - 1));
+        let max_triangles = self.max_triangles.min(crate::bvh::MAX_TRIANGLES - 1);
         if vertices > max_vertices {
             return Err(SceneError::TooLarge {
                 path: file.to_owned(),

@@ -22,6 +22,8 @@ use rayon::prelude::*;
 
 use binary::{build_node, Aabb, Bins, Context, PrimRef, Side, MAX_BINS};
 
+const _: () = assert!(MAX_TRIANGLES == PrimRef::MAX_INDEX as u64);
+
 /// The deepest 4-wide node (root = 0) [`build_bvh`] produces: traversal then needs at most
 /// `3 * MAX_NODE_DEPTH + 4 <= TRAVERSAL_STACK_SIZE` stack entries.
 pub const MAX_NODE_DEPTH: u32 = (TRAVERSAL_STACK_SIZE as u32 - 4) / 3;
@@ -29,6 +31,11 @@ pub const MAX_NODE_DEPTH: u32 = (TRAVERSAL_STACK_SIZE as u32 - 4) / 3;
 /// The deepest leaf (root = 0) of the intermediate binary tree. The collapse keeps 4-wide node depths
 /// below `ceil(MAX_DEPTH / 2)`, hence within [`MAX_NODE_DEPTH`].
 pub const MAX_DEPTH: u32 = 2 * (MAX_NODE_DEPTH + 1);
+
+/// Scenes must have fewer triangles than this: the builder keeps a triangle's index in 29 bits of its
+/// primitive reference (and a leaf's traversal entry names a node below [`MAX_NODE_COUNT`]). The loaders
+/// refuse bigger scenes with an error ([`crate::mesh::LoadOptions::check_size`]).
+pub const MAX_TRIANGLES: u64 = 1 << 29;
 
 /// Builder settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,6 +75,59 @@ pub struct BvhStats {
     pub binary_max_depth: u32,
     /// Bytes of the node array.
     pub memory_bytes: usize,
+    /// SAH cost of the 4-wide tree (see [`sah_cost`]) with the build's traversal and intersection costs:
+    /// the expected cost of a random ray through the root, for comparing builder settings.
+    pub sah_cost: f64,
+}
+
+/// The surface area heuristic cost of a 4-wide tree (MacDonald and Booth 1990): every node visit costs
+/// `traversal_cost` and every triangle test `intersection_cost`, each weighted by the probability that
+/// a random ray through the root's box enters the box of the node or leaf (ratio of surface areas). The
+/// root is always visited; an empty tree costs 0.
+#[must_use]
+pub fn sah_cost(nodes: &[Bvh4Node], traversal_cost: f64, intersection_cost: f64) -> f64 {
+    let Some(root) = nodes.first() else {
+        return 0.0;
+    };
+    let half_area = |node: &Bvh4Node, slot: usize| -> f64 {
+        let d = [
+            f64::from(node.max_x[slot] - node.min_x[slot]),
+            f64::from(node.max_y[slot] - node.min_y[slot]),
+            f64::from(node.max_z[slot] - node.min_z[slot]),
+        ];
+        d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+    };
+    let mut lo = [f32::MAX; 3];
+    let mut hi = [-f32::MAX; 3];
+    for slot in (0..4).filter(|&s| !root.is_empty_slot(s)) {
+        lo = [
+            lo[0].min(root.min_x[slot]),
+            lo[1].min(root.min_y[slot]),
+            lo[2].min(root.min_z[slot]),
+        ];
+        hi = [
+            hi[0].max(root.max_x[slot]),
+            hi[1].max(root.max_y[slot]),
+            hi[2].max(root.max_z[slot]),
+        ];
+    }
+    let d = [0, 1, 2].map(|k| f64::from(hi[k] - lo[k]).max(0.0));
+    let root_area = d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+    if root_area <= 0.0 {
+        return traversal_cost;
+    }
+    let mut weighted = 0.0;
+    for node in nodes {
+        for slot in (0..4).filter(|&s| !node.is_empty_slot(s)) {
+            let cost = if node.count[slot] == 0 {
+                traversal_cost
+            } else {
+                intersection_cost * f64::from(node.count[slot])
+            };
+            weighted += half_area(node, slot) * cost;
+        }
+    }
+    traversal_cost + weighted / root_area
 }
 
 /// A built BVH in traversal layout (see [`Bvh4Node`]).
@@ -97,8 +157,8 @@ pub fn build_bvh(triangles: &[TrianglePositions], options: &BvhBuildOptions) -> 
         };
     }
     assert!(
-        n < (u32::MAX / 2) as usize,
-        "too many triangles for 32-bit node indices"
+        n < MAX_TRIANGLES as usize,
+        "too many triangles for the BVH builder (the loaders stop at MAX_TRIANGLES)"
     );
     let max_leaf = options.max_leaf_size.max(1) as usize;
     let ctx = Context {
@@ -117,13 +177,13 @@ pub fn build_bvh(triangles: &[TrianglePositions], options: &BvhBuildOptions) -> 
             let a = Vec3A::from_slice(&t.v0[..3]);
             let b = Vec3A::from_slice(&t.v1[..3]);
             let c = Vec3A::from_slice(&t.v2[..3]);
-            PrimRef {
-                bounds: Aabb {
+            PrimRef::new(
+                Aabb {
                     min: a.min(b).min(c),
                     max: a.max(b).max(c),
                 },
-                index: i as u32,
-            }
+                i as u32,
+            )
         })
         .collect();
     let root = Side::of(&prims);
@@ -138,10 +198,15 @@ pub fn build_bvh(triangles: &[TrianglePositions], options: &BvhBuildOptions) -> 
         nodes.len() < MAX_NODE_COUNT,
         "too many BVH nodes for traversal's stack entries"
     );
-    let triangle_order: Vec<u32> = prims.par_iter().map(|p| p.index).collect();
+    let triangle_order: Vec<u32> = prims.par_iter().map(PrimRef::index).collect();
 
     stats.node_count = nodes.len();
     stats.memory_bytes = nodes.len() * std::mem::size_of::<Bvh4Node>();
+    stats.sah_cost = sah_cost(
+        &nodes,
+        f64::from(ctx.traversal_cost),
+        f64::from(ctx.intersection_cost),
+    );
     stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
     Bvh {
         nodes,
@@ -157,6 +222,7 @@ mod tests {
     use fovea_core::geometry::triangle::WatertightRay;
     use fovea_core::geometry::Ray;
     use fovea_core::math::{pack_vec3, vec3_from};
+    use fovea_core::scene::INVALID_INDEX;
     use fovea_core::scene::{Material, SceneView, TriangleInfo};
     use glam::Vec3;
 
@@ -464,6 +530,49 @@ mod tests {
             total_hits += assert_matches_brute_force(&packed, &mut rng, rays);
         }
         assert!(total_hits > 2000, "{total_hits}");
+    }
+
+    #[test]
+    fn sah_cost_of_known_trees() {
+        // Two stacked triangles stay one leaf (SAH: a split costs 1 + (1 + 1) / 2 = 2, no less than two
+        // tests), so the tree costs one root visit plus two tests.
+        let tri = |z: f32| TrianglePositions {
+            v0: [0.0, 0.0, z, 0.0],
+            v1: [1.0, 0.0, z, 0.0],
+            v2: [0.0, 1.0, z, 0.0],
+        };
+        let two = build_bvh(&[tri(0.0), tri(0.5)], &BvhBuildOptions::default());
+        let cost = two.stats.sah_cost;
+        assert!((cost - 3.0).abs() < 1e-6, "{cost}");
+        let mut root = Bvh4Node::EMPTY;
+        root.min_x = [0.0, 0.0, f32::MAX, f32::MAX];
+        root.max_x = [1.0, 1.0, -f32::MAX, -f32::MAX];
+        root.min_y = [0.0, 0.0, f32::MAX, f32::MAX];
+        root.max_y = [1.0, 1.0, -f32::MAX, -f32::MAX];
+        root.min_z = [0.0, 0.5, f32::MAX, f32::MAX];
+        root.max_z = [0.5, 1.0, -f32::MAX, -f32::MAX];
+        root.child = [0, 3, INVALID_INDEX, INVALID_INDEX];
+        root.count = [3, 5, 0, 0];
+        // Unit cube root (half area 3); two leaves of half area 1 + 0.5 + 0.5 = 2 each.
+        let expected = 1.0 + (2.0 * 3.0 + 2.0 * 5.0) / 3.0;
+        assert!((sah_cost(&[root], 1.0, 1.0) - expected).abs() < 1e-9);
+        assert_eq!(sah_cost(&[], 1.0, 1.0), 0.0);
+        // The metric ranks builder settings: 32 bins beat 2 on a random soup.
+        let mut rng = TestRng(9);
+        let input = soup(2000, &mut rng);
+        let fine = build_bvh(&input, &BvhBuildOptions::default())
+            .stats
+            .sah_cost;
+        let coarse = build_bvh(
+            &input,
+            &BvhBuildOptions {
+                bin_count: 2,
+                ..BvhBuildOptions::default()
+            },
+        )
+        .stats
+        .sah_cost;
+        assert!(fine < coarse, "32 bins {fine} vs 2 bins {coarse}");
     }
 
     #[test]
