@@ -148,8 +148,11 @@ pub const PROBE_CELL_MEAN: u32 = 8;
 pub const PROBE_FILL_PIXEL: u32 = 9;
 /// [`crate::lights::power_heuristic`]: `in[0].xy` = (pdf_a, pdf_b) → `out[0].x` = the weight.
 pub const PROBE_POWER_HEURISTIC: u32 = 10;
+/// The portable transcendental functions ([`crate::math::transcendental`]): `in[0]` = (x, y, z, w),
+/// `in[1].xy` = (a, b) → `out[0]` = (sin x, cos x, tan x, atan2(a, b)), `out[1]` = (e^z, ln y, y^w, 2^z).
+pub const PROBE_TRANSCENDENTAL: u32 = 11;
 /// Number of probe selectors; any other selector writes zeros.
-pub const PROBE_SELECTOR_COUNT: u32 = 11;
+pub const PROBE_SELECTOR_COUNT: u32 = 12;
 
 // Scene probe selectors: the `probe_scene` entry point evaluates them over the scene bound at
 // `BINDING_GLOBALS ..= BINDING_ENVIRONMENT_CONDITIONAL` (with every feature on), reading
@@ -316,6 +319,17 @@ pub fn probe_eval(
         out[0] = v.to_array();
     } else if selector == PROBE_POWER_HEURISTIC {
         out[0][0] = crate::lights::power_heuristic(r0[0], r0[1]);
+    } else if selector == PROBE_TRANSCENDENTAL {
+        use crate::math::transcendental as t;
+        let r1 = inputs[base + 1];
+        let (s, c) = t::sin_cos(r0[0]);
+        out[0] = [s, c, t::tan(r0[0]), t::atan2(r1[0], r1[1])];
+        out[1] = [
+            t::exp(r0[2]),
+            t::ln(r0[1]),
+            t::powf(r0[1], r0[3]),
+            t::exp2(r0[2]),
+        ];
     }
     out
 }

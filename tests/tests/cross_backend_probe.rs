@@ -570,6 +570,53 @@ fn tonemap_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
     v
 }
 
+/// Which arguments `PROBE_TRANSCENDENTAL` gets.
+#[derive(Clone, Copy)]
+enum ArgumentRange {
+    /// What core computes: angles within a few turns, `exp` of at most ±20 (and whole `2^EV`), `ln` and
+    /// `pow` of bases from 0.01 to 10 with sRGB and GTR1-like exponents.
+    Core,
+    /// Angles up to ±8000, `exp` across overflow and underflow, bases from 1e-30 to 1e30.
+    Wide,
+}
+
+/// Inputs of `PROBE_TRANSCENDENTAL`: `in[0]` = (angle, base, exponent argument, power), `in[1].xy` =
+/// atan2's (y, x) on all quadrants and axes, zeros included.
+fn transcendental_inputs(rng: &mut Rng, n: usize, range: ArgumentRange) -> Vec<[f32; 4]> {
+    let wide = matches!(range, ArgumentRange::Wide);
+    let mut inputs = Vec::with_capacity(n * STRIDE);
+    for i in 0..n {
+        let x = match (wide, i % 3) {
+            (false, 0) => rng.range(0.0, std::f32::consts::TAU),
+            (false, 1) => rng.range(-4.0 * std::f32::consts::PI, 4.0 * std::f32::consts::PI),
+            (_, 2) => rng.range(-1e-3, 1e-3),
+            _ => rng.range(-8000.0, 8000.0),
+        };
+        let y = if wide {
+            rng.wide().abs()
+        } else {
+            10f32.powf(rng.range(-2.0, 1.0))
+        };
+        let z = match (wide, i % 2) {
+            (false, 0) => rng.range(-20.0, 20.0),
+            (false, _) => (rng.below(41) as f32) - 20.0,
+            (true, _) => rng.range(-110.0, 95.0),
+        };
+        let w = match i % 4 {
+            0 => 2.4,
+            1 => 1.0 / 2.4,
+            _ => rng.range(-3.0, 3.0),
+        };
+        let (a, b) = if i % 8 == 0 {
+            (rng.below(3) as f32 - 1.0, rng.below(3) as f32 - 1.0)
+        } else {
+            (rng.wide(), rng.wide())
+        };
+        push_item(&mut inputs, &[[x, y, z, w], [a, b, 0.0, 0.0]]);
+    }
+    inputs
+}
+
 /// |cos| of the angle between a `PROBE_TRIANGLE` item's ray and its triangle's normal (f64).
 fn grazing_cos(item: &[[f32; 4]]) -> f64 {
     let v = |r: [f32; 4]| [f64::from(r[0]), f64::from(r[1]), f64::from(r[2])];
@@ -849,6 +896,42 @@ fn core_functions_agree_across_backends() {
         TOL_FILL,
         &no_flip,
     ));
+
+    // The portable transcendental functions (only + - * / floor and bit casts), over the arguments core
+    // gives them and then over a wide range.
+    for (range, [trig, exp_log], tol) in [
+        (
+            ArgumentRange::Core,
+            ["sin cos tan atan2 (core)", "exp ln pow exp2 (core)"],
+            TOL_TRANSCENDENTAL,
+        ),
+        (
+            ArgumentRange::Wide,
+            ["sin cos tan atan2 (wide)", "exp ln pow exp2 (wide)"],
+            TOL_TRANSCENDENTAL_WIDE,
+        ),
+    ] {
+        let inputs = transcendental_inputs(&mut rng, n, range);
+        let (cpu, gpu) = run(
+            &mut ctx,
+            PROBE_TRANSCENDENTAL,
+            &inputs,
+            &zero_frame,
+            &[],
+            &[],
+        );
+        for (name, record) in [(trig, 0), (exp_log, 1)] {
+            rows.push(compare_floats(
+                name,
+                &inputs,
+                &cpu,
+                &gpu,
+                &[(record, 0), (record, 1), (record, 2), (record, 3)],
+                tol,
+                &no_flip,
+            ));
+        }
+    }
 
     print_table(
         &format!("CPU vs {device}: per-function agreement of kernel_abi::probe_eval"),
@@ -1269,6 +1352,32 @@ const TOL_DISNEY_SAMPLE: Tolerance = Tolerance {
 /// Tone map: measured bit-exact; a channel may move by one count where the float lands on a rounding
 /// boundary, bounded at 0.5 % of the items.
 const TONEMAP_ROUNDING_RATE: f64 = 0.005;
+/// The portable transcendental functions over core's arguments. Measured on lavapipe: sin, cos, tan and
+/// atan2 98 % bit-exact, at most 2 ULP; exp, ln, pow, exp2 27 % bit-exact, within a few ULP except `pow`,
+/// which multiplies a last-bit difference of `ln x` by `|y ln x|` (up to ~15 here: 18 ULP, < 2e-6
+/// relative). The differences are the driver's: NIR treats float operations not decorated
+/// `NoContraction` (rust-gpu emits none) as reassociable and regroups some sums of products (it
+/// rewrote `ln`'s split `e · ln 2`, which core now computes in one product for that reason). A GPU that
+/// fuses the polynomials' multiply-adds differs by about one rounding per step.
+const TOL_TRANSCENDENTAL: Tolerance = Tolerance {
+    max_ulps: 4,
+    max_abs: 2e-7,
+    max_rel: 2e-6,
+    max_flip_rate: 0.0,
+};
+/// The same over the wide range, where the Cody–Waite reductions `((x - k·C₁) - k·C₂) - k·C₃` matter:
+/// NIR factors `k` out of them (`x - k·(C₂ + C₃)`-like, with a rounded constant), so from `|x| ≈ 1800`
+/// (k ≈ 1100) sin and cos differ by ~1e-7 absolute, which tan near its poles turns into 5e-5 relative
+/// (measured: 61 % bit-exact, 1110 ULP), and exp from `z ≈ 25` (68 ULP). Core never goes there: sampling
+/// angles have k ≤ 4 and its exponents stay within ±20. (A reduction with nothing to factor, `(x · 2/π -
+/// k) · π/2`, was tried: NIR then distributed the product instead, and near-pole directions of the
+/// environment sampling got worse, so the classic reduction stays.)
+const TOL_TRANSCENDENTAL_WIDE: Tolerance = Tolerance {
+    max_ulps: 4,
+    max_abs: 2e-7,
+    max_rel: 1e-4,
+    max_flip_rate: 0.0,
+};
 /// Cell means are plain sums and one division (nothing to fuse): measured bit-exact.
 const TOL_CELL_MEAN: Tolerance = Tolerance {
     max_ulps: 2,

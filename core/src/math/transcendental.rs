@@ -1,12 +1,15 @@
 //! Portable sin, cos, tan, atan2, exp, exp2 and ln built only from `+`, `-`, `*`, `/`, `floor` and bit
-//! casts, so that the CPU host and a Vulkan driver compute the *same bits*.
+//! casts, so that the CPU host and a Vulkan driver compute the same bits, or nearly.
 //!
 //! Why: `libm` on the CPU and the GPU's `GLSL.std.450` instructions (which rust-gpu maps `libm` calls to)
 //! are both accurate to a few ulp but not to the *same* ulp; one ulp in a sampled direction flips a
 //! branch further down a path, and the two backends' images then differ in whole pixels (issue 3's frame
-//! diff). IEEE `+ - * /` and `floor` are exactly rounded everywhere, so these polynomial versions are
-//! bit-identical on the CPU and on lavapipe (which executes spirv-opt's fused `Fma` as a separate
-//! multiply and add). A GPU that does fuse them differs by rounding only.
+//! diff). IEEE `+ - * /` and `floor` are exactly rounded everywhere, so these polynomial versions agree
+//! on the CPU and on lavapipe (which executes spirv-opt's fused `Fma` as a separate multiply and add):
+//! for the arguments core gives them, 98 % of sin/cos/atan2 results bit for bit and the rest within 2 ulp
+//! (`cross_backend_probe`). What remains is the driver's compiler regrouping sums of products (NIR
+//! treats float operations without `NoContraction`, which rust-gpu does not emit, as reassociable); it
+//! is why [`ln`] takes `e · ln 2` as one product. A GPU that fuses multiply-adds differs by rounding only.
 //!
 //! The range reductions and minimax polynomials are Stephen Moshier's Cephes single-precision ones
 //! (`sinf.c`, `atanf.c`, `expf.c`, `logf.c`); the tests below measure the error against `f64` references.
@@ -219,10 +222,12 @@ pub fn ln(x: f32) -> f32 {
         + 3.333_333e-1)
         * f
         * z;
-    let fe = e as f32;
-    y += LN2_LO * fe;
     y -= 0.5 * z;
-    f + y + LN2_HI * fe
+    // `e · ln 2` in one rounded product (Cephes splits ln 2 in two for another few tenths of an ulp, but
+    // a GPU compiler may regroup the two products, as lavapipe did: `pow` then differed by up to 175 ulp).
+    // Inputs near 1 have `e = 0`, so the product costs accuracy only where `|ln x| >= ln 2 / 2`, at most
+    // half an ulp of the result.
+    (f + y) + e as f32 * core::f32::consts::LN_2
 }
 
 /// `x^y` for `x ≥ 0` as `e^(y ln x)`: `0^y` is 0 for `y > 0`, `+∞` for `y < 0`; `x^0 = 1^y = 1`; NaN
@@ -380,12 +385,12 @@ mod tests {
 
     #[test]
     fn powf_matches_for_srgb_and_gtr1_exponents() {
-        // `e^(y ln x)` turns the rounding of `ln x` (about one ulp of `|ln x|`) into a relative error of
-        // `|y ln x| · 2⁻²⁴`-ish: allow two ulps plus twice `|y ln x|` ulps.
+        // `e^(y ln x)` turns the rounding of `ln x` (up to about one ulp of `|ln x|`) into a relative
+        // error of `|y ln x| · 2⁻²³`-ish: allow two ulps plus four times `|y ln x|` ulps.
         for y in [2.4, 1.0 / 2.4, 0.25, 0.9] {
             for x in log_sweep(1e-8, 4.0, 1 << 16) {
                 let exact = (x as f64).powf(y as f64);
-                let bound = 2.0 + 2.0 * (y as f64 * (x as f64).ln()).abs();
+                let bound = 2.0 + 4.0 * (y as f64 * (x as f64).ln()).abs();
                 let u = ulps(powf(x, y), exact);
                 assert!(u <= bound, "{x}^{y}: {u} ulps (bound {bound})");
             }
