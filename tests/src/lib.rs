@@ -43,6 +43,35 @@ pub fn emissive_triangles(packed: &PackedScene) -> Vec<u32> {
         .collect()
 }
 
+/// The Lost Empire view of the Vulkan tests (over the village towards the lava) with vertical field of
+/// view `fov_y` (radians).
+pub fn lost_empire_camera(fov_y: f32, aspect: f32) -> Camera {
+    Camera::look_at(
+        Vec3::new(-20.0, 30.0, 60.0),
+        Vec3::new(5.0, 15.0, 20.0),
+        Vec3::Y,
+        fov_y,
+        aspect,
+    )
+}
+
+/// The paper's foveation (32/16/8 spp on 1/2/4 blocks, 5.2° and 17°) for a `width`×`height` image on the
+/// default display (70.848 × 39.852 cm at 60 cm), gaze at the centre.
+pub fn paper_foveation(width: u32, height: u32) -> FoveationParams {
+    use fovea_core::foveation::display::{eccentricity_to_radius_px, DisplayGeometry};
+    let display = DisplayGeometry {
+        width_cm: 70.848,
+        height_cm: 39.852,
+        distance_cm: 60.0,
+        resolution: [width, height],
+    };
+    FoveationParams::paper(
+        [width as f32 * 0.5, height as f32 * 0.5],
+        eccentricity_to_radius_px(5.2, &display),
+        eccentricity_to_radius_px(17.0, &display),
+    )
+}
+
 /// The camera that views McGuire's Cornell box from the front.
 pub fn cornell_camera(width: u32, height: u32) -> Camera {
     Camera::look_at(
@@ -185,6 +214,28 @@ pub mod stability {
         } else {
             ci
         }
+    }
+
+    /// A float's position on the number line in ULPs (±0 both map to 0), for ULP distances.
+    pub fn ordered(x: f32) -> i64 {
+        let b = x.to_bits() as i32;
+        if b < 0 {
+            -i64::from(b & 0x7fff_ffff)
+        } else {
+            i64::from(b)
+        }
+    }
+
+    /// Appends one probe item: `records` padded with zeros to `kernel_abi::PROBE_INPUT_RECORDS`.
+    pub fn push_probe_item(inputs: &mut Vec<[f32; 4]>, records: &[[f32; 4]]) {
+        let stride = fovea_core::kernel_abi::PROBE_INPUT_RECORDS as usize;
+        assert!(
+            records.len() <= stride,
+            "a probe item has at most {stride} records"
+        );
+        let start = inputs.len();
+        inputs.extend_from_slice(records);
+        inputs.resize(start + stride, [0.0; 4]);
     }
 
     /// SplitMix64 (Steele, Lea, Flood 2014): a small deterministic generator of test inputs.

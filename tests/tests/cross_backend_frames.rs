@@ -150,14 +150,9 @@ fn camera(
         }
         View::LostEmpireCrop => {
             // The bundled view (60° vertical over 1080 rows); its central 180 rows span this angle.
+            // 180 rows of the 1080p frame of `lost_empire_full_frame_renders_alike`.
             let fov = 2.0 * ((30f32.to_radians()).tan() * 180.0 / 1080.0).atan();
-            Camera::look_at(
-                Vec3::new(-20.0, 30.0, 60.0),
-                Vec3::new(5.0, 15.0, 20.0),
-                Vec3::Y,
-                fov,
-                aspect,
-            )
+            lost_empire_camera(fov, aspect)
         }
     }
 }
@@ -308,9 +303,10 @@ fn small_scenes_render_alike_on_cpu_and_vulkan() {
     }
 }
 
-/// The whole 1920×1080 Lost Empire frame at the paper's settings (32/16/8 spp on 1/2/4 blocks, radii of
-/// a 1080p display at the default geometry), the frame the crop above is cut from. Measured 99.98 % of
+/// The whole 1920×1080 Lost Empire frame as `fovea render` makes it by default (32/16/8 spp on 1/2/4
+/// blocks, radii of the default display), the frame the crop above is cut from. Measured 99.98 % of
 /// pixels within 1e-3 and mean FLIP 8.6e-6 (about 25 s on lavapipe, 2 s on the CPU with 2 threads).
+/// Also prints the GPU's dispatch figures (chunks, idle invocations).
 #[test]
 fn lost_empire_full_frame_renders_alike() {
     let Some(mut ctx) = vulkan_context_or_skip("the full-frame Vulkan test") else {
@@ -324,33 +320,36 @@ fn lost_empire_full_frame_renders_alike() {
         return;
     }
     let packed = load_packed(&path, &Environment::Constant([1.0, 1.0, 1.0]));
-    let cam = Camera::look_at(
-        Vec3::new(-20.0, 30.0, 60.0),
-        Vec3::new(5.0, 15.0, 20.0),
-        Vec3::Y,
-        60f32.to_radians(),
-        w as f32 / h as f32,
-    );
-    let fov = FoveationParams::paper([w as f32 * 0.5, h as f32 * 0.5], 74.0, 243.0);
-    let frame = frame_params(cam, fov, w, h, 7);
-    let t = std::time::Instant::now();
-    let (cpu, _) = render(&packed, &frame);
-    let cpu_s = t.elapsed().as_secs_f64();
+    let cam = lost_empire_camera(60f32.to_radians(), w as f32 / h as f32);
+    let frame = frame_params(cam, paper_foveation(w, h), w, h, 7);
+    let (cpu, cpu_stats) = render(&packed, &frame);
+    let upload = std::time::Instant::now();
     let scene = ctx.upload_scene(&packed).expect("upload");
-    let t = std::time::Instant::now();
-    let (gpu, _) = ctx
+    let upload_ms = upload.elapsed().as_secs_f64() * 1e3;
+    let (gpu, gpu_stats) = ctx
         .render_frame(&scene, &frame, FILL_BILINEAR, 0.0, true)
         .expect("Vulkan render");
-    let gpu_s = t.elapsed().as_secs_f64();
     drop(scene);
     let hdr = gpu.hdr.as_ref().expect("HDR requested");
     let f = compare(&cpu.pixels, &hdr.pixels, &gpu.ldr, w, h);
     eprintln!(
-        "Lost Empire {w}x{h} 32/16/8: {:.4} % within 1e-3, max abs {:.3e}, mean FLIP {:.3e}; CPU {cpu_s:.1} s, {} {gpu_s:.1} s",
+        "Lost Empire {w}x{h} 32/16/8 ({} samples), CPU vs {}: {:.4} % within 1e-3, max abs {:.3e}, mean \
+         FLIP {:.3e}; CPU {:.0} ms, GPU {:.0} ms ({} chunks, {} idle invocations, plan {:.1} ms, upload \
+         {upload_ms:.0} ms)",
+        gpu_stats.render.primary_samples,
+        ctx.device_name(),
         100.0 * f.within,
         f.max_abs,
         f.mean_flip,
-        ctx.device_name()
+        cpu_stats.render_ms,
+        gpu_stats.render.render_ms,
+        gpu_stats.chunks,
+        gpu_stats.idle_invocations,
+        gpu_stats.plan_ms,
+    );
+    assert_eq!(
+        gpu_stats.render.samples_per_region,
+        cpu_stats.samples_per_region
     );
     drop(ctx);
     assert!(log.lock().unwrap().is_empty(), "validation messages");

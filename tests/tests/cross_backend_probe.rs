@@ -20,88 +20,45 @@ use fovea_scene::bvh::BvhBuildOptions;
 use fovea_scene::environment::Environment;
 use fovea_scene::mesh::{load_scene, LoadOptions};
 use fovea_scene::pack::{pack_scene, PackedScene};
+use fovea_tests::stability::{ordered, push_probe_item as push_item, Rng};
 use fovea_tests::vulkan_context_or_skip;
 use fovea_vulkan::VulkanContext;
 
 const STRIDE: usize = PROBE_INPUT_RECORDS as usize;
 const OUT: usize = PROBE_OUTPUT_RECORDS as usize;
 
-/// SplitMix64: a small deterministic generator for the inputs.
-struct Rng(u64);
+/// A direction in the upper hemisphere, often grazing (z tiny, zero or slightly negative).
+fn local_dir(rng: &mut Rng) -> [f32; 3] {
+    let z = match rng.below(8) {
+        0 => 0.0,
+        1 => rng.range(0.0, 1e-4),
+        2 => -rng.range(0.0, 1e-4),
+        3 => 1.0,
+        4 => rng.range(-0.2, 0.0),
+        _ => rng.range(0.0, 1.0),
+    };
+    let phi = rng.range(0.0, std::f32::consts::TAU);
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    [r * phi.cos(), r * phi.sin(), z]
+}
 
-impl Rng {
-    fn u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn u32(&mut self) -> u32 {
-        (self.u64() >> 32) as u32
-    }
-    /// Uniform in [0, 1).
-    fn f(&mut self) -> f32 {
-        (self.u32() >> 8) as f32 * (1.0 / 16_777_216.0)
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f()
-    }
-    fn below(&mut self, n: u32) -> u32 {
-        self.u32() % n
-    }
-    /// A uniform direction on the sphere.
-    fn dir(&mut self) -> [f32; 3] {
-        let z = self.range(-1.0, 1.0);
-        let phi = self.range(0.0, std::f32::consts::TAU);
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        [r * phi.cos(), r * phi.sin(), z]
-    }
-    /// A direction in the upper hemisphere, often grazing (z tiny, zero or slightly negative).
-    fn local_dir(&mut self) -> [f32; 3] {
-        let z = match self.below(8) {
-            0 => 0.0,
-            1 => self.range(0.0, 1e-4),
-            2 => -self.range(0.0, 1e-4),
-            3 => 1.0,
-            4 => self.range(-0.2, 0.0),
-            _ => self.range(0.0, 1.0),
-        };
-        let phi = self.range(0.0, std::f32::consts::TAU);
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        [r * phi.cos(), r * phi.sin(), z]
-    }
-    /// A number of random magnitude (1e-30 .. 1e30) and sign, sometimes exactly 0.
-    fn wide(&mut self) -> f32 {
-        if self.below(16) == 0 {
-            return 0.0;
-        }
-        let e = self.range(-30.0, 30.0);
-        let s = if self.below(2) == 0 { 1.0 } else { -1.0 };
-        s * 10f32.powf(e) * self.range(1.0, 10.0)
-    }
-    /// A parameter in [0, 1], often exactly 0 or 1.
-    fn unit_param(&mut self) -> f32 {
-        match self.below(5) {
-            0 => 0.0,
-            1 => 1.0,
-            _ => self.f(),
-        }
+/// A number of random magnitude (1e-30 .. 1e30) and sign, sometimes exactly 0.
+fn wide(rng: &mut Rng) -> f32 {
+    rng.wide(-30.0, 30.0)
+}
+
+/// A BSDF parameter in [0, 1], often exactly 0 or 1 (not the near-0/1 values of `Rng::unit_param`,
+/// which the stability suite covers: here they would only add ill-conditioned items).
+fn param(rng: &mut Rng) -> f32 {
+    match rng.below(5) {
+        0 => 0.0,
+        1 => 1.0,
+        _ => rng.f(),
     }
 }
 
 fn bits(v: [u32; 4]) -> [f32; 4] {
     v.map(f32::from_bits)
-}
-
-/// A 32-bit float's position on the number line in ULPs (±0 both map to 0).
-fn ordered(x: f32) -> i64 {
-    let b = x.to_bits() as i32;
-    if b < 0 {
-        -i64::from(b & 0x7fff_ffff)
-    } else {
-        i64::from(b)
-    }
 }
 
 /// ULP distance of two floats (0 for two NaNs, `u64::MAX` for one NaN).
@@ -330,13 +287,6 @@ fn no_flip(_: usize, _: &[[f32; 4]], _: &[[f32; 4]]) -> Class {
     Class::Compare
 }
 
-/// Item builder: `records` padded to the stride.
-fn push_item(inputs: &mut Vec<[f32; 4]>, records: &[[f32; 4]]) {
-    let start = inputs.len();
-    inputs.extend_from_slice(records);
-    inputs.resize(start + STRIDE, [0.0; 4]);
-}
-
 fn pcg_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
     let mut v = Vec::new();
     let special = [0u32, 1, 0x7fff_ffff, 0x8000_0000, 0xffff_ffff, 0x7fc0_0000];
@@ -375,7 +325,7 @@ fn offset_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
     let mut v = Vec::new();
     for i in 0..n {
         let p = if i % 3 == 0 {
-            [rng.wide(), rng.wide(), rng.wide()]
+            [wide(rng), wide(rng), wide(rng)]
         } else {
             [
                 rng.range(-100.0, 100.0),
@@ -389,7 +339,7 @@ fn offset_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
                 a[rng.below(3) as usize] = if rng.below(2) == 0 { 1.0 } else { -1.0 };
                 a
             }
-            _ => rng.dir(),
+            _ => rng.dir().to_array(),
         };
         // The triangle's magnitude: |p| (often below 1, where the near-zero offsets scale with it).
         let magnitude = p[0].abs().max(p[1].abs()).max(p[2].abs()) * rng.range(1.0, 4.0);
@@ -414,7 +364,7 @@ fn triangle_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
             rng.range(-2.0, 2.0) * scale,
         ];
         let mut vert = || {
-            let d = rng.dir();
+            let d = rng.dir().to_array();
             let r = rng.range(0.1, 1.0) * scale;
             [
                 centre[0] + d[0] * r,
@@ -460,7 +410,7 @@ fn triangle_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
             let len = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt().max(1e-30);
             [e[0] / len, e[1] / len, e[2] / len]
         } else {
-            rng.dir()
+            rng.dir().to_array()
         };
         let dist = rng.range(0.5, 5.0) * scale;
         let origin = [
@@ -492,14 +442,9 @@ fn disney_head(rng: &mut Rng) -> [[f32; 4]; 3] {
         _ => rng.f(),
     };
     [
-        [rng.f(), rng.f(), rng.f(), rng.unit_param()],
-        [rough, rng.unit_param(), rng.unit_param(), rng.unit_param()],
-        [
-            rng.unit_param(),
-            rng.unit_param(),
-            rng.unit_param(),
-            rng.unit_param(),
-        ],
+        [rng.f(), rng.f(), rng.f(), param(rng)],
+        [rough, param(rng), param(rng), param(rng)],
+        [param(rng), param(rng), param(rng), param(rng)],
     ]
 }
 
@@ -507,11 +452,11 @@ fn disney_eval_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
     let mut v = Vec::new();
     for i in 0..n {
         let head = disney_head(rng);
-        let wo = rng.local_dir();
+        let wo = local_dir(rng);
         let wi = match i % 6 {
             // The mirror direction (the specular peak, where roughness 0 is a delta).
             0 => [-wo[0], -wo[1], wo[2]],
-            _ => rng.local_dir(),
+            _ => local_dir(rng),
         };
         push_item(
             &mut v,
@@ -532,7 +477,7 @@ fn disney_sample_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
     let edge = [0.0, 1.0 - f32::EPSILON / 2.0, 0.5];
     for i in 0..n {
         let head = disney_head(rng);
-        let wo = rng.local_dir();
+        let wo = local_dir(rng);
         let mut u = [rng.f(), rng.f(), rng.f()];
         if i % 5 == 0 {
             u[1 + rng.below(2) as usize] = edge[rng.below(3) as usize];
@@ -583,21 +528,21 @@ enum ArgumentRange {
 /// Inputs of `PROBE_TRANSCENDENTAL`: `in[0]` = (angle, base, exponent argument, power), `in[1].xy` =
 /// atan2's (y, x) on all quadrants and axes, zeros included.
 fn transcendental_inputs(rng: &mut Rng, n: usize, range: ArgumentRange) -> Vec<[f32; 4]> {
-    let wide = matches!(range, ArgumentRange::Wide);
+    let is_wide = matches!(range, ArgumentRange::Wide);
     let mut inputs = Vec::with_capacity(n * STRIDE);
     for i in 0..n {
-        let x = match (wide, i % 3) {
+        let x = match (is_wide, i % 3) {
             (false, 0) => rng.range(0.0, std::f32::consts::TAU),
             (false, 1) => rng.range(-4.0 * std::f32::consts::PI, 4.0 * std::f32::consts::PI),
             (_, 2) => rng.range(-1e-3, 1e-3),
             _ => rng.range(-8000.0, 8000.0),
         };
-        let y = if wide {
-            rng.wide().abs()
+        let y = if is_wide {
+            wide(rng).abs()
         } else {
             10f32.powf(rng.range(-2.0, 1.0))
         };
-        let z = match (wide, i % 2) {
+        let z = match (is_wide, i % 2) {
             (false, 0) => rng.range(-20.0, 20.0),
             (false, _) => (rng.below(41) as f32) - 20.0,
             (true, _) => rng.range(-110.0, 95.0),
@@ -610,7 +555,7 @@ fn transcendental_inputs(rng: &mut Rng, n: usize, range: ArgumentRange) -> Vec<[
         let (a, b) = if i % 8 == 0 {
             (rng.below(3) as f32 - 1.0, rng.below(3) as f32 - 1.0)
         } else {
-            (rng.wide(), rng.wide())
+            (wide(rng), wide(rng))
         };
         push_item(&mut inputs, &[[x, y, z, w], [a, b, 0.0, 0.0]]);
     }
@@ -853,7 +798,14 @@ fn core_functions_agree_across_backends() {
 
     // Cell means and the fill over a random replicated image of the foveated frame.
     let replicated: Vec<[f32; 4]> = (0..w * h)
-        .map(|_| [rng.range(0.0, 4.0), rng.f(), rng.wide().abs().min(1e6), 1.0])
+        .map(|_| {
+            [
+                rng.range(0.0, 4.0),
+                rng.f(),
+                wide(&mut rng).abs().min(1e6),
+                1.0,
+            ]
+        })
         .collect();
     let cells = cell_buffer_len(w, h, &frame.foveation);
     let mut inputs = Vec::new();
@@ -1032,7 +984,7 @@ fn traversal_inputs(rng: &mut Rng, packed: &PackedScene, n: usize) -> Vec<[f32; 
     for i in 0..n {
         let o = scene_point(rng, packed);
         let (d, t_max) = if i % 3 == 0 {
-            (rng.dir(), 1e30)
+            (rng.dir().to_array(), 1e30)
         } else {
             let t = &packed.triangles[rng.below(packed.triangles.len() as u32) as usize];
             let target = match i % 4 {
@@ -1094,7 +1046,7 @@ fn triangle_light_inputs(
 fn environment_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
     let mut v = Vec::new();
     for _ in 0..n {
-        let d = rng.dir();
+        let d = rng.dir().to_array();
         push_item(
             &mut v,
             &[[d[0], d[1], d[2], 0.0], [rng.f(), rng.f(), 0.0, 0.0]],

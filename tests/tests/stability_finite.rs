@@ -30,7 +30,9 @@ use fovea_core::rng::SampleRng;
 use fovea_core::scene::{Material, SceneView, MATERIAL_DOUBLE_SIDED_EMISSION};
 use fovea_scene::environment::Environment;
 use fovea_scene::pack::PackedScene;
-use fovea_tests::stability::{heavy, icosphere, loaded_scene, pack, pick, Rng};
+use fovea_tests::stability::{
+    heavy, icosphere, loaded_scene, ordered, pack, pick, push_probe_item as push, Rng,
+};
 use rayon::prelude::*;
 
 const STRIDE: usize = PROBE_INPUT_RECORDS as usize;
@@ -40,16 +42,6 @@ const CHUNK: usize = 1 << 18;
 /// Items per probe function: 1 M in CI, 10 M with `FOVEA_HEAVY=1`.
 fn fuzz_count() -> usize {
     pick(1 << 20, 10_000_000)
-}
-
-/// A float's position on the number line in ULPs (±0 both map to 0).
-fn ordered(x: f32) -> i64 {
-    let b = x.to_bits() as i32;
-    if b < 0 {
-        -i64::from(b & 0x7fff_ffff)
-    } else {
-        i64::from(b)
-    }
 }
 
 fn finite4(r: [f32; 4]) -> bool {
@@ -68,12 +60,6 @@ struct Case {
     /// `Err(why)` if the outputs of an item are not acceptable; `Ok(true)` if the item "did something"
     /// (a hit, a non-zero value), for the coverage figure.
     check: Check,
-}
-
-fn push(v: &mut Vec<[f32; 4]>, records: &[[f32; 4]]) {
-    let start = v.len();
-    v.extend_from_slice(records);
-    v.resize(start + STRIDE, [0.0; 4]);
 }
 
 fn rec(v: Vec3, w: f32) -> [f32; 4] {
