@@ -111,12 +111,20 @@ pub fn write_image(
             write_png(path, image.width, image.height, &rgb)
         }
         ImageFormat::Exr => write_atomically(path, |tmp| {
+            use exr::prelude::*;
             let (w, h) = (image.width as usize, image.height as usize);
-            exr::prelude::write_rgb_file(tmp, w, h, |x, y| {
+            let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
                 let p = image.pixels[y * w + x];
                 (p[0], p[1], p[2])
-            })
-            .map_err(|e| e.to_string())
+            });
+            // Compressed serially: the parallel writer stores blocks in the order they finish, so two
+            // writes of the same image could differ byte for byte (a render is deterministic; its file
+            // should be too, so that `cmp` or a hash can check it).
+            Image::from_channels((w, h), channels)
+                .write()
+                .non_parallel()
+                .to_file(tmp)
+                .map_err(|e| e.to_string())
         }),
     }
 }
