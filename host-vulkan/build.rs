@@ -257,4 +257,8 @@ fn sanitise_env(cmd: &mut Command) {
             cmd.env_remove(OsStr::new(k));
         }
     }
+    // Set after the loop above (which removes the outer cargo's own `CARGO_ENCODED_RUSTFLAGS`): empty, it
+    // takes precedence over the repository's `.cargo/config.toml` (`target-cpu=native` for the hosts),
+    // which the nested cargo would otherwise read too, so the kernel builder keeps its own cache.
+    cmd.env("CARGO_ENCODED_RUSTFLAGS", "");
 }
