@@ -391,12 +391,21 @@ impl DisneyParams {
     /// [`DisneyParams::eval_and_pdf`] for a material within `features` (lobes outside it are skipped).
     #[must_use]
     pub fn eval_and_pdf_with<F: Features>(&self, features: F, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+        self.at_wo(features, wo).eval_and_pdf(wi)
+    }
+
+    /// The BRDF with everything that depends on `wo` alone computed once (clamped parameters, layering
+    /// terms, lobe-selection probabilities), for a path vertex that both evaluates a light sample and
+    /// samples the next direction. Gives the same numbers as [`DisneyParams::eval_and_pdf_with`] and
+    /// [`DisneyParams::sample_with`], which call it.
+    #[inline]
+    #[must_use]
+    pub fn at_wo<F: Features>(&self, features: F, wo: Vec3) -> DisneyAtWo {
         let wo = normalize_or_zero(wo);
-        let wi = normalize_or_zero(wi);
-        if !(wo.z > 0.0 && wi.z > 0.0) {
-            return (Vec3::ZERO, 0.0);
-        }
-        Self::eval_and_pdf_unit(&self.lobes(wo.z, features), wo, wi)
+        // Below the surface nothing reflects; the lobes are not needed (and `cos_o` would be out of
+        // the tables' range).
+        let lobes = self.lobes(wo.z.max(0.0), features);
+        DisneyAtWo { lobes, wo }
     }
 
     /// [`DisneyParams::eval_and_pdf`] for unit `wo`, `wi` above the surface and `lobes` of `wo.z`.
@@ -499,11 +508,36 @@ impl DisneyParams {
     /// [`DisneyParams::sample`] for a material within `features` (lobes outside it are skipped).
     #[must_use]
     pub fn sample_with<F: Features>(&self, features: F, wo: Vec3, u: Vec3) -> BsdfSample {
-        let wo_n = normalize_or_zero(wo);
-        if wo_n.z <= 0.0 {
+        self.at_wo(features, wo).sample(u)
+    }
+}
+
+/// A [`DisneyParams`] prepared for one outgoing direction by [`DisneyParams::at_wo`].
+pub struct DisneyAtWo {
+    lobes: Lobes,
+    /// The unit outgoing direction (zero if degenerate).
+    wo: Vec3,
+}
+
+impl DisneyAtWo {
+    /// [`DisneyParams::eval_and_pdf`] at this `wo`.
+    #[inline]
+    #[must_use]
+    pub fn eval_and_pdf(&self, wi: Vec3) -> (Vec3, f32) {
+        let wi = normalize_or_zero(wi);
+        if !(self.wo.z > 0.0 && wi.z > 0.0) {
+            return (Vec3::ZERO, 0.0);
+        }
+        DisneyParams::eval_and_pdf_unit(&self.lobes, self.wo, wi)
+    }
+
+    /// [`DisneyParams::sample`] at this `wo`.
+    #[must_use]
+    pub fn sample(&self, u: Vec3) -> BsdfSample {
+        let (lobes, wo) = (&self.lobes, self.wo);
+        if wo.z <= 0.0 {
             return BsdfSample::failed();
         }
-        let lobes = self.lobes(wo_n.z, features);
         let lobe = if lobes.p_clearcoat > 0.0 && u.x >= lobes.p_diffuse + lobes.p_specular {
             LOBE_CLEARCOAT
         } else if lobes.p_specular > 0.0 && u.x >= lobes.p_diffuse {
@@ -511,12 +545,12 @@ impl DisneyParams {
         } else {
             LOBE_DIFFUSE
         };
-        let wi = Self::sample_lobe(&lobes, wo_n, lobe, Vec2::new(u.y, u.z));
+        let wi = DisneyParams::sample_lobe(lobes, wo, lobe, Vec2::new(u.y, u.z));
         if wi.z <= 0.0 {
             return BsdfSample::failed();
         }
         // The same numbers as `eval_and_pdf(wo, wi)`: `normalize_or_zero` passes unit vectors through.
-        let (f, pdf) = Self::eval_and_pdf_unit(&lobes, wo_n, wi);
+        let (f, pdf) = DisneyParams::eval_and_pdf_unit(lobes, wo, wi);
         if pdf <= 0.0 {
             return BsdfSample::failed();
         }

@@ -155,7 +155,7 @@ pub fn trace_path<F: crate::scene::Features>(
             // The shading normal faces away from the viewer although the geometric one does not.
             break;
         }
-        let bsdf = surface.params;
+        let bsdf = surface.params.at_wo(scene.features, wo);
         let origin = offset_ray_origin(surface.position, ng, surface.magnitude);
 
         // Next-event estimation.
@@ -165,7 +165,7 @@ pub fn trace_path<F: crate::scene::Features>(
             let ls = sample_light(scene, surface.position, u_select, u_light);
             if ls.pdf > 0.0 && ls.direction.dot(ng) > 0.0 {
                 let wi = frame.to_local(ls.direction);
-                let (f, pdf_b) = bsdf.eval_and_pdf_with(scene.features, wo, wi);
+                let (f, pdf_b) = bsdf.eval_and_pdf(wi);
                 if wi.z > 0.0 && f != Vec3::ZERO {
                     let shadow = if ls.is_infinite {
                         Ray::new(origin, ls.direction)
@@ -194,7 +194,7 @@ pub fn trace_path<F: crate::scene::Features>(
         }
 
         // BSDF sampling for the next segment.
-        let s = bsdf.sample_with(scene.features, wo, rng.next_3d());
+        let s = bsdf.sample(rng.next_3d());
         if !(s.pdf > 0.0) {
             break;
         }
