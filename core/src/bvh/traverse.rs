@@ -245,7 +245,8 @@ fn traverse<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32, any: bool)
                     for i in 0..4 {
                         if mask & (1 << i) != 0 {
                             let mut p = stack_len;
-                            while p > base && stack_t[p - 1] < t[i] {
+                            // Any-hit queries take the first hit found: order does not matter.
+                            while !any && p > base && stack_t[p - 1] < t[i] {
                                 stack_item[p] = stack_item[p - 1];
                                 stack_t[p] = stack_t[p - 1];
                                 p -= 1;
