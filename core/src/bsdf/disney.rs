@@ -402,8 +402,9 @@ impl DisneyParams {
     #[must_use]
     pub fn at_wo<F: Features>(&self, features: F, wo: Vec3) -> DisneyAtWo {
         let wo = normalize_or_zero(wo);
-        // Below the surface nothing reflects; the lobes are not needed (and `cos_o` would be out of
-        // the tables' range).
+        // Below the surface nothing reflects (`eval_and_pdf` and `sample` then return zero without
+        // looking at the lobes); `cos_o` is clamped so that the lobes, computed anyway, stay within the
+        // albedo fits' domain.
         let lobes = self.lobes(wo.z.max(0.0), features);
         DisneyAtWo { lobes, wo }
     }
