@@ -269,9 +269,9 @@ pub fn probe_eval(
     } else if selector == PROBE_TRIANGLE {
         let ray = crate::geometry::Ray::new(probe_vec3(r0), probe_vec3(inputs[base + 1]));
         let tri = crate::scene::TrianglePositions {
-            v0: inputs[base + 2],
-            v1: inputs[base + 3],
-            v2: inputs[base + 4],
+            v0: glam::Vec4::from_array(inputs[base + 2]),
+            v1: glam::Vec4::from_array(inputs[base + 3]),
+            v2: glam::Vec4::from_array(inputs[base + 4]),
         };
         let hit = crate::geometry::triangle::WatertightRay::new(&ray).intersect(&tri, r0[3]);
         out[0] = [hit.t, hit.b1, hit.b2, if hit.hit { 1.0 } else { 0.0 }];
@@ -502,17 +502,17 @@ mod tests {
         assert_eq!(out[0], [q.x, q.y, q.z, 0.0]);
 
         let tri = TrianglePositions {
-            v0: [-1.0, -1.0, 2.0, 0.0],
-            v1: [1.0, -1.0, 2.0, 0.0],
-            v2: [0.0, 1.0, 2.0, 0.0],
+            v0: glam::Vec4::new(-1.0, -1.0, 2.0, 0.0),
+            v1: glam::Vec4::new(1.0, -1.0, 2.0, 0.0),
+            v2: glam::Vec4::new(0.0, 1.0, 2.0, 0.0),
         };
         let ray = Ray::new(Vec3::new(0.1, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0));
         let records = [
             [0.1, 0.0, 0.0, 10.0],
             [0.0, 0.0, 1.0, 0.0],
-            tri.v0,
-            tri.v1,
-            tri.v2,
+            tri.v0.to_array(),
+            tri.v1.to_array(),
+            tri.v2.to_array(),
         ];
         let out = probe_one(PROBE_TRIANGLE, &records, &f);
         let hit = WatertightRay::new(&ray).intersect(&tri, 10.0);

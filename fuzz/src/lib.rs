@@ -108,7 +108,7 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
     assert!(finite(&p.bounds_min.to_array()) && finite(&p.bounds_max.to_array()));
     let vertices = p.normals.len().max(p.uvs.len());
     for (t, info) in p.triangles.iter().zip(&p.triangle_info) {
-        assert!(finite(&t.v0) && finite(&t.v1) && finite(&t.v2), "{t:?}");
+        assert!(finite(&t.v0.to_array()) && finite(&t.v1.to_array()) && finite(&t.v2.to_array()), "{t:?}");
         assert!((info.material as usize) < p.materials.len());
         if vertices > 0 {
             assert!(info.vertices.iter().all(|&v| (v as usize) < vertices));
@@ -188,7 +188,7 @@ pub fn cast_rays(p: &PackedScene) {
     // A ray at the centroid of a few triangles.
     let step = (p.triangles.len() / 8).max(1);
     for t in p.triangles.iter().step_by(step).take(8) {
-        let c = (Vec3::from_slice(&t.v0) + Vec3::from_slice(&t.v1) + Vec3::from_slice(&t.v2)) / 3.0;
+        let c = (t.v0.truncate() + t.v1.truncate() + t.v2.truncate()) / 3.0;
         let origin = c + Vec3::new(0.3, 1.0, 0.7) * extent;
         let d = (c - origin).normalize_or_zero();
         if d != Vec3::ZERO && c.is_finite() && origin.is_finite() {

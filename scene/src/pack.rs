@@ -10,7 +10,7 @@ use fovea_core::scene::{
     LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
     MATERIAL_DOUBLE_SIDED_EMISSION, TEXTURE_SRGB,
 };
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::bvh::{build_bvh, BvhBuildOptions, BvhStats};
 use crate::environment::{build_cdf, Environment, EnvironmentTables};
@@ -123,9 +123,9 @@ pub fn triangle_positions(
     positions: &[[f32; 3]],
     triangles: &[[u32; 3]],
 ) -> Vec<TrianglePositions> {
-    let position = |i: u32| -> [f32; 4] {
+    let position = |i: u32| -> Vec4 {
         let p = positions[i as usize];
-        [p[0], p[1], p[2], 0.0]
+        Vec4::new(p[0], p[1], p[2], 0.0)
     };
     triangles
         .iter()
@@ -241,11 +241,7 @@ pub fn pack_scene(
             if !m.is_emissive() {
                 continue;
             }
-            let (v0, v1, v2) = (
-                Vec3::from_slice(&t.v0),
-                Vec3::from_slice(&t.v1),
-                Vec3::from_slice(&t.v2),
-            );
+            let (v0, v1, v2) = (t.v0.truncate(), t.v1.truncate(), t.v2.truncate());
             let area = 0.5 * (v1 - v0).cross(v2 - v0).length();
             if !(area > 0.0) || !area.is_finite() {
                 continue;

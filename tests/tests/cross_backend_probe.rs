@@ -988,7 +988,7 @@ fn traversal_inputs(rng: &mut Rng, packed: &PackedScene, n: usize) -> Vec<[f32; 
         } else {
             let t = &packed.triangles[rng.below(packed.triangles.len() as u32) as usize];
             let target = match i % 4 {
-                0 => xyz(t.v0),
+                0 => xyz(t.v0.to_array()),
                 1 => std::array::from_fn(|k| 0.5 * (t.v0[k] + t.v1[k])),
                 _ => {
                     let other = rng.below(packed.triangles.len() as u32) as usize;
@@ -1116,7 +1116,13 @@ fn scene_functions_agree_across_backends() {
         let tri = out[0][3].to_bits() as usize;
         tri < packed.triangles.len() && {
             let t = &packed.triangles[tri];
-            let item = [inputs[i * STRIDE], inputs[i * STRIDE + 1], t.v0, t.v1, t.v2];
+            let item = [
+                inputs[i * STRIDE],
+                inputs[i * STRIDE + 1],
+                t.v0.to_array(),
+                t.v1.to_array(),
+                t.v2.to_array(),
+            ];
             grazing_cos(&item) < GRAZING_COS
         }
     };

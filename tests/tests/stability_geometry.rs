@@ -18,9 +18,9 @@ use rayon::prelude::*;
 
 fn tri(v: [Vec3; 3]) -> TrianglePositions {
     TrianglePositions {
-        v0: [v[0].x, v[0].y, v[0].z, 0.0],
-        v1: [v[1].x, v[1].y, v[1].z, 0.0],
-        v2: [v[2].x, v[2].y, v[2].z, 0.0],
+        v0: v[0].extend(0.0),
+        v1: v[1].extend(0.0),
+        v2: v[2].extend(0.0),
     }
 }
 

@@ -19,7 +19,7 @@
 //! builder are themselves a few ulps larger than their triangles. Zero direction components are handled
 //! without infinities or NaNs: their inverse is clamped to `±f32::MAX`, so `(bound - origin) * inv` is a
 //! huge (or infinite) finite-signed number, and never `0 * ∞`.
-use glam::{Vec3, Vec4};
+use glam::{UVec4, Vec3, Vec4};
 
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
@@ -167,9 +167,7 @@ impl RayBox4 {
 /// The near and far planes of one axis for four boxes: `(min, max)`, swapped when the ray runs towards
 /// `-axis`.
 #[inline(always)]
-fn near_far(min: [f32; 4], max: [f32; 4], negative: bool) -> (Vec4, Vec4) {
-    let min = Vec4::from_array(min);
-    let max = Vec4::from_array(max);
+fn near_far(min: Vec4, max: Vec4, negative: bool) -> (Vec4, Vec4) {
     if negative {
         (max, min)
     } else {
@@ -202,6 +200,22 @@ fn lowest_slot(mask: u32) -> usize {
         2
     } else {
         3
+    }
+}
+
+/// Component `i` (0 to 3) of `v`, picked by value: indexing a vector in place would make rust-gpu
+/// select between pointers, which SPIR-V's logical addressing does not allow.
+#[inline(always)]
+#[must_use]
+fn lane(v: UVec4, i: usize) -> u32 {
+    if i == 0 {
+        v.x
+    } else if i == 1 {
+        v.y
+    } else if i == 2 {
+        v.z
+    } else {
+        v.w
     }
 }
 
@@ -263,8 +277,8 @@ fn traverse<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32, any: bool)
         } else {
             let parent = &scene.nodes[((item & !LEAF_ENTRY) >> 2) as usize];
             let slot = (item & 3) as usize;
-            let first = parent.child[slot];
-            let end = first + parent.count[slot];
+            let first = lane(parent.child, slot);
+            let end = first + lane(parent.count, slot);
             let mut i = first;
             while i < end {
                 let h = watertight.intersect(&scene.triangles[i as usize], closest);
@@ -306,8 +320,8 @@ pub const LEAF_ENTRY: u32 = 1 << 31;
 /// The traversal entry of slot `i` of `node` (whose index is `index`).
 #[inline(always)]
 fn entry_of(node: &Bvh4Node, index: u32, i: usize) -> u32 {
-    if node.count[i] == 0 {
-        node.child[i]
+    if lane(node.count, i) == 0 {
+        lane(node.child, i)
     } else {
         LEAF_ENTRY | (index << 2) | i as u32
     }
@@ -332,15 +346,15 @@ mod tests {
     extern crate std;
 
     use super::*;
-    use crate::math::pack_vec3;
+
     use crate::scene::{Material, TriangleInfo, TrianglePositions};
     use glam::Vec3;
 
     fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
         TrianglePositions {
-            v0: pack_vec3(a, 0.0),
-            v1: pack_vec3(b, 0.0),
-            v2: pack_vec3(c, 0.0),
+            v0: a.extend(0.0),
+            v1: b.extend(0.0),
+            v2: c.extend(0.0),
         }
     }
 

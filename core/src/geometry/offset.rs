@@ -95,7 +95,7 @@ mod tests {
     use super::*;
     use crate::geometry::triangle::WatertightRay;
     use crate::geometry::Ray;
-    use crate::math::{pack_vec3, vec3_from};
+
     use crate::scene::TrianglePositions;
 
     use crate::test_support::SplitMix64 as TestRng;
@@ -172,16 +172,16 @@ mod tests {
                     }
                     let n = cross.normalize();
                     let tri = TrianglePositions {
-                        v0: pack_vec3(v0, 0.0),
-                        v1: pack_vec3(v1, 0.0),
-                        v2: pack_vec3(v2, 0.0),
+                        v0: v0.extend(0.0),
+                        v1: v1.extend(0.0),
+                        v2: v2.extend(0.0),
                     };
                     let (mut b1, mut b2) = (rng.uniform(), rng.uniform());
                     if b1 + b2 > 1.0 {
                         b1 = 1.0 - b1;
                         b2 = 1.0 - b2;
                     }
-                    let (t0, t1, t2) = (vec3_from(tri.v0), vec3_from(tri.v1), vec3_from(tri.v2));
+                    let (t0, t1, t2) = (tri.v0.truncate(), tri.v1.truncate(), tri.v2.truncate());
                     let p = t0 * (1.0 - b1 - b2) + t1 * b1 + t2 * b2;
                     for side in [1.0f32, -1.0] {
                         let ns = n * side;

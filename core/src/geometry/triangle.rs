@@ -15,7 +15,7 @@
 //! paper's double-precision result, barring underflow. Zeros that remain are true zeros (the ray passes
 //! exactly through an edge or vertex in the transformed space) and count as inside, so such a ray hits
 //! both (all) adjoining triangles rather than none. Backface culling is off: both windings hit.
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use super::ray::Ray;
 use crate::scene::TrianglePositions;
@@ -121,11 +121,12 @@ impl WatertightRay {
         }
     }
 
-    /// `v - origin` in the permuted frame. The permutation indexes the packed vertex directly (one load
-    /// per component, no branches; `& 3` lets the compiler drop the bounds checks).
+    /// `v - origin` in the permuted frame. The vertex is loaded whole and the permutation indexes a
+    /// local copy (no branches; `& 3` lets the compiler drop the bounds checks).
     #[inline]
     #[must_use]
-    fn relative(&self, v: &[f32; 4]) -> Vec3 {
+    fn relative(&self, v: Vec4) -> Vec3 {
+        let v = v.to_array();
         Vec3::new(
             v[(self.kx & 3) as usize],
             v[(self.ky & 3) as usize],
@@ -138,9 +139,9 @@ impl WatertightRay {
     #[inline]
     #[must_use]
     pub fn intersect(&self, tri: &TrianglePositions, t_max: f32) -> TriangleHit {
-        let a = self.relative(&tri.v0);
-        let b = self.relative(&tri.v1);
-        let c = self.relative(&tri.v2);
+        let a = self.relative(tri.v0);
+        let b = self.relative(tri.v1);
+        let c = self.relative(tri.v2);
 
         // Shear the vertices into the ray's frame (the ray now runs along +z from the origin).
         let ax = a.x - self.sx * a.z;
@@ -207,16 +208,16 @@ impl WatertightRay {
 mod tests {
     extern crate std;
     use super::*;
-    use crate::math::{pack_vec3, vec3_from};
+
     use std::vec::Vec;
 
     use crate::test_support::SplitMix64 as TestRng;
 
     fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
         TrianglePositions {
-            v0: pack_vec3(a, 0.0),
-            v1: pack_vec3(b, 0.0),
-            v2: pack_vec3(c, 0.0),
+            v0: a.extend(0.0),
+            v1: b.extend(0.0),
+            v2: c.extend(0.0),
         }
     }
 
@@ -308,7 +309,7 @@ mod tests {
     fn targets(mesh: &[TrianglePositions], rng: &mut TestRng) -> Vec<Vec3> {
         let mut out = Vec::new();
         for t in mesh {
-            let v = [vec3_from(t.v0), vec3_from(t.v1), vec3_from(t.v2)];
+            let v = [t.v0.truncate(), t.v1.truncate(), t.v2.truncate()];
             for k in 0..3 {
                 let (a, b) = (v[k], v[(k + 1) % 3]);
                 out.push(a);

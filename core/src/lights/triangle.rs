@@ -16,7 +16,7 @@ use crate::scene::{Features, SceneView, INVALID_INDEX, MATERIAL_DOUBLE_SIDED_EMI
 #[must_use]
 pub fn triangle_vertices<F: Features>(scene: &SceneView<F>, triangle: u32) -> [Vec3; 3] {
     let t = scene.triangles[triangle as usize];
-    [vec3_from(t.v0), vec3_from(t.v1), vec3_from(t.v2)]
+    [t.v0.truncate(), t.v1.truncate(), t.v2.truncate()]
 }
 
 /// The unnormalised geometric normal `(v1 - v0) × (v2 - v0)` (its length is twice the area); the front
@@ -203,9 +203,9 @@ mod tests {
         let mut max_rel = 0.0f32;
         for (k, (name, v, p)) in cases.into_iter().enumerate() {
             let tris = [TrianglePositions {
-                v0: pack_vec3(v[0], 0.0),
-                v1: pack_vec3(v[1], 0.0),
-                v2: pack_vec3(v[2], 0.0),
+                v0: v[0].extend(0.0),
+                v1: v[1].extend(0.0),
+                v2: v[2].extend(0.0),
             }];
             let info = [TriangleInfo {
                 vertices: [0, 1, 2],

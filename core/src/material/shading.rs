@@ -135,7 +135,7 @@ pub fn surface_point<F: Features>(scene: &SceneView<F>, hit: &Hit) -> SurfacePoi
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::pack_vec3;
+
     use crate::scene::{Material, TriangleInfo, TrianglePositions};
 
     /// Tangent frames stay finite and orthonormal for texture parameterisations whose determinant is
@@ -145,9 +145,9 @@ mod tests {
     fn tangent_frame_is_finite_for_tiny_uv_determinants() {
         let scale = 1.0e10f32;
         let tri = TrianglePositions {
-            v0: pack_vec3(Vec3::ZERO, 0.0),
-            v1: pack_vec3(Vec3::new(scale, 0.0, 0.0), 0.0),
-            v2: pack_vec3(Vec3::new(0.0, scale, 0.0), 0.0),
+            v0: Vec3::ZERO.extend(0.0),
+            v1: (Vec3::new(scale, 0.0, 0.0)).extend(0.0),
+            v2: (Vec3::new(0.0, scale, 0.0)).extend(0.0),
         };
         let info = TriangleInfo {
             vertices: [0, 1, 2],

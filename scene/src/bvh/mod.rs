@@ -174,9 +174,9 @@ pub fn build_bvh(triangles: &[TrianglePositions], options: &BvhBuildOptions) -> 
         .par_iter()
         .enumerate()
         .map(|(i, t)| {
-            let a = Vec3A::from_slice(&t.v0[..3]);
-            let b = Vec3A::from_slice(&t.v1[..3]);
-            let c = Vec3A::from_slice(&t.v2[..3]);
+            let a = Vec3A::from_vec4(t.v0);
+            let b = Vec3A::from_vec4(t.v1);
+            let c = Vec3A::from_vec4(t.v2);
             PrimRef::new(
                 Aabb {
                     min: a.min(b).min(c),
@@ -221,10 +221,9 @@ mod tests {
     use fovea_core::bvh::{any_hit, closest_hit, Hit};
     use fovea_core::geometry::triangle::WatertightRay;
     use fovea_core::geometry::Ray;
-    use fovea_core::math::{pack_vec3, vec3_from};
     use fovea_core::scene::INVALID_INDEX;
     use fovea_core::scene::{Material, SceneView, TriangleInfo};
-    use glam::Vec3;
+    use glam::{UVec4, Vec3, Vec4};
 
     /// SplitMix64 for reproducible test data.
     struct TestRng(u64);
@@ -258,9 +257,9 @@ mod tests {
 
     fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
         TrianglePositions {
-            v0: pack_vec3(a, 0.0),
-            v1: pack_vec3(b, 0.0),
-            v2: pack_vec3(c, 0.0),
+            v0: a.extend(0.0),
+            v1: b.extend(0.0),
+            v2: c.extend(0.0),
         }
     }
 
@@ -406,7 +405,7 @@ mod tests {
             self.next_triangle = range.end;
             let centroid = |k: usize| {
                 let t = &self.input[self.bvh.triangle_order[k] as usize];
-                let (a, b, c) = (vec3_from(t.v0), vec3_from(t.v1), vec3_from(t.v2));
+                let (a, b, c) = (t.v0.truncate(), t.v1.truncate(), t.v2.truncate());
                 a.min(b).min(c) + a.max(b).max(c)
             };
             let coincident = range.clone().all(|k| centroid(k) == centroid(range.start));
@@ -417,7 +416,7 @@ mod tests {
             for k in range {
                 let t = &self.input[self.bvh.triangle_order[k] as usize];
                 for v in [t.v0, t.v1, t.v2] {
-                    let v = vec3_from(v);
+                    let v = v.truncate();
                     assert!(
                         v.cmpgt(lo).all() && v.cmplt(hi).all(),
                         "{v:?} not strictly in {lo:?}..{hi:?}"
@@ -482,7 +481,7 @@ mod tests {
                 let t = &triangles[(rng.next_u64() % triangles.len() as u64) as usize];
                 let (b1, b2) = (rng.uniform() * 0.5, rng.uniform() * 0.5);
                 let p =
-                    vec3_from(t.v0) * (1.0 - b1 - b2) + vec3_from(t.v1) * b1 + vec3_from(t.v2) * b2;
+                    t.v0.truncate() * (1.0 - b1 - b2) + t.v1.truncate() * b1 + t.v2.truncate() * b2;
                 (p - origin).normalize_or(Vec3::X)
             }
             _ => rng.unit_vector(),
@@ -537,22 +536,22 @@ mod tests {
         // Two stacked triangles stay one leaf (SAH: a split costs 1 + (1 + 1) / 2 = 2, no less than two
         // tests), so the tree costs one root visit plus two tests.
         let tri = |z: f32| TrianglePositions {
-            v0: [0.0, 0.0, z, 0.0],
-            v1: [1.0, 0.0, z, 0.0],
-            v2: [0.0, 1.0, z, 0.0],
+            v0: Vec4::new(0.0, 0.0, z, 0.0),
+            v1: Vec4::new(1.0, 0.0, z, 0.0),
+            v2: Vec4::new(0.0, 1.0, z, 0.0),
         };
         let two = build_bvh(&[tri(0.0), tri(0.5)], &BvhBuildOptions::default());
         let cost = two.stats.sah_cost;
         assert!((cost - 3.0).abs() < 1e-6, "{cost}");
         let mut root = Bvh4Node::EMPTY;
-        root.min_x = [0.0, 0.0, f32::MAX, f32::MAX];
-        root.max_x = [1.0, 1.0, -f32::MAX, -f32::MAX];
-        root.min_y = [0.0, 0.0, f32::MAX, f32::MAX];
-        root.max_y = [1.0, 1.0, -f32::MAX, -f32::MAX];
-        root.min_z = [0.0, 0.5, f32::MAX, f32::MAX];
-        root.max_z = [0.5, 1.0, -f32::MAX, -f32::MAX];
-        root.child = [0, 3, INVALID_INDEX, INVALID_INDEX];
-        root.count = [3, 5, 0, 0];
+        root.min_x = Vec4::new(0.0, 0.0, f32::MAX, f32::MAX);
+        root.max_x = Vec4::new(1.0, 1.0, -f32::MAX, -f32::MAX);
+        root.min_y = Vec4::new(0.0, 0.0, f32::MAX, f32::MAX);
+        root.max_y = Vec4::new(1.0, 1.0, -f32::MAX, -f32::MAX);
+        root.min_z = Vec4::new(0.0, 0.5, f32::MAX, f32::MAX);
+        root.max_z = Vec4::new(0.5, 1.0, -f32::MAX, -f32::MAX);
+        root.child = UVec4::new(0, 3, INVALID_INDEX, INVALID_INDEX);
+        root.count = UVec4::new(3, 5, 0, 0);
         // Unit cube root (half area 3); two leaves of half area 1 + 0.5 + 0.5 = 2 each.
         let expected = 1.0 + (2.0 * 3.0 + 2.0 * 5.0) / 3.0;
         assert!((sah_cost(&[root], 1.0, 1.0) - expected).abs() < 1e-9);
@@ -752,7 +751,7 @@ mod tests {
         let scene = packed.view();
         let mut rays = 0;
         for t in &mesh {
-            let v = [vec3_from(t.v0), vec3_from(t.v1), vec3_from(t.v2)];
+            let v = [t.v0.truncate(), t.v1.truncate(), t.v2.truncate()];
             for k in 0..3 {
                 for target in [
                     v[k],
