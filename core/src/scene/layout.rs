@@ -8,7 +8,7 @@
 //! The two types traversal reads, [`Bvh4Node`] and [`TrianglePositions`], hold `Vec4`/`UVec4` rather
 //! than `[f32; 4]`: rust-gpu loads a vector member with one 4-component load where an array becomes four
 //! scalar loads, and lavapipe (Mesa 22.3) pays a per-lane, bounds-checked loop for every load
-//! instruction, so the vector form made its frames about 9 % faster (README, "lavapipe").
+//! instruction, so the vector form made its frames 6-9 % faster (README, "lavapipe").
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec4, Vec4};
 
