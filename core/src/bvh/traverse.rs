@@ -346,7 +346,6 @@ mod tests {
     extern crate std;
 
     use super::*;
-
     use crate::scene::{Material, TriangleInfo, TrianglePositions};
     use glam::Vec3;
 

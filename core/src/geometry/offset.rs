@@ -95,7 +95,6 @@ mod tests {
     use super::*;
     use crate::geometry::triangle::WatertightRay;
     use crate::geometry::Ray;
-
     use crate::scene::TrianglePositions;
 
     use crate::test_support::SplitMix64 as TestRng;

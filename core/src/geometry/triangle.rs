@@ -208,7 +208,6 @@ impl WatertightRay {
 mod tests {
     extern crate std;
     use super::*;
-
     use std::vec::Vec;
 
     use crate::test_support::SplitMix64 as TestRng;

@@ -135,7 +135,6 @@ pub fn surface_point<F: Features>(scene: &SceneView<F>, hit: &Hit) -> SurfacePoi
 #[cfg(test)]
 mod tests {
     use super::*;
-
     use crate::scene::{Material, TriangleInfo, TrianglePositions};
 
     /// Tangent frames stay finite and orthonormal for texture parameterisations whose determinant is
@@ -146,8 +145,8 @@ mod tests {
         let scale = 1.0e10f32;
         let tri = TrianglePositions {
             v0: Vec3::ZERO.extend(0.0),
-            v1: (Vec3::new(scale, 0.0, 0.0)).extend(0.0),
-            v2: (Vec3::new(0.0, scale, 0.0)).extend(0.0),
+            v1: Vec3::new(scale, 0.0, 0.0).extend(0.0),
+            v2: Vec3::new(0.0, scale, 0.0).extend(0.0),
         };
         let info = TriangleInfo {
             vertices: [0, 1, 2],
