@@ -19,7 +19,7 @@
 //! builder are themselves a few ulps larger than their triangles. Zero direction components are handled
 //! without infinities or NaNs: their inverse is clamped to `±f32::MAX`, so `(bound - origin) * inv` is a
 //! huge (or infinite) finite-signed number, and never `0 * ∞`.
-use glam::{UVec4, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
@@ -203,22 +203,6 @@ fn lowest_slot(mask: u32) -> usize {
     }
 }
 
-/// Component `i` (0 to 3) of `v`, picked by value: indexing a vector in place would make rust-gpu
-/// select between pointers, which SPIR-V's logical addressing does not allow.
-#[inline(always)]
-#[must_use]
-fn lane(v: UVec4, i: usize) -> u32 {
-    if i == 0 {
-        v.x
-    } else if i == 1 {
-        v.y
-    } else if i == 2 {
-        v.z
-    } else {
-        v.w
-    }
-}
-
 /// Shared traversal loop (inlined into both callers, so each gets a copy specialised for `any`): the closest hit in `(0, t_max)`, or (with `any`) the first one found.
 ///
 /// The current item is a node (`count == 0`, `item` its index) or a leaf (`count` triangles from
@@ -277,8 +261,8 @@ fn traverse<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32, any: bool)
         } else {
             let parent = &scene.nodes[((item & !LEAF_ENTRY) >> 2) as usize];
             let slot = (item & 3) as usize;
-            let first = lane(parent.child, slot);
-            let end = first + lane(parent.count, slot);
+            let first = parent.slot_child(slot);
+            let end = first + parent.slot_count(slot);
             let mut i = first;
             while i < end {
                 let h = watertight.intersect(&scene.triangles[i as usize], closest);
@@ -320,8 +304,8 @@ pub const LEAF_ENTRY: u32 = 1 << 31;
 /// The traversal entry of slot `i` of `node` (whose index is `index`).
 #[inline(always)]
 fn entry_of(node: &Bvh4Node, index: u32, i: usize) -> u32 {
-    if lane(node.count, i) == 0 {
-        lane(node.child, i)
+    if node.slot_count(i) == 0 {
+        node.slot_child(i)
     } else {
         LEAF_ENTRY | (index << 2) | i as u32
     }

@@ -79,25 +79,43 @@ impl Bvh4Node {
         count: UVec4::ZERO,
     };
 
+    /// The first child of slot `i`: a node index, or a leaf's first triangle (see the type's docs).
+    ///
+    /// Read by value rather than by indexing `child` in place: on the GPU, indexing a vector in place makes
+    /// rust-gpu select between pointers, which SPIR-V's logical addressing does not allow.
+    #[inline(always)]
+    #[must_use]
+    pub fn slot_child(&self, i: usize) -> u32 {
+        component(self.child, i)
+    }
+
+    /// The triangle count of slot `i` (0 for an interior or empty slot); read by value like
+    /// [`Self::slot_child`].
+    #[inline(always)]
+    #[must_use]
+    pub fn slot_count(&self, i: usize) -> u32 {
+        component(self.count, i)
+    }
+
     /// Whether slot `i` is empty.
     #[inline]
     #[must_use]
     pub fn is_empty_slot(&self, i: usize) -> bool {
-        self.child[i] == INVALID_INDEX && self.count[i] == 0
+        self.slot_child(i) == INVALID_INDEX && self.slot_count(i) == 0
     }
 
     /// Whether slot `i` is a leaf.
     #[inline]
     #[must_use]
     pub fn is_leaf_slot(&self, i: usize) -> bool {
-        self.count[i] != 0
+        self.slot_count(i) != 0
     }
 
     /// Whether slot `i` is an interior node.
     #[inline]
     #[must_use]
     pub fn is_interior_slot(&self, i: usize) -> bool {
-        self.count[i] == 0 && self.child[i] != INVALID_INDEX
+        self.slot_count(i) == 0 && self.slot_child(i) != INVALID_INDEX
     }
 
     /// The box of slot `i` as `(min, max)`.
@@ -119,6 +137,21 @@ impl Bvh4Node {
         self.max_x[i] = max[0];
         self.max_y[i] = max[1];
         self.max_z[i] = max[2];
+    }
+}
+
+/// Component `i` (0 to 3) of `v`, picked with selects.
+#[inline(always)]
+#[must_use]
+fn component(v: UVec4, i: usize) -> u32 {
+    if i == 0 {
+        v.x
+    } else if i == 1 {
+        v.y
+    } else if i == 2 {
+        v.z
+    } else {
+        v.w
     }
 }
 
