@@ -35,6 +35,31 @@ if [ ${#need_apt[@]} -gt 0 ]; then
   fi
 fi
 
+# --- lavapipe from Mesa 25 on Debian 12 -------------------------------------------------------------------
+# Debian 12's own lavapipe (Mesa 22.3) masks every branch, both sides of every `if` always run, and renders
+# fovea's kernel about 3x slower than Mesa 25.0 from bookworm-backports, which skips branches no lane takes
+# (README, "lavapipe"). So on bookworm, lavapipe comes from backports (it needs only a newer libdrm; other
+# Mesa packages are left alone). FOVEA_SYSTEM_LAVAPIPE=1 keeps the distribution's version.
+if [ "${FOVEA_SYSTEM_LAVAPIPE:-0}" != 1 ] && command -v apt-get >/dev/null 2>&1 &&
+  grep -q '^VERSION_CODENAME=bookworm' /etc/os-release 2>/dev/null; then
+  lvp_version=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || true)
+  case "$lvp_version" in
+    2[5-9].*) ;;
+    *)
+      SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+      backports=/etc/apt/sources.list.d/fovea-bookworm-backports.list
+      if ! grep -rqs 'bookworm-backports' /etc/apt/sources.list /etc/apt/sources.list.d/; then
+        echo "deb http://deb.debian.org/debian bookworm-backports main" | $SUDO tee "$backports" >/dev/null
+      fi
+      echo "setup: installing lavapipe (mesa-vulkan-drivers) from bookworm-backports"
+      $SUDO apt-get update -qq >/dev/null
+      DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
+        -t bookworm-backports mesa-vulkan-drivers >/dev/null ||
+        { echo "setup: installing mesa-vulkan-drivers from bookworm-backports failed" >&2; exit 1; }
+      ;;
+  esac
+fi
+
 # --- stable Rust ------------------------------------------------------------------------------------------
 if ! command -v cargo >/dev/null 2>&1; then
   if [ -x "$HOME/.cargo/bin/cargo" ]; then
