@@ -50,8 +50,11 @@ pub const BINDING_LDR: u32 = 20;
 /// The frame's [`FrameParams`] (one element; a buffer rather than push constants because it is larger
 /// than the 128 bytes of push constants Vulkan guarantees).
 pub const BINDING_FRAME: u32 = 21;
+/// Nodes and triangle positions again, as one storage texel buffer (`R32G32B32A32_UINT`) that traversal
+/// reads ([`crate::bvh::source`]).
+pub const BINDING_GEOMETRY: u32 = 22;
 /// Number of bindings.
-pub const BINDING_COUNT: u32 = 22;
+pub const BINDING_COUNT: u32 = 23;
 
 /// Specialization constant id of `render_samples`' feature mask (`FEATURE_*` bits; default every
 /// feature). The host sets it per scene when it creates the pipeline.
@@ -335,13 +338,14 @@ pub fn probe_eval(
 }
 
 /// Evaluates scene probe item `item` with `selector` (one of the `PROBE_SCENE_*` selectors) over
-/// `scene`: reads `inputs[item · PROBE_INPUT_RECORDS ..]` and returns the item's
+/// `scene`, traversing through `source` (the GPU's texel buffer, or the CPU's slices): reads `inputs[item · PROBE_INPUT_RECORDS ..]` and returns the item's
 /// [`PROBE_OUTPUT_RECORDS`] output records. The GPU `probe_scene` entry point and the CPU side of the
 /// cross-backend tests both call this.
 #[must_use]
-pub fn probe_scene_eval<F: crate::scene::Features>(
+pub fn probe_scene_eval<F: crate::scene::Features, S: crate::bvh::TraversalSource>(
     selector: u32,
     scene: &crate::scene::SceneView<F>,
+    source: &S,
     inputs: &[[f32; 4]],
     item: u32,
 ) -> [[f32; 4]; 2] {
@@ -352,10 +356,10 @@ pub fn probe_scene_eval<F: crate::scene::Features>(
     if selector == PROBE_SCENE_CLOSEST_HIT || selector == PROBE_SCENE_ANY_HIT {
         let ray = crate::geometry::Ray::new(probe_vec3(r0), probe_vec3(r1));
         if selector == PROBE_SCENE_CLOSEST_HIT {
-            let hit = crate::bvh::traverse::closest_hit(scene, &ray, r0[3]);
+            let hit = crate::bvh::closest_hit_with(scene, source, &ray, r0[3]);
             out[0] = [hit.t, hit.b1, hit.b2, f32::from_bits(hit.triangle)];
         } else {
-            let blocked = crate::bvh::traverse::any_hit(scene, &ray, r0[3]);
+            let blocked = crate::bvh::any_hit_with(scene, source, &ray, r0[3]);
             out[0][0] = if blocked { 1.0 } else { 0.0 };
         }
     } else if selector == PROBE_SCENE_SAMPLE_LIGHT {

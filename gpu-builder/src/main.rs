@@ -35,7 +35,9 @@ fn run(out: &Path) -> Result<(), String> {
     let kernel = root.join("gpu-kernel");
     let target_dir = root.join("target").join("spirv");
 
-    let mut builder = SpirvBuilder::new(&kernel, TARGET);
+    // ImageBuffer: the geometry texel buffer traversal reads (core's `bvh::source`).
+    let mut builder =
+        SpirvBuilder::new(&kernel, TARGET).capability(spirv_builder::Capability::ImageBuffer);
     builder.toolchain_overwrite = Some(NIGHTLY.into());
     builder.target_dir_path = Some(target_dir);
     let result = builder

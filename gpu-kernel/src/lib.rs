@@ -16,9 +16,14 @@
 // Entry points take one argument per binding.
 #![allow(clippy::too_many_arguments)]
 
+#[cfg(target_arch = "spirv")]
+use fovea_core::bvh::source::GeometryTexels;
+// Built for the host (a plain library), the geometry binding is the scene's own slices.
+#[cfg(not(target_arch = "spirv"))]
+use fovea_core::bvh::SceneSlices as GeometryTexels;
 use fovea_core::foveation::{block_extent, cell_mean_at, fill_pixel, OwnedBlock};
 use fovea_core::glam::Vec3;
-use fovea_core::integrator::{render_block_sample, FrameParams};
+use fovea_core::integrator::{render_block_sample_with, FrameParams};
 use fovea_core::kernel_abi::{self, GpuBlock, KernelPushConstants, WORKGROUP_SIZE};
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::features::FEATURES_ALL;
@@ -54,6 +59,7 @@ const _: () = {
     assert!(kernel_abi::BINDING_HDR == 19);
     assert!(kernel_abi::BINDING_LDR == 20);
     assert!(kernel_abi::BINDING_FRAME == 21);
+    assert!(kernel_abi::BINDING_GEOMETRY == 22);
     assert!(kernel_abi::BINDING_PROBE_INPUT == 15);
     assert!(kernel_abi::BINDING_PROBE_OUTPUT == 16);
     assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
@@ -108,6 +114,7 @@ pub fn render_samples(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] blocks: &[GpuBlock],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] samples: &mut [[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+    #[spirv(descriptor_set = 0, binding = 22)] geometry: &GeometryTexels,
 ) {
     let i = invocation_index(id, num_workgroups);
     let spp = pc.spp;
@@ -133,7 +140,7 @@ pub fn render_samples(
         environment_conditional_cdf,
     };
     let block = owned_block(&blocks[(i / spp) as usize]);
-    let c = render_block_sample(&scene, frame, &block, i % spp);
+    let c = render_block_sample_with(&scene, geometry, frame, &block, i % spp);
     samples[i as usize] = [c.x, c.y, c.z, 0.0];
 }
 
@@ -289,6 +296,7 @@ pub fn probe_scene(
     environment_conditional_cdf: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] inputs: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] outputs: &mut [[f32; 4]],
+    #[spirv(descriptor_set = 0, binding = 22)] geometry: &GeometryTexels,
 ) {
     let i = invocation_index(id, num_workgroups);
     if i >= pc.item_count {
@@ -312,7 +320,7 @@ pub fn probe_scene(
         environment_marginal_cdf,
         environment_conditional_cdf,
     };
-    let out = kernel_abi::probe_scene_eval(pc.spp, &scene, inputs, i);
+    let out = kernel_abi::probe_scene_eval(pc.spp, &scene, geometry, inputs, i);
     let base = (i * kernel_abi::PROBE_OUTPUT_RECORDS) as usize;
     outputs[base] = out[0];
     outputs[base + 1] = out[1];

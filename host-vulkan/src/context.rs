@@ -7,7 +7,7 @@ use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::{AllocationSizes, AllocatorDebugSettings, MemoryLocation};
 
 use fovea_core::kernel_abi::{
-    KernelPushConstants, BINDING_BLOCKS, BINDING_COUNT, SPEC_CONSTANT_FEATURES,
+    KernelPushConstants, BINDING_BLOCKS, BINDING_COUNT, BINDING_GEOMETRY, SPEC_CONSTANT_FEATURES,
 };
 use fovea_core::scene::features::FEATURES_ALL;
 
@@ -53,6 +53,7 @@ pub fn validation_requested() -> bool {
 pub(crate) struct Limits {
     pub max_storage_buffer_range: u64,
     pub min_storage_buffer_offset_alignment: u64,
+    pub max_texel_buffer_elements: u64,
     pub max_workgroup_count_x: u32,
     pub max_memory_allocation_size: u64,
     /// Size of the largest device-local heap.
@@ -367,14 +368,7 @@ impl VulkanContext {
                     None,
                 )
                 .during("vkCreatePipelineLayout")?;
-            let pool_sizes = [
-                vk::DescriptorPoolSize::default()
-                    .ty(vk::DescriptorType::STORAGE_BUFFER)
-                    .descriptor_count(BINDING_COUNT - 1),
-                vk::DescriptorPoolSize::default()
-                    .ty(vk::DescriptorType::STORAGE_BUFFER_DYNAMIC)
-                    .descriptor_count(1),
-            ];
+            let pool_sizes = descriptor_pool_sizes();
             self.descriptor_pool = device
                 .create_descriptor_pool(
                     &vk::DescriptorPoolCreateInfo::default()
@@ -557,19 +551,21 @@ impl VulkanContext {
         result.map_err(|e| self.poison_on_fatal(e))
     }
 
-    /// Copies `data` into a new device-local storage buffer through a staging buffer.
+    /// Copies `data` into a new device-local storage buffer (with `extra_usage` besides) through a
+    /// staging buffer.
     pub(crate) fn upload<T: bytemuck::Pod>(
         &mut self,
         what: &str,
         data: &[T],
         size: u64,
+        extra_usage: vk::BufferUsageFlags,
     ) -> Result<GpuBuffer> {
         let bytes = std::mem::size_of_val(data) as u64;
         let dst = GpuBuffer::new(
             &self.shared,
             what,
             size.max(bytes),
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | extra_usage,
             MemoryLocation::GpuOnly,
         )?;
         let mut staging = GpuBuffer::new(
@@ -615,14 +611,29 @@ impl VulkanContext {
     }
 }
 
-/// Descriptor type of each binding: the chunk's block list is bound with a dynamic offset, everything else
-/// as a plain storage buffer.
+/// Descriptor type of each binding: the chunk's block list is bound with a dynamic offset, the geometry
+/// as a storage texel buffer, everything else as a plain storage buffer.
 pub(crate) fn descriptor_type(binding: u32) -> vk::DescriptorType {
     if binding == BINDING_BLOCKS {
         vk::DescriptorType::STORAGE_BUFFER_DYNAMIC
+    } else if binding == BINDING_GEOMETRY {
+        vk::DescriptorType::STORAGE_TEXEL_BUFFER
     } else {
         vk::DescriptorType::STORAGE_BUFFER
     }
+}
+
+/// Descriptors of each type in one set of the kernel's layout (for descriptor pools).
+pub(crate) fn descriptor_pool_sizes() -> Vec<vk::DescriptorPoolSize> {
+    let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
+    for b in 0..BINDING_COUNT {
+        let ty = descriptor_type(b);
+        match sizes.iter_mut().find(|s| s.ty == ty) {
+            Some(s) => s.descriptor_count += 1,
+            None => sizes.push(vk::DescriptorPoolSize::default().ty(ty).descriptor_count(1)),
+        }
+    }
+    sizes
 }
 
 fn query_limits(shared: &Shared) -> Limits {
@@ -645,6 +656,7 @@ fn query_limits(shared: &Shared) -> Limits {
     Limits {
         max_storage_buffer_range: u64::from(limits.max_storage_buffer_range),
         min_storage_buffer_offset_alignment: limits.min_storage_buffer_offset_alignment.max(1),
+        max_texel_buffer_elements: u64::from(limits.max_texel_buffer_elements),
         max_workgroup_count_x: limits.max_compute_work_group_count[0],
         max_memory_allocation_size: maintenance3.max_memory_allocation_size,
         device_local_heap,

@@ -231,6 +231,18 @@ fn write_start_timestamp(device: &ash::Device, cb: vk::CommandBuffer, query_pool
     }
 }
 
+/// The descriptor write of the geometry texel buffer (`BINDING_GEOMETRY`) of `set`.
+pub(crate) fn geometry_write<'a>(
+    set: vk::DescriptorSet,
+    view: &'a [vk::BufferView; 1],
+) -> vk::WriteDescriptorSet<'a> {
+    vk::WriteDescriptorSet::default()
+        .dst_set(set)
+        .dst_binding(fovea_core::kernel_abi::BINDING_GEOMETRY)
+        .descriptor_type(vk::DescriptorType::STORAGE_TEXEL_BUFFER)
+        .texel_buffer_view(view)
+}
+
 /// A memory barrier after a dispatch: its writes (and reads, for buffers reused next) before the next
 /// dispatch (`COMPUTE_SHADER`) or the readback copies (`TRANSFER`).
 fn barrier(device: &ash::Device, cb: vk::CommandBuffer, dst_stage: vk::PipelineStageFlags) {
@@ -397,16 +409,7 @@ impl VulkanContext {
     /// on).
     fn write_descriptors(&mut self, scene: &GpuScene, sizes: &Sizes) {
         let res = self.frame.as_ref().expect("frame resources exist");
-        let mut infos: Vec<(u32, vk::DescriptorBufferInfo)> = Vec::new();
-        for (b, buf) in scene.buffers.iter().enumerate() {
-            infos.push((
-                b as u32,
-                vk::DescriptorBufferInfo::default()
-                    .buffer(buf.buffer)
-                    .offset(0)
-                    .range(scene.ranges[b]),
-            ));
-        }
+        let mut infos = scene.buffer_infos();
         let frame_buffers = [
             (BINDING_BLOCKS, &res.blocks, sizes.chunk_blocks * 16),
             (BINDING_SAMPLES, &res.samples, sizes.chunk_samples * PIXEL),
@@ -433,6 +436,7 @@ impl VulkanContext {
                     .range(range),
             ));
         }
+        let geometry = [scene.geometry_view()];
         let writes: Vec<vk::WriteDescriptorSet> = infos
             .iter()
             .map(|(binding, info)| {
@@ -442,8 +446,12 @@ impl VulkanContext {
                     .descriptor_type(crate::context::descriptor_type(*binding))
                     .buffer_info(std::slice::from_ref(info))
             })
+            .chain(std::iter::once(geometry_write(
+                self.descriptor_set,
+                &geometry,
+            )))
             .collect();
-        // SAFETY: the set is not in use by any pending command buffer, and every buffer is alive.
+        // SAFETY: the set is not in use by any pending command buffer, and every buffer and view is alive.
         unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
     }
 

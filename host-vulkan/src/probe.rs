@@ -82,11 +82,11 @@ impl VulkanContext {
         let cell_means_buf = host_buffer("probe cell means", bytemuck::cast_slice(cell_means))?;
         let frame_buf = host_buffer("probe frame parameters", bytemuck::bytes_of(frame))?;
         let extra = [
-            (BINDING_REPLICATED, replicated_buf.buffer, vk::WHOLE_SIZE),
-            (BINDING_CELL_MEANS, cell_means_buf.buffer, vk::WHOLE_SIZE),
-            (BINDING_FRAME, frame_buf.buffer, vk::WHOLE_SIZE),
+            (BINDING_REPLICATED, whole(&replicated_buf)),
+            (BINDING_CELL_MEANS, whole(&cell_means_buf)),
+            (BINDING_FRAME, whole(&frame_buf)),
         ];
-        self.dispatch_probe(ProbeEntry::Functions, selector, inputs, &extra)
+        self.dispatch_probe(ProbeEntry::Functions, selector, inputs, &extra, None)
     }
 
     /// Runs the `probe_scene` entry point with `selector` (a `PROBE_SCENE_*` selector) over `scene`, with
@@ -99,24 +99,26 @@ impl VulkanContext {
     ) -> Result<Vec<[f32; 4]>> {
         self.check_usable()?;
         scene.check_uploaded_to(&self.shared)?;
-        let extra: Vec<(u32, vk::Buffer, u64)> = scene
-            .buffers
-            .iter()
-            .zip(scene.ranges)
-            .enumerate()
-            .map(|(b, (buf, range))| (b as u32, buf.buffer, range))
-            .collect();
-        self.dispatch_probe(ProbeEntry::Scene, selector, inputs, &extra)
+        let extra = scene.buffer_infos();
+        self.dispatch_probe(
+            ProbeEntry::Scene,
+            selector,
+            inputs,
+            &extra,
+            Some(scene.geometry_view()),
+        )
     }
 
     /// Dispatches one probe entry point over `inputs` with its own descriptor set: the inputs and
-    /// outputs plus `extra` bindings (binding, buffer, range); returns the output records.
+    /// outputs plus `extra` bindings (binding, descriptor) and, for the scene probe, the geometry texel
+    /// buffer; returns the output records.
     fn dispatch_probe(
         &mut self,
         entry: ProbeEntry,
         selector: u32,
         inputs: &[[f32; 4]],
-        extra: &[(u32, vk::Buffer, u64)],
+        extra: &[(u32, vk::DescriptorBufferInfo)],
+        geometry: Option<vk::BufferView>,
     ) -> Result<Vec<[f32; 4]>> {
         let stride = PROBE_INPUT_RECORDS as usize;
         if !inputs.len().is_multiple_of(stride) {
@@ -160,31 +162,27 @@ impl VulkanContext {
 
         let set = ProbeSet::new(self)?;
         let mut bindings = vec![
-            (BINDING_PROBE_INPUT, input_buf.buffer, vk::WHOLE_SIZE),
-            (BINDING_PROBE_OUTPUT, output_buf.buffer, vk::WHOLE_SIZE),
+            (BINDING_PROBE_INPUT, whole(&input_buf)),
+            (BINDING_PROBE_OUTPUT, whole(&output_buf)),
         ];
         bindings.extend_from_slice(extra);
-        let infos: Vec<vk::DescriptorBufferInfo> = bindings
-            .iter()
-            .map(|&(_, buffer, range)| {
-                vk::DescriptorBufferInfo::default()
-                    .buffer(buffer)
-                    .offset(0)
-                    .range(range)
-            })
-            .collect();
+        let geometry: Vec<[vk::BufferView; 1]> = geometry.into_iter().map(|v| [v]).collect();
         let writes: Vec<vk::WriteDescriptorSet> = bindings
             .iter()
-            .zip(&infos)
-            .map(|((binding, _, _), info)| {
+            .map(|(binding, info)| {
                 vk::WriteDescriptorSet::default()
                     .dst_set(set.set)
                     .dst_binding(*binding)
                     .descriptor_type(crate::context::descriptor_type(*binding))
                     .buffer_info(std::slice::from_ref(info))
             })
+            .chain(
+                geometry
+                    .iter()
+                    .map(|v| crate::frame::geometry_write(set.set, v)),
+            )
             .collect();
-        // SAFETY: the set is new and unused; every buffer is alive.
+        // SAFETY: the set is new and unused; every buffer and view is alive.
         unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
 
         let pc = KernelPushConstants {
@@ -263,6 +261,14 @@ impl VulkanContext {
     }
 }
 
+/// A descriptor for the whole of `buffer`.
+fn whole(buffer: &GpuBuffer) -> vk::DescriptorBufferInfo {
+    vk::DescriptorBufferInfo::default()
+        .buffer(buffer.buffer)
+        .offset(0)
+        .range(vk::WHOLE_SIZE)
+}
+
 /// A descriptor pool with one set of the kernel's layout, destroyed on drop.
 struct ProbeSet {
     device: ash::Device,
@@ -273,15 +279,7 @@ struct ProbeSet {
 impl ProbeSet {
     fn new(ctx: &VulkanContext) -> Result<Self> {
         let device = ctx.shared.device.clone();
-        let count = fovea_core::kernel_abi::BINDING_COUNT;
-        let sizes = [
-            vk::DescriptorPoolSize::default()
-                .ty(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(count - 1),
-            vk::DescriptorPoolSize::default()
-                .ty(vk::DescriptorType::STORAGE_BUFFER_DYNAMIC)
-                .descriptor_count(1),
-        ];
+        let sizes = crate::context::descriptor_pool_sizes();
         // SAFETY: valid create info.
         let pool = unsafe {
             device.create_descriptor_pool(

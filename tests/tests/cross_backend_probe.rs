@@ -10,6 +10,7 @@
 //!
 //! Without a Vulkan device the test prints a note and passes, except with `CI=true`. The validation
 //! layer is always on here and must stay silent.
+use fovea_core::bvh::SceneSlices;
 use fovea_core::foveation::fill::{cell_buffer_len, FILL_BILINEAR, FILL_REPLICATE};
 use fovea_core::foveation::regions::FoveationParams;
 use fovea_core::glam::{Vec2, Vec3};
@@ -1068,7 +1069,7 @@ fn scene_functions_agree_across_backends() {
     assert!(!emissive.is_empty());
     let cpu_eval_scene = |selector: u32, inputs: &[[f32; 4]]| -> Vec<[f32; 4]> {
         (0..inputs.len() / STRIDE)
-            .flat_map(|i| probe_scene_eval(selector, &scene, inputs, i as u32))
+            .flat_map(|i| probe_scene_eval(selector, &scene, &SceneSlices, inputs, i as u32))
             .collect()
     };
     // The CPU side of the probe is the functions themselves (checked here, device or not).

@@ -21,6 +21,7 @@
 //! huge (or infinite) finite-signed number, and never `0 * ∞`.
 use glam::{Vec3, Vec4};
 
+use super::source::{SceneSlices, TraversalSource};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
 use crate::material::alpha::is_cut_out;
@@ -210,7 +211,13 @@ fn lowest_slot(mask: u32) -> usize {
 // Index loops over local arrays: rust-gpu does not compile iterators over them.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn traverse<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32, any: bool) -> Hit {
+fn traverse<F: Features, S: TraversalSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    ray: &Ray,
+    t_max: f32,
+    any: bool,
+) -> Hit {
     let mut best = Hit::miss();
     if scene.nodes.is_empty() {
         return best;
@@ -227,7 +234,7 @@ fn traverse<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32, any: bool)
     loop {
         let mut next = false;
         if item & LEAF_ENTRY == 0 {
-            let node = &scene.nodes[item as usize];
+            let node = &source.node(scene, item);
             let (entry, mask) = ray_box.intersect(node, closest);
             if mask != 0 {
                 next = true;
@@ -259,13 +266,13 @@ fn traverse<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32, any: bool)
                 }
             }
         } else {
-            let parent = &scene.nodes[((item & !LEAF_ENTRY) >> 2) as usize];
+            let parent = &source.node(scene, (item & !LEAF_ENTRY) >> 2);
             let slot = (item & 3) as usize;
             let first = parent.slot_child(slot);
             let end = first + parent.slot_count(slot);
             let mut i = first;
             while i < end {
-                let h = watertight.intersect(&scene.triangles[i as usize], closest);
+                let h = watertight.intersect(&source.triangle(scene, i), closest);
                 if h.hit && !hit_is_cut_out(scene, i, h.b1, h.b2) {
                     closest = h.t;
                     best = Hit {
@@ -315,14 +322,36 @@ fn entry_of(node: &Bvh4Node, index: u32, i: usize) -> u32 {
 /// [`Hit::miss`] if there is none or the scene has no nodes.
 #[must_use]
 pub fn closest_hit<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32) -> Hit {
-    traverse(scene, ray, t_max, false)
+    closest_hit_with(scene, &SceneSlices, ray, t_max)
+}
+
+/// [`closest_hit`] reading nodes and triangles from `source`.
+#[must_use]
+pub fn closest_hit_with<F: Features, S: TraversalSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    ray: &Ray,
+    t_max: f32,
+) -> Hit {
+    traverse(scene, source, ray, t_max, false)
 }
 
 /// Whether anything (other than alpha cut-out holes) blocks the open segment `(0, t_max)` of `ray`; for
 /// shadow rays. Stops at the first hit found.
 #[must_use]
 pub fn any_hit<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32) -> bool {
-    traverse(scene, ray, t_max, true).is_hit()
+    any_hit_with(scene, &SceneSlices, ray, t_max)
+}
+
+/// [`any_hit`] reading nodes and triangles from `source`.
+#[must_use]
+pub fn any_hit_with<F: Features, S: TraversalSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    ray: &Ray,
+    t_max: f32,
+) -> bool {
+    traverse(scene, source, ray, t_max, true).is_hit()
 }
 
 #[cfg(test)]

@@ -5,8 +5,9 @@ pub mod path;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-pub use path::{trace_path, IntegratorSettings};
+pub use path::{trace_path, trace_path_with, IntegratorSettings};
 
+use crate::bvh::{SceneSlices, TraversalSource};
 use crate::camera::Camera;
 use crate::foveation::{block_sample_position, FoveationParams, OwnedBlock};
 use crate::rng::SampleRng;
@@ -37,6 +38,19 @@ pub fn render_block_sample<F: crate::scene::Features>(
     block: &OwnedBlock,
     sample: u32,
 ) -> Vec3 {
+    render_block_sample_with(scene, &SceneSlices, frame, block, sample)
+}
+
+/// [`render_block_sample`] with traversal reading nodes and triangles from `source` (the GPU's texel
+/// buffer).
+#[must_use]
+pub fn render_block_sample_with<F: crate::scene::Features, S: TraversalSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    frame: &FrameParams,
+    block: &OwnedBlock,
+    sample: u32,
+) -> Vec3 {
     let mut rng = SampleRng::new(
         block.origin,
         frame.frame_index,
@@ -46,5 +60,5 @@ pub fn render_block_sample<F: crate::scene::Features>(
     );
     let film = block_sample_position(block, frame.width, frame.height, rng.next_2d());
     let ray = frame.camera.generate_ray(film, frame.width, frame.height);
-    trace_path(scene, ray, &mut rng, &frame.integrator)
+    trace_path_with(scene, source, ray, &mut rng, &frame.integrator)
 }

@@ -20,7 +20,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use crate::bvh::traverse::{any_hit, closest_hit};
+use crate::bvh::{any_hit_with, closest_hit_with, SceneSlices, TraversalSource};
 use crate::geometry::offset::{offset_ray_origin, SHADOW_RAY_T_MAX};
 use crate::geometry::Ray;
 use crate::lights::{
@@ -81,6 +81,18 @@ pub fn trace_path<F: crate::scene::Features>(
     rng: &mut SampleRng,
     settings: &IntegratorSettings,
 ) -> Vec3 {
+    trace_path_with(scene, &SceneSlices, camera_ray, rng, settings)
+}
+
+/// [`trace_path`] with traversal reading nodes and triangles from `source` (the GPU's texel buffer).
+#[must_use]
+pub fn trace_path_with<F: crate::scene::Features, S: TraversalSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    camera_ray: Ray,
+    rng: &mut SampleRng,
+    settings: &IntegratorSettings,
+) -> Vec3 {
     let mis = settings.strategy == STRATEGY_MIS;
     let use_nee = settings.strategy != STRATEGY_BSDF_ONLY;
     let use_bsdf_hits = settings.strategy != STRATEGY_LIGHT_ONLY;
@@ -92,7 +104,7 @@ pub fn trace_path<F: crate::scene::Features>(
     let mut bsdf_pdf = 0.0f32;
     let mut bounce = 0u32;
     loop {
-        let hit = closest_hit(scene, &ray, INFINITE_DISTANCE);
+        let hit = closest_hit_with(scene, source, &ray, INFINITE_DISTANCE);
         if !hit.is_hit() {
             let le = environment::radiance(scene, ray.direction);
             if bounce == 0 {
@@ -177,7 +189,7 @@ pub fn trace_path<F: crate::scene::Features>(
                     } else {
                         SHADOW_RAY_T_MAX
                     };
-                    if !any_hit(scene, &shadow, t_max) {
+                    if !any_hit_with(scene, source, &shadow, t_max) {
                         let weight = if ls.is_delta || !mis {
                             1.0
                         } else {

@@ -330,5 +330,8 @@ pub struct SceneGlobals {
     pub environment_integral: f32,
     /// Index of the environment in the light list, or [`INVALID_INDEX`] when there is none.
     pub environment_light: u32,
-    pub _pad: [u32; 2],
+    /// The first texel of the triangle positions in the GPU's geometry texel buffer
+    /// ([`crate::bvh::source`]); set by the Vulkan host when it uploads the scene, unused on the CPU.
+    pub triangle_texels: u32,
+    pub _pad: u32,
 }
