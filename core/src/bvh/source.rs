@@ -13,7 +13,7 @@
 use crate::scene::{Bvh4Node, Features, SceneView, TrianglePositions};
 
 /// Texels (16 bytes each) per [`Bvh4Node`].
-pub const NODE_TEXELS: u32 = 8;
+pub const NODE_TEXELS: u32 = 7;
 /// Texels per [`TrianglePositions`].
 pub const TRIANGLE_TEXELS: u32 = 3;
 
@@ -74,8 +74,7 @@ impl TraversalSource for GeometryTexels {
             max_y: float_bits(self.read(t + 3)),
             min_z: float_bits(self.read(t + 4)),
             max_z: float_bits(self.read(t + 5)),
-            child: self.read(t + 6),
-            count: self.read(t + 7),
+            slots: self.read(t + 6),
         }
     }
 

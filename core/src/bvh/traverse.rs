@@ -5,9 +5,9 @@
 //! test is a dozen vector operations (Wald, Benthin, Boulos 2008, "Getting rid of packets"). The hit
 //! children are then visited near to far: all but the nearest are pushed with their entry distances, the
 //! farthest deepest, and a popped entry is skipped if a closer hit was found meanwhile. Leaves are stack
-//! entries like nodes, so they are tested in the same near-to-far order; a leaf entry names its parent
-//! node and slot (`LEAF_ENTRY | 4 * parent + slot`, so trees must have fewer than [`MAX_NODE_COUNT`]
-//! nodes), which keeps an entry at one `u32` plus its distance.
+//! entries like nodes, so they are tested in the same near-to-far order; an entry is the child's slot
+//! word ([`Bvh4Node::slots`]: a node index, or a leaf's first triangle and count), one `u32` plus its
+//! distance.
 //!
 //! The near and far planes of each axis are picked by the sign of the ray's (clamped) inverse direction,
 //! not by a per-box min/max of the two slab distances; an inverted box (the builder's empty slots) thus
@@ -19,24 +19,28 @@
 //! builder are themselves a few ulps larger than their triangles. Zero direction components are handled
 //! without infinities or NaNs: their inverse is clamped to `±f32::MAX`, so `(bound - origin) * inv` is a
 //! huge (or infinite) finite-signed number, and never `0 * ∞`.
-use glam::{Vec3, Vec4};
+use glam::{UVec4, Vec3, Vec4};
 
 use super::source::{SceneSlices, TraversalSource};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
 use crate::material::alpha::is_cut_out;
 use crate::scene::features::FEATURE_ALPHA_CUTOUT;
-use crate::scene::{Bvh4Node, Features, SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
+use crate::scene::{
+    leaf_count, leaf_first, Bvh4Node, Features, SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT,
+    SLOT_LEAF,
+};
 
 /// Entries of the traversal stack. A node visit pushes its (up to four) hit children and pops the nearest,
 /// so while a node of depth `j` (root = 0) is visited the stack holds at most `3 j` entries, and at most
-/// `3 D + 4` ever for trees whose deepest node has depth `D`. `fovea_scene::bvh::build_bvh` keeps
+/// `3 D + 4` are ever written (a visit writes all four children above the top) for trees whose deepest
+/// node has depth `D`. `fovea_scene::bvh::build_bvh` keeps
 /// `D <= (TRAVERSAL_STACK_SIZE - 4) / 3 = 20`.
 pub const TRAVERSAL_STACK_SIZE: usize = 64;
 
-/// Trees must have fewer nodes than this: a leaf's stack entry stores `4 * parent + slot` below
-/// [`LEAF_ENTRY`]'s bit.
-pub const MAX_NODE_COUNT: usize = 1 << 29;
+/// Trees must have fewer nodes than this: an interior slot word holds the node's index below
+/// [`SLOT_LEAF`].
+pub const MAX_NODE_COUNT: usize = SLOT_LEAF as usize;
 
 /// γ₃ = 3u / (1 - 3u) with the unit roundoff u = 2⁻²⁴ (pbrt-v3 Sec. 3.9.1).
 const GAMMA3: f32 = 3.0 * (f32::EPSILON * 0.5) / (1.0 - 3.0 * (f32::EPSILON * 0.5));
@@ -189,6 +193,43 @@ fn hit_is_cut_out<F: Features>(scene: &SceneView<F>, triangle: u32, b1: f32, b2:
         && is_cut_out(scene, triangle, b1, b2)
 }
 
+/// Where each of a node's four children goes when its hit children are pushed: child `i`'s rank is
+/// the number of hit children to be visited after it, so the one visited next (the nearest) has rank
+/// `hits - 1` and the farthest rank 0, the bottom of the pushed run. Ties go to the higher slot first.
+/// Any-hit queries visit in slot order, highest slot first (order does not matter to them, and not
+/// sorting is cheaper). Missed children get rank 3, which only ever lands at or above the new top.
+///
+/// Branch-free (compares and bit counts, no loops): the stack is written at computed positions
+/// instead of shifting entries as an insertion sort does, which matters on SIMD-per-lane GPUs
+/// (lavapipe), where every dynamically indexed stack access is a loop over the lanes.
+#[inline(always)]
+#[must_use]
+fn child_ranks(entry: Vec4, mask: u32, any: bool) -> UVec4 {
+    // `farther(i)`: the hit children visited after child `i`.
+    let farther = |t_i: f32, below_i: u32| -> u32 {
+        let (greater, equal) = if any {
+            (0, 0xF)
+        } else {
+            let t = Vec4::splat(t_i);
+            (entry.cmpgt(t).bitmask(), entry.cmpeq(t).bitmask())
+        };
+        (greater | (equal & below_i)) & mask
+    };
+    let rank = |i: u32, t_i: f32| -> u32 {
+        if mask & (1 << i) != 0 {
+            farther(t_i, (1 << i) - 1).count_ones()
+        } else {
+            3
+        }
+    };
+    UVec4::new(
+        rank(0, entry.x),
+        rank(1, entry.y),
+        rank(2, entry.z),
+        rank(3, entry.w),
+    )
+}
+
 /// The slot of the lowest set bit of a non-zero 4-bit mask (no intrinsics, for the GPU's sake).
 #[inline]
 #[must_use]
@@ -204,10 +245,37 @@ fn lowest_slot(mask: u32) -> usize {
     }
 }
 
-/// Shared traversal loop (inlined into both callers, so each gets a copy specialised for `any`): the closest hit in `(0, t_max)`, or (with `any`) the first one found.
+/// Pushes one child of a visited node (see [`child_ranks`]): if it was `hit`, the child of rank
+/// `hits - 1` becomes the next `item`, and any other goes to `stack_len + rank`; `top` is
+/// `(stack_len, hits)`.
+#[inline(always)]
+fn push_child(
+    stack_item: &mut [u32; TRAVERSAL_STACK_SIZE],
+    stack_t: &mut [f32; TRAVERSAL_STACK_SIZE],
+    item: &mut u32,
+    top: (usize, u32),
+    hit: bool,
+    rank: u32,
+    t: f32,
+    slot: u32,
+) {
+    let (stack_len, hits) = top;
+    if hit {
+        if rank + 1 == hits {
+            *item = slot;
+        } else {
+            stack_item[stack_len + rank as usize] = slot;
+            stack_t[stack_len + rank as usize] = t;
+        }
+    }
+}
+
+/// Shared traversal loop (inlined into both callers, so each gets a copy specialised for `any`): the
+/// closest hit in `(0, t_max)`, or (with `any`) the first one found.
 ///
-/// The current item is a node (`count == 0`, `item` its index) or a leaf (`count` triangles from
-/// `item`); stack entries are items with their entry distances.
+/// The current item is a node index or a leaf slot word ([`SLOT_LEAF`] set); stack entries are items
+/// with their entry distances. A visited node writes all four children at their ranks above the stack
+/// top ([`child_ranks`]), keeps the hit ones below the nearest and continues with the nearest.
 // Index loops over local arrays: rust-gpu does not compile iterators over them.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
@@ -226,50 +294,76 @@ fn traverse<F: Features, S: TraversalSource>(
     let ray_box = RayBox4::new(ray);
     let mut closest = t_max;
 
-    // Entries are nodes (their index) or leaves (`LEAF_ENTRY | 4 * parent + slot`).
     let mut stack_item = [0u32; TRAVERSAL_STACK_SIZE];
     let mut stack_t = [0.0f32; TRAVERSAL_STACK_SIZE];
     let mut stack_len = 0usize;
     let mut item = 0u32;
     loop {
         let mut next = false;
-        if item & LEAF_ENTRY == 0 {
-            let node = &source.node(scene, item);
-            let (entry, mask) = ray_box.intersect(node, closest);
+        if item & SLOT_LEAF == 0 {
+            let node = source.node(scene, item);
+            let (entry, mask) = ray_box.intersect(&node, closest);
             if mask != 0 {
                 next = true;
                 if mask & (mask - 1) == 0 {
                     // One child hit: continue with it, no stack traffic.
-                    let i = lowest_slot(mask);
-                    item = entry_of(node, item, i);
+                    item = node.slot(lowest_slot(mask));
                 } else {
-                    // Insert the hit children into the top of the stack, sorted so that the nearest
-                    // ends on top, then continue with the nearest.
-                    let t = entry.to_array();
-                    let base = stack_len;
-                    for i in 0..4 {
-                        if mask & (1 << i) != 0 {
-                            let mut p = stack_len;
-                            // Any-hit queries take the first hit found: order does not matter.
-                            while !any && p > base && stack_t[p - 1] < t[i] {
-                                stack_item[p] = stack_item[p - 1];
-                                stack_t[p] = stack_t[p - 1];
-                                p -= 1;
-                            }
-                            stack_item[p] = entry_of(node, item, i);
-                            stack_t[p] = t[i];
-                            stack_len += 1;
-                        }
-                    }
-                    stack_len -= 1;
-                    item = stack_item[stack_len];
+                    // Push the hit children below the nearest, farthest deepest, and continue with
+                    // the nearest.
+                    let hits = mask.count_ones();
+                    let rank = child_ranks(entry, mask, any);
+                    // Unrolled by hand: the GPU compilers keep a loop over the four slots as a loop,
+                    // which then indexes the ranks and distances dynamically.
+                    let (items, ts) = (&mut stack_item, &mut stack_t);
+                    let top = (stack_len, hits);
+                    let s = node.slots;
+                    push_child(
+                        items,
+                        ts,
+                        &mut item,
+                        top,
+                        mask & 1 != 0,
+                        rank.x,
+                        entry.x,
+                        s.x,
+                    );
+                    push_child(
+                        items,
+                        ts,
+                        &mut item,
+                        top,
+                        mask & 2 != 0,
+                        rank.y,
+                        entry.y,
+                        s.y,
+                    );
+                    push_child(
+                        items,
+                        ts,
+                        &mut item,
+                        top,
+                        mask & 4 != 0,
+                        rank.z,
+                        entry.z,
+                        s.z,
+                    );
+                    push_child(
+                        items,
+                        ts,
+                        &mut item,
+                        top,
+                        mask & 8 != 0,
+                        rank.w,
+                        entry.w,
+                        s.w,
+                    );
+                    stack_len += hits as usize - 1;
                 }
             }
         } else {
-            let parent = &source.node(scene, (item & !LEAF_ENTRY) >> 2);
-            let slot = (item & 3) as usize;
-            let first = parent.slot_child(slot);
-            let end = first + parent.slot_count(slot);
+            let first = leaf_first(item);
+            let end = first + leaf_count(item);
             let mut i = first;
             while i < end {
                 let h = watertight.intersect(&source.triangle(scene, i), closest);
@@ -302,19 +396,6 @@ fn traverse<F: Features, S: TraversalSource>(
                 return best;
             }
         }
-    }
-}
-
-/// Marks a traversal stack entry as a leaf, named by its parent node and slot (`4 * parent + slot`).
-pub const LEAF_ENTRY: u32 = 1 << 31;
-
-/// The traversal entry of slot `i` of `node` (whose index is `index`).
-#[inline(always)]
-fn entry_of(node: &Bvh4Node, index: u32, i: usize) -> u32 {
-    if node.slot_count(i) == 0 {
-        node.slot_child(i)
-    } else {
-        LEAF_ENTRY | (index << 2) | i as u32
     }
 }
 
@@ -359,7 +440,7 @@ mod tests {
     extern crate std;
 
     use super::*;
-    use crate::scene::{Material, TriangleInfo, TrianglePositions};
+    use crate::scene::{leaf_slot, Material, TriangleInfo, TrianglePositions};
     use glam::Vec3;
 
     fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
@@ -386,11 +467,10 @@ mod tests {
     }
 
     /// Slot `slot` of `node` becomes a box around z-layer `z` (as the builder writes it, slightly larger
-    /// than its triangle) holding `count` items at `child`.
-    fn set_layer(node: &mut Bvh4Node, slot: usize, z: f32, child: u32, count: u32) {
+    /// than its triangle) with slot word `word`.
+    fn set_layer(node: &mut Bvh4Node, slot: usize, z: f32, word: u32) {
         node.set_slot_bounds(slot, [-1.001, -1.001, z - 0.001], [3.001, 3.001, z + 0.001]);
-        node.child[slot] = child;
-        node.count[slot] = count;
+        node.slots[slot] = word;
     }
 
     /// Two big triangles at z = 1 (material 1) and z = 2 (material 0). The root holds the far triangle as
@@ -408,10 +488,10 @@ mod tests {
             Vec3::new(3.0, -1.0, 2.0),
         );
         let mut root = Bvh4Node::EMPTY;
-        set_layer(&mut root, 3, 2.0, 0, 1);
-        set_layer(&mut root, 1, 1.0, 1, 0);
+        set_layer(&mut root, 3, 2.0, leaf_slot(0, 1));
+        set_layer(&mut root, 1, 1.0, 1);
         let mut inner = Bvh4Node::EMPTY;
-        set_layer(&mut inner, 2, 1.0, 1, 1);
+        set_layer(&mut inner, 2, 1.0, leaf_slot(1, 1));
         let info = [
             TriangleInfo {
                 vertices: [0, 1, 2],
@@ -507,8 +587,7 @@ mod tests {
     fn unit_cube_node() -> Bvh4Node {
         let mut node = Bvh4Node::EMPTY;
         node.set_slot_bounds(1, [0.0; 3], [1.0; 3]);
-        node.child[1] = 0;
-        node.count[1] = 1;
+        node.slots[1] = leaf_slot(0, 1);
         node
     }
 
@@ -624,16 +703,14 @@ mod tests {
             let mut node = Bvh4Node::EMPTY;
             for slot in 0..4 {
                 node.set_slot_bounds(slot, big.0, big.1);
-                node.child[slot] = 0;
-                node.count[slot] = 1;
+                node.slots[slot] = leaf_slot(0, 1);
             }
             if level < depth {
-                // All four boxes tie; the last slot inserted ends on top and is visited first, so the
-                // three leaves of every level stay on the stack until the chain's end.
-                node.child[3] = level as u32 + 1;
-                node.count[3] = 0;
+                // All four boxes tie; the highest slot is visited first, so the three leaves of every
+                // level stay on the stack until the chain's end.
+                node.slots[3] = level as u32 + 1;
             } else {
-                node.child[0] = 1;
+                node.slots[0] = leaf_slot(1, 1);
             }
             nodes.push(node);
         }

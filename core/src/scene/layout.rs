@@ -39,20 +39,56 @@ impl BvhNode {
     }
 }
 
-/// A node of the 4-wide BVH that both backends traverse (128 bytes), node 0 the root.
+/// [`Bvh4Node::slots`]: marks a leaf slot word (see [`Bvh4Node`]).
+pub const SLOT_LEAF: u32 = 1 << 31;
+/// [`Bvh4Node::slots`]: an empty slot.
+pub const SLOT_EMPTY: u32 = INVALID_INDEX;
+/// A leaf's triangle count minus one sits in the 4 bits from here.
+const LEAF_COUNT_SHIFT: u32 = 27;
+/// A leaf's first triangle sits in the low 27 bits.
+const LEAF_FIRST_MASK: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
+/// Most triangles one leaf may hold (what its 4-bit count can say).
+pub const MAX_LEAF_TRIANGLES: u32 = 16;
+/// Triangle indices of leaves stay below this (27 bits); `first + count` at most this.
+pub const MAX_LEAF_TRIANGLE_INDEX: u32 = 1 << LEAF_COUNT_SHIFT;
+
+/// The slot word of a leaf holding triangles `first .. first + count` (`1 <= count <=
+/// MAX_LEAF_TRIANGLES`, `first + count <= MAX_LEAF_TRIANGLE_INDEX`).
+#[inline]
+#[must_use]
+pub const fn leaf_slot(first: u32, count: u32) -> u32 {
+    SLOT_LEAF | ((count - 1) << LEAF_COUNT_SHIFT) | first
+}
+
+/// The first triangle of a leaf slot word.
+#[inline(always)]
+#[must_use]
+pub const fn leaf_first(slot: u32) -> u32 {
+    slot & LEAF_FIRST_MASK
+}
+
+/// The triangle count of a leaf slot word.
+#[inline(always)]
+#[must_use]
+pub const fn leaf_count(slot: u32) -> u32 {
+    ((slot >> LEAF_COUNT_SHIFT) & (MAX_LEAF_TRIANGLES - 1)) + 1
+}
+
+/// A node of the 4-wide BVH that both backends traverse (112 bytes), node 0 the root.
 ///
 /// The boxes of the four children are stored structure-of-arrays, so one `Vec4` holds one bound of all
 /// four and a single SIMD slab test checks the four boxes at once (Wald, Benthin, Boulos 2008,
-/// "Getting rid of packets"; Dammertz et al. 2008, "Shallow bounding volume hierarchies"). Child slot `i`
-/// is
-/// - an interior node, `nodes[child[i]]`, when `count[i] == 0` and `child[i] != INVALID_INDEX`;
-/// - a leaf with triangles `child[i] .. child[i] + count[i]` of the (BVH-ordered) triangle arrays when
-///   `count[i] > 0`;
-/// - empty when `child[i] == INVALID_INDEX` (and `count[i] == 0`). An empty slot's box is inverted
-///   (`min = f32::MAX`, `max = -f32::MAX`), which the slab test (with near and far planes chosen by the
-///   ray's direction signs) always misses, so it is never entered.
+/// "Getting rid of packets"; Dammertz et al. 2008, "Shallow bounding volume hierarchies"). Slot `i` is
+/// described by one word, `slots[i]`:
+/// - an interior node: its index, below [`SLOT_LEAF`];
+/// - a leaf: [`leaf_slot`]`(first, count)`, the triangles `first .. first + count` of the (BVH-ordered)
+///   triangle arrays, read back with [`leaf_first`] and [`leaf_count`];
+/// - empty: [`SLOT_EMPTY`]. An empty slot's box is inverted (`min = f32::MAX`, `max = -f32::MAX`),
+///   which the slab test (with near and far planes chosen by the ray's direction signs) always misses,
+///   so it is never entered. (Read as a leaf, the word would end past [`MAX_LEAF_TRIANGLE_INDEX`].)
 ///
-/// Boxes strictly contain their triangles (the builder widens them by a few ulps).
+/// A slot word is also what traversal keeps on its stack, so a leaf is tested without reading its
+/// parent again. Boxes strictly contain their triangles (the builder widens them by a few ulps).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Bvh4Node {
@@ -62,8 +98,7 @@ pub struct Bvh4Node {
     pub max_y: Vec4,
     pub min_z: Vec4,
     pub max_z: Vec4,
-    pub child: UVec4,
-    pub count: UVec4,
+    pub slots: UVec4,
 }
 
 impl Bvh4Node {
@@ -75,47 +110,38 @@ impl Bvh4Node {
         max_y: Vec4::splat(-f32::MAX),
         min_z: Vec4::splat(f32::MAX),
         max_z: Vec4::splat(-f32::MAX),
-        child: UVec4::splat(INVALID_INDEX),
-        count: UVec4::ZERO,
+        slots: UVec4::splat(SLOT_EMPTY),
     };
 
-    /// The first child of slot `i`: a node index, or a leaf's first triangle (see the type's docs).
+    /// The word of slot `i` (see the type's docs).
     ///
-    /// Read by value rather than by indexing `child` in place: on the GPU, indexing a vector in place makes
-    /// rust-gpu select between pointers, which SPIR-V's logical addressing does not allow.
+    /// Read by value rather than by indexing `slots` in place: on the GPU, indexing a vector in place
+    /// makes rust-gpu select between pointers, which SPIR-V's logical addressing does not allow.
     #[inline(always)]
     #[must_use]
-    pub fn slot_child(&self, i: usize) -> u32 {
-        component(self.child, i)
-    }
-
-    /// The triangle count of slot `i` (0 for an interior or empty slot); read by value like
-    /// [`Self::slot_child`].
-    #[inline(always)]
-    #[must_use]
-    pub fn slot_count(&self, i: usize) -> u32 {
-        component(self.count, i)
+    pub fn slot(&self, i: usize) -> u32 {
+        component(self.slots, i)
     }
 
     /// Whether slot `i` is empty.
     #[inline]
     #[must_use]
     pub fn is_empty_slot(&self, i: usize) -> bool {
-        self.slot_child(i) == INVALID_INDEX && self.slot_count(i) == 0
+        self.slot(i) == SLOT_EMPTY
     }
 
     /// Whether slot `i` is a leaf.
     #[inline]
     #[must_use]
     pub fn is_leaf_slot(&self, i: usize) -> bool {
-        self.slot_count(i) != 0
+        self.slot(i) & SLOT_LEAF != 0 && !self.is_empty_slot(i)
     }
 
     /// Whether slot `i` is an interior node.
     #[inline]
     #[must_use]
     pub fn is_interior_slot(&self, i: usize) -> bool {
-        self.slot_count(i) == 0 && self.slot_child(i) != INVALID_INDEX
+        self.slot(i) & SLOT_LEAF == 0
     }
 
     /// The box of slot `i` as `(min, max)`.

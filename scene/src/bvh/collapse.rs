@@ -12,7 +12,7 @@
 //! every interior child of its binary node (so every interior child is at least two binary levels down,
 //! `h' <= h - 2`, and the bound carries over), then continues greedily. Interior nodes have `h >= 1`, so
 //! 4-wide node depths stay below `ceil(MAX_DEPTH / 2) = MAX_NODE_DEPTH + 1`.
-use fovea_core::scene::{Bvh4Node, BvhNode};
+use fovea_core::scene::{leaf_slot, Bvh4Node, BvhNode};
 
 use super::{BvhStats, MAX_DEPTH};
 
@@ -187,12 +187,10 @@ pub(super) fn collapse(
             let b = &arena.nodes[c.slots[i]];
             node.set_slot_bounds(i, b.bounds_min.map(widen_down), b.bounds_max.map(widen_up));
             if b.is_leaf() {
-                node.child[i] = b.left_or_first;
-                node.count[i] = b.triangle_count;
+                node.slots[i] = leaf_slot(b.left_or_first, b.triangle_count);
                 stats.leaf_count += 1;
             } else {
-                node.child[i] = (first_child + interior) as u32;
-                node.count[i] = 0;
+                node.slots[i] = (first_child + interior) as u32;
                 interior += 1;
             }
         }

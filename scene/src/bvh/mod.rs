@@ -16,13 +16,15 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use fovea_core::bvh::{MAX_NODE_COUNT, TRAVERSAL_STACK_SIZE};
-use fovea_core::scene::{Bvh4Node, BvhNode, TrianglePositions};
+use fovea_core::scene::{
+    leaf_count, Bvh4Node, BvhNode, TrianglePositions, MAX_LEAF_TRIANGLES, MAX_LEAF_TRIANGLE_INDEX,
+};
 use glam::Vec3A;
 use rayon::prelude::*;
 
 use binary::{build_node, Aabb, Bins, Context, PrimRef, Side, MAX_BINS};
 
-const _: () = assert!(MAX_TRIANGLES == PrimRef::MAX_INDEX as u64);
+const _: () = assert!(MAX_TRIANGLES <= PrimRef::MAX_INDEX as u64);
 
 /// The deepest 4-wide node (root = 0) [`build_bvh`] produces: traversal then needs at most
 /// `3 * MAX_NODE_DEPTH + 4 <= TRAVERSAL_STACK_SIZE` stack entries.
@@ -32,16 +34,17 @@ pub const MAX_NODE_DEPTH: u32 = (TRAVERSAL_STACK_SIZE as u32 - 4) / 3;
 /// below `ceil(MAX_DEPTH / 2)`, hence within [`MAX_NODE_DEPTH`].
 pub const MAX_DEPTH: u32 = 2 * (MAX_NODE_DEPTH + 1);
 
-/// Scenes must have fewer triangles than this: the builder keeps a triangle's index in 29 bits of its
-/// primitive reference (and a leaf's traversal entry names a node below [`MAX_NODE_COUNT`]). The loaders
-/// refuse bigger scenes with an error ([`crate::mesh::LoadOptions::check_size`]).
-pub const MAX_TRIANGLES: u64 = 1 << 29;
+/// Scenes must have fewer triangles than this (134 M): a leaf's slot word keeps its first triangle in 27
+/// bits ([`fovea_core::scene::leaf_slot`]). The loaders refuse bigger scenes with an error
+/// ([`crate::mesh::LoadOptions::check_size`]).
+pub const MAX_TRIANGLES: u64 = MAX_LEAF_TRIANGLE_INDEX as u64;
 
 /// Builder settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BvhBuildOptions {
-    /// Leaves hold at most this many triangles, except when all centroids of a node coincide (then up to
-    /// four times this many, since no split can separate them).
+    /// Leaves hold at most this many triangles (1 to 16), except when all centroids of a node coincide
+    /// (then up to four times this many, since no split can separate them, but never more than a leaf's
+    /// slot word can count, [`fovea_core::scene::MAX_LEAF_TRIANGLES`] = 16).
     pub max_leaf_size: u32,
     /// SAH bins per axis (2 to 32).
     pub bin_count: u32,
@@ -119,10 +122,10 @@ pub fn sah_cost(nodes: &[Bvh4Node], traversal_cost: f64, intersection_cost: f64)
     let mut weighted = 0.0;
     for node in nodes {
         for slot in (0..4).filter(|&s| !node.is_empty_slot(s)) {
-            let cost = if node.count[slot] == 0 {
-                traversal_cost
+            let cost = if node.is_leaf_slot(slot) {
+                intersection_cost * f64::from(leaf_count(node.slot(slot)))
             } else {
-                intersection_cost * f64::from(node.count[slot])
+                traversal_cost
             };
             weighted += half_area(node, slot) * cost;
         }
@@ -160,11 +163,13 @@ pub fn build_bvh(triangles: &[TrianglePositions], options: &BvhBuildOptions) -> 
         n < MAX_TRIANGLES as usize,
         "too many triangles for the BVH builder (the loaders stop at MAX_TRIANGLES)"
     );
-    let max_leaf = options.max_leaf_size.max(1) as usize;
+    // A leaf's slot word can count up to MAX_LEAF_TRIANGLES triangles.
+    let limit = MAX_LEAF_TRIANGLES as usize;
+    let max_leaf = (options.max_leaf_size as usize).clamp(1, limit);
     let ctx = Context {
         bins: (options.bin_count as usize).clamp(2, MAX_BINS),
         max_leaf,
-        coincident_leaf: 4 * max_leaf,
+        coincident_leaf: (4 * max_leaf).min(limit),
         traversal_cost: options.traversal_cost.max(0.0),
         intersection_cost: options.intersection_cost.max(1e-6),
         leaves: AtomicUsize::new(0),
@@ -221,7 +226,7 @@ mod tests {
     use fovea_core::bvh::{any_hit, closest_hit, Hit};
     use fovea_core::geometry::triangle::WatertightRay;
     use fovea_core::geometry::Ray;
-    use fovea_core::scene::INVALID_INDEX;
+    use fovea_core::scene::{leaf_first, leaf_slot, SLOT_EMPTY};
     use fovea_core::scene::{Material, SceneView, TriangleInfo};
     use glam::{UVec4, Vec3, Vec4};
 
@@ -369,7 +374,7 @@ mod tests {
             // depth first.
             for slot in 0..used {
                 if node.is_interior_slot(slot) {
-                    assert_eq!(node.child[slot] as usize, self.next_expected_child);
+                    assert_eq!(node.slot(slot) as usize, self.next_expected_child);
                     self.next_expected_child += 1;
                 }
             }
@@ -379,11 +384,11 @@ mod tests {
                 if slot >= used {
                     assert!(node.is_empty_slot(slot), "empty slots come last");
                     assert!(lo.cmpgt(hi).all(), "empty slots are inverted");
-                    assert_eq!(node.count[slot], 0);
                 } else if node.is_leaf_slot(slot) {
-                    self.leaf(node.child[slot] as usize, node.count[slot] as usize, lo, hi);
+                    let word = node.slot(slot);
+                    self.leaf(leaf_first(word) as usize, leaf_count(word) as usize, lo, hi);
                 } else {
-                    let c = node.child[slot] as usize;
+                    let c = node.slot(slot) as usize;
                     let child = self.bvh.nodes[c];
                     for s in 0..4 {
                         if !child.is_empty_slot(s) {
@@ -411,6 +416,7 @@ mod tests {
             let coincident = range.clone().all(|k| centroid(k) == centroid(range.start));
             assert!(
                 count >= 1
+                    && count <= MAX_LEAF_TRIANGLES as usize
                     && (count <= self.max_leaf || (coincident && count <= 4 * self.max_leaf))
             );
             for k in range {
@@ -550,8 +556,7 @@ mod tests {
         root.max_y = Vec4::new(1.0, 1.0, -f32::MAX, -f32::MAX);
         root.min_z = Vec4::new(0.0, 0.5, f32::MAX, f32::MAX);
         root.max_z = Vec4::new(0.5, 1.0, -f32::MAX, -f32::MAX);
-        root.child = UVec4::new(0, 3, INVALID_INDEX, INVALID_INDEX);
-        root.count = UVec4::new(3, 5, 0, 0);
+        root.slots = UVec4::new(leaf_slot(0, 3), leaf_slot(3, 5), SLOT_EMPTY, SLOT_EMPTY);
         // Unit cube root (half area 3); two leaves of half area 1 + 0.5 + 0.5 = 2 each.
         let expected = 1.0 + (2.0 * 3.0 + 2.0 * 5.0) / 3.0;
         assert!((sah_cost(&[root], 1.0, 1.0) - expected).abs() < 1e-9);
