@@ -25,6 +25,7 @@ use super::source::{SceneSlices, TraversalSource};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
 use crate::material::alpha::is_cut_out;
+use crate::math::lane_mask::{eq_mask, gt_mask, le_mask};
 use crate::scene::features::FEATURE_ALPHA_CUTOUT;
 use crate::scene::{
     leaf_count, leaf_first, Bvh4Node, Features, SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT,
@@ -165,7 +166,7 @@ impl RayBox4 {
             .min(tf_y)
             .min(tf_z)
             .min(Vec4::splat(t_max.min(f32::MAX)));
-        (near, near.cmple(far).bitmask())
+        (near, le_mask(near, far))
     }
 }
 
@@ -211,7 +212,7 @@ fn child_ranks(entry: Vec4, mask: u32, any: bool) -> UVec4 {
             (0, 0xF)
         } else {
             let t = Vec4::splat(t_i);
-            (entry.cmpgt(t).bitmask(), entry.cmpeq(t).bitmask())
+            (gt_mask(entry, t), eq_mask(entry, t))
         };
         (greater | (equal & below_i)) & mask
     };

@@ -3,6 +3,7 @@
 pub mod color;
 pub mod float;
 pub mod frame;
+pub mod lane_mask;
 pub mod transcendental;
 
 pub use frame::Frame;
