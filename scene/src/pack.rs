@@ -8,7 +8,7 @@ use fovea_core::scene::{
     Bvh4Node, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleInfo,
     TrianglePositions, ENVIRONMENT_CONSTANT, ENVIRONMENT_MAP, ENVIRONMENT_NONE, INVALID_INDEX,
     LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
-    MATERIAL_DOUBLE_SIDED_EMISSION, TEXTURE_SRGB,
+    MATERIAL_ALPHA_CUTOUT, MATERIAL_DOUBLE_SIDED_EMISSION, TEXTURE_SRGB, TRIANGLE_ALPHA_CUTOUT,
 };
 use glam::{Vec3, Vec4};
 
@@ -172,10 +172,18 @@ pub fn pack_scene(
     }
 
     let bvh = build_bvh(&input_triangles, bvh_options);
+    // Leaf order; `v0.w` marks the triangles whose material has an alpha cut-out.
     let ordered_triangles: Vec<TrianglePositions> = bvh
         .triangle_order
         .iter()
-        .map(|&i| input_triangles[i as usize])
+        .map(|&i| {
+            let mut t = input_triangles[i as usize];
+            let material = &materials[triangle_materials[i as usize] as usize];
+            if material.flags & MATERIAL_ALPHA_CUTOUT != 0 {
+                t.v0.w = TRIANGLE_ALPHA_CUTOUT;
+            }
+            t
+        })
         .collect();
     drop(input_triangles);
     let triangle_info: Vec<TriangleInfo> = bvh

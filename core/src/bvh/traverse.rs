@@ -28,8 +28,8 @@ use crate::material::alpha::is_cut_out;
 use crate::math::lane_mask::{eq_mask, gt_mask, le_mask};
 use crate::scene::features::FEATURE_ALPHA_CUTOUT;
 use crate::scene::{
-    leaf_count, leaf_first, Bvh4Node, Features, SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT,
-    SLOT_LEAF,
+    leaf_count, leaf_first, Bvh4Node, Features, SceneView, TrianglePositions, INVALID_INDEX,
+    SLOT_LEAF, TRIANGLE_ALPHA_CUTOUT,
 };
 
 /// Entries of the traversal stack. A node visit pushes its (up to four) hit children and pops the nearest,
@@ -181,16 +181,20 @@ fn near_far(min: Vec4, max: Vec4, negative: bool) -> (Vec4, Vec4) {
     }
 }
 
-/// Whether a candidate hit on `triangle` lies in a cut-out hole. Opaque materials cost one flag test;
-/// scenes without cut-outs (by their feature set) none.
+/// Whether a candidate hit on `triangle` (positions `tri`) lies in a cut-out hole. Triangles of opaque
+/// materials cost one test of `tri.v0.w` ([`TRIANGLE_ALPHA_CUTOUT`]); scenes without cut-outs (by their
+/// feature set) none.
 #[inline]
 #[must_use]
-fn hit_is_cut_out<F: Features>(scene: &SceneView<F>, triangle: u32, b1: f32, b2: f32) -> bool {
-    if !scene.features.has(FEATURE_ALPHA_CUTOUT) {
-        return false;
-    }
-    let material = scene.triangle_info[triangle as usize].material;
-    scene.materials[material as usize].flags & MATERIAL_ALPHA_CUTOUT != 0
+fn hit_is_cut_out<F: Features>(
+    scene: &SceneView<F>,
+    triangle: u32,
+    tri: &TrianglePositions,
+    b1: f32,
+    b2: f32,
+) -> bool {
+    scene.features.has(FEATURE_ALPHA_CUTOUT)
+        && tri.v0.w == TRIANGLE_ALPHA_CUTOUT
         && is_cut_out(scene, triangle, b1, b2)
 }
 
@@ -367,8 +371,9 @@ fn traverse<F: Features, S: TraversalSource>(
             let end = first + leaf_count(item);
             let mut i = first;
             while i < end {
-                let h = watertight.intersect(&source.triangle(scene, i), closest);
-                if h.hit && !hit_is_cut_out(scene, i, h.b1, h.b2) {
+                let tri = source.triangle(scene, i);
+                let h = watertight.intersect(&tri, closest);
+                if h.hit && !hit_is_cut_out(scene, i, &tri, h.b1, h.b2) {
                     closest = h.t;
                     best = Hit {
                         t: h.t,
@@ -441,7 +446,7 @@ mod tests {
     extern crate std;
 
     use super::*;
-    use crate::scene::{leaf_slot, Material, TriangleInfo, TrianglePositions};
+    use crate::scene::{leaf_slot, Material, TriangleInfo, MATERIAL_ALPHA_CUTOUT};
     use glam::Vec3;
 
     fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
@@ -559,7 +564,9 @@ mod tests {
 
     #[test]
     fn alpha_cut_out_triangles_are_skipped() {
-        let (nodes, triangles, info) = two_layers();
+        let (nodes, mut triangles, info) = two_layers();
+        // Triangle 1 (the near layer) has material 1, which the packer marks in its positions.
+        triangles[1].v0.w = TRIANGLE_ALPHA_CUTOUT;
         let hole = Material {
             flags: MATERIAL_ALPHA_CUTOUT,
             base_color: [0.8, 0.8, 0.8, 0.0],

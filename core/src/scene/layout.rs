@@ -6,9 +6,8 @@
 //! rust-gpu). Absent references are [`INVALID_INDEX`]; booleans are bits in a `u32` flags word.
 //!
 //! The two types traversal reads, [`Bvh4Node`] and [`TrianglePositions`], hold `Vec4`/`UVec4` rather
-//! than `[f32; 4]`: rust-gpu loads a vector member with one 4-component load where an array becomes four
-//! scalar loads, and lavapipe (Mesa 22.3) pays a per-lane, bounds-checked loop for every load
-//! instruction, so the vector form made its frames 6-9 % faster (README, "lavapipe").
+//! than `[f32; 4]`, so that they map onto 16-byte texels one to one: the GPU reads them from a texel
+//! buffer ([`crate::bvh::source`]).
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec4, Vec4};
 
@@ -187,7 +186,10 @@ impl Default for Bvh4Node {
     }
 }
 
-/// World-space vertex positions of one triangle (48 bytes; `w` is unused and zero), in BVH leaf order.
+/// World-space vertex positions of one triangle (48 bytes), in BVH leaf order. `v0.w` is
+/// [`TRIANGLE_ALPHA_CUTOUT`] when the triangle's material has an alpha cut-out (so traversal runs the
+/// cut-out test only for such triangles, without reading their material first), else 0; `v1.w` and
+/// `v2.w` are 0.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TrianglePositions {
@@ -195,6 +197,9 @@ pub struct TrianglePositions {
     pub v1: Vec4,
     pub v2: Vec4,
 }
+
+/// [`TrianglePositions::v0`]'s `w` for a triangle whose material has an alpha cut-out.
+pub const TRIANGLE_ALPHA_CUTOUT: f32 = 1.0;
 
 /// What shading needs to know about one triangle besides its positions (16 bytes), in BVH leaf order.
 ///
