@@ -69,12 +69,25 @@ pub struct GpuBlock {
     pub region: u32,
 }
 
+impl GpuBlock {
+    /// The block as foveation's [`crate::foveation::OwnedBlock`].
+    #[inline]
+    #[must_use]
+    pub fn owned(&self) -> crate::foveation::OwnedBlock {
+        crate::foveation::OwnedBlock {
+            region: self.region,
+            size: self.size,
+            origin: self.origin,
+        }
+    }
+}
+
 /// Push constants of every entry point: what this dispatch covers (32 bytes). The frame itself is in
 /// [`BINDING_FRAME`].
 ///
-/// `render_samples` runs one invocation per sample: invocation `i < block_count · spp` renders sample
-/// `i % spp` of block `i / spp` of the chunk (all blocks of a chunk belong to one region, so they share
-/// `spp`). `reduce_blocks` runs one invocation per block of the chunk. `cell_means`, `fill` and `tonemap`
+/// `render_samples` renders the chunk's `block_count · spp` samples, sample `i` being sample `i % spp` of
+/// block `i / spp` (all blocks of a chunk belong to one region, so they share `spp`), about
+/// [`SAMPLES_PER_INVOCATION`] per invocation. `reduce_blocks` runs one invocation per block of the chunk. `cell_means`, `fill` and `tonemap`
 /// run one invocation per cell or pixel, `item_count` in all.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -94,6 +107,11 @@ pub struct KernelPushConstants {
 
 /// Workgroup size of every entry point.
 pub const WORKGROUP_SIZE: u32 = 64;
+
+/// About how many samples one `render_samples` invocation renders, one after the other: the host
+/// dispatches `ceil(samples / SAMPLES_PER_INVOCATION)` invocations
+/// ([`crate::integrator::render_sample_stream`]).
+pub const SAMPLES_PER_INVOCATION: u32 = 4;
 
 // ---------------------------------------------------------------------------------------------------------
 // The `probe` entry point: evaluates one core function per invocation, for the cross-backend tests.

@@ -21,9 +21,9 @@ use fovea_core::bvh::source::GeometryTexels;
 // Built for the host (a plain library), the geometry binding is the scene's own slices.
 #[cfg(not(target_arch = "spirv"))]
 use fovea_core::bvh::SceneSlices as GeometryTexels;
-use fovea_core::foveation::{block_extent, cell_mean_at, fill_pixel, OwnedBlock};
+use fovea_core::foveation::{block_extent, cell_mean_at, fill_pixel};
 use fovea_core::glam::Vec3;
-use fovea_core::integrator::{render_block_sample_with, FrameParams};
+use fovea_core::integrator::{render_sample_stream, FrameParams};
 use fovea_core::kernel_abi::{self, GpuBlock, KernelPushConstants, WORKGROUP_SIZE};
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::features::FEATURES_ALL;
@@ -75,20 +75,11 @@ pub fn invocation_index(id: UVec3, num_workgroups: UVec3) -> u32 {
     id.x + id.y * (num_workgroups.x * WORKGROUP_SIZE)
 }
 
-/// The block of a dispatch chunk as core's [`OwnedBlock`].
-#[inline]
-#[must_use]
-pub fn owned_block(b: &GpuBlock) -> OwnedBlock {
-    OwnedBlock {
-        region: b.region,
-        size: b.size,
-        origin: b.origin,
-    }
-}
-
-/// Pass 1a: invocation `i < block_count · spp` renders sample `i % spp` of block `i / spp` of the chunk
-/// into `samples[i]` (rgb, w = 0). `features` is a specialization constant: the host sets the scene's
-/// feature mask when it creates the pipeline, so the driver drops the code of absent features.
+/// Pass 1a: the chunk's `block_count · spp` samples into `samples` (rgb, w = 0; sample `i` is sample
+/// `i % spp` of block `i / spp`), invocation `i` rendering samples `i`, `i + n`, `i + 2n`, ... for `n`
+/// invocations in the dispatch, one path segment at a time (core's `render_sample_stream`). `features`
+/// is a specialization constant: the host sets the scene's feature mask when it creates the pipeline, so
+/// the driver drops the code of absent features.
 #[spirv(compute(threads(64)))]
 pub fn render_samples(
     #[spirv(spec_constant(id = 0, default = 65535))] features: u32,
@@ -117,8 +108,7 @@ pub fn render_samples(
     #[spirv(descriptor_set = 0, binding = 22)] geometry: &GeometryTexels,
 ) {
     let i = invocation_index(id, num_workgroups);
-    let spp = pc.spp;
-    if spp == 0 || i >= pc.block_count * spp {
+    if pc.spp == 0 {
         return;
     }
     let scene = SceneView {
@@ -139,9 +129,18 @@ pub fn render_samples(
         environment_marginal_cdf,
         environment_conditional_cdf,
     };
-    let block = owned_block(&blocks[(i / spp) as usize]);
-    let c = render_block_sample_with(&scene, geometry, frame, &block, i % spp);
-    samples[i as usize] = [c.x, c.y, c.z, 0.0];
+    let invocations = num_workgroups.x * num_workgroups.y * WORKGROUP_SIZE;
+    render_sample_stream(
+        &scene,
+        geometry,
+        frame,
+        blocks,
+        pc.block_count,
+        pc.spp,
+        i,
+        invocations,
+        samples,
+    );
 }
 
 /// Pass 1b: invocation `j < block_count` averages the `spp` samples of block `j` (summed in order from
@@ -169,7 +168,7 @@ pub fn reduce_blocks(
     }
     let mean = sum / spp.max(1) as f32;
     let value = [mean.x, mean.y, mean.z, 1.0];
-    let block = owned_block(&blocks[j as usize]);
+    let block = blocks[j as usize].owned();
     let extent = block_extent(&block, frame.width, frame.height);
     for dy in 0..extent[1] {
         let row = (block.origin[1] + dy) * frame.width + block.origin[0];

@@ -2,7 +2,7 @@
 //! chunks of bounded size (one `render_samples` + `reduce_blocks` pair per chunk).
 use fovea_core::foveation::blocks::owning_block;
 use fovea_core::foveation::regions::{FoveationParams, REGION_COUNT};
-use fovea_core::kernel_abi::{GpuBlock, WORKGROUP_SIZE};
+use fovea_core::kernel_abi::{GpuBlock, SAMPLES_PER_INVOCATION, WORKGROUP_SIZE};
 
 /// Default bound on the samples of one chunk: 2^20 (16 MiB of samples buffer; a few hundred ms of lavapipe
 /// time on a small scene, about a millisecond on a desktop GPU).
@@ -72,18 +72,30 @@ impl Chunk {
         u64::from(self.block_count) * u64::from(self.spp)
     }
 
-    /// Workgroups of the chunk's `render_samples` dispatch (one invocation per sample).
+    /// Invocations the chunk's `render_samples` dispatch needs: one per
+    /// [`SAMPLES_PER_INVOCATION`] samples (each invocation renders every `n`-th sample).
+    #[inline]
+    #[must_use]
+    pub fn sample_invocations(&self) -> u64 {
+        self.samples().div_ceil(u64::from(SAMPLES_PER_INVOCATION))
+    }
+
+    /// Workgroups of the chunk's `render_samples` dispatch.
     #[inline]
     #[must_use]
     pub fn sample_workgroups(&self) -> u32 {
-        (self.samples().div_ceil(u64::from(WORKGROUP_SIZE))) as u32
+        (self
+            .sample_invocations()
+            .div_ceil(u64::from(WORKGROUP_SIZE))) as u32
     }
 
-    /// Invocations of `render_samples` with nothing to do (only in the chunk's last workgroup).
+    /// Invocations of `render_samples` with no sample to render (only in the chunk's last workgroup, and
+    /// only when the chunk has fewer samples than that workgroup has invocations).
     #[inline]
     #[must_use]
     pub fn idle_invocations(&self) -> u64 {
-        u64::from(self.sample_workgroups()) * u64::from(WORKGROUP_SIZE) - self.samples()
+        let dispatched = u64::from(self.sample_workgroups()) * u64::from(WORKGROUP_SIZE);
+        dispatched - dispatched.min(self.samples())
     }
 }
 
@@ -286,7 +298,8 @@ mod tests {
     }
 
     #[test]
-    fn idle_invocations_only_fill_the_last_workgroup() {
+    fn invocations_cover_their_samples_and_idle_only_in_small_chunks() {
+        let per = u64::from(SAMPLES_PER_INVOCATION);
         let c = Chunk {
             region: 0,
             spp: 32,
@@ -294,13 +307,26 @@ mod tests {
             block_count: 3,
             buffer_index: 0,
         };
-        assert_eq!(c.sample_workgroups(), 2);
-        assert_eq!(c.idle_invocations(), 128 - 96);
+        // 96 samples: ceil(96 / per) invocations in one workgroup, of which those beyond the 96th idle.
+        assert_eq!(c.sample_invocations(), 96u64.div_ceil(per));
+        assert_eq!(c.sample_workgroups(), 1);
+        assert_eq!(c.idle_invocations(), 64u64.saturating_sub(96));
         let c = Chunk {
-            spp: 8,
-            block_count: 8,
+            spp: 1,
+            block_count: 10,
             ..c
         };
+        assert_eq!(c.idle_invocations(), 64 - 10);
+        // A large chunk: every dispatched invocation has samples.
+        let c = Chunk {
+            spp: 32,
+            block_count: 4096,
+            ..c
+        };
+        assert_eq!(
+            u64::from(c.sample_workgroups()) * 64,
+            (4096 * 32 / per).div_ceil(64) * 64
+        );
         assert_eq!(c.idle_invocations(), 0);
     }
 

@@ -544,7 +544,7 @@ impl VulkanContext {
                     pipeline::RENDER_SAMPLES,
                     offset,
                     &pc,
-                    c.samples(),
+                    c.sample_invocations(),
                 );
                 barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
                 dispatch(
