@@ -50,7 +50,8 @@ pub enum SceneError {
     #[error("{}: face index out of range: {message}", .path.display())]
     FaceIndexOutOfRange { path: PathBuf, message: String },
 
-    /// The scene has more vertices or triangles than [`crate::mesh::LoadOptions`] allow.
+    /// The scene has more vertices or triangles than [`crate::mesh::LoadOptions`] allow, or more texels
+    /// than the packed texel array can index.
     #[error("{}: scene too large: {message}", .path.display())]
     TooLarge { path: PathBuf, message: String },
 

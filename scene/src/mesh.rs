@@ -453,14 +453,26 @@ pub fn load_scene_from(
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    match extension.as_str() {
+    let scene = match extension.as_str() {
         "gltf" | "glb" => crate::gltf_loader::load_gltf_from(source, path, options),
         "obj" => crate::obj_loader::load_obj_from(source, path, options),
         _ => Err(SceneError::UnknownExtension {
             path: path.to_owned(),
             extension,
         }),
+    }?;
+    let words = crate::pack::packed_texel_words(&scene.textures);
+    if words > u64::from(u32::MAX) {
+        return Err(SceneError::TooLarge {
+            path: path.to_owned(),
+            message: format!(
+                "its textures need {words} 32-bit texel words once packed (sRGB colour takes two per \
+                 texel); at most {} fit",
+                u32::MAX
+            ),
+        });
     }
+    Ok(scene)
 }
 
 #[cfg(test)]

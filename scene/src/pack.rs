@@ -8,7 +8,7 @@ use fovea_core::scene::{
     Bvh4Node, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleInfo,
     TrianglePositions, ENVIRONMENT_CONSTANT, ENVIRONMENT_MAP, ENVIRONMENT_NONE, INVALID_INDEX,
     LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
-    MATERIAL_ALPHA_CUTOUT, MATERIAL_DOUBLE_SIDED_EMISSION, TEXTURE_SRGB, TRIANGLE_ALPHA_CUTOUT,
+    MATERIAL_ALPHA_CUTOUT, MATERIAL_DOUBLE_SIDED_EMISSION, TEXTURE_RGBA16, TRIANGLE_ALPHA_CUTOUT,
 };
 use glam::{Vec3, Vec4};
 
@@ -215,17 +215,26 @@ pub fn pack_scene(
         Vec::new()
     };
 
-    // Textures: one texel array, one info record each.
+    // Textures: one texel array, one info record each; sRGB colour becomes linear RGBA16.
     let mut texture_infos = Vec::with_capacity(textures.len());
-    let mut texels = Vec::with_capacity(textures.iter().map(|t| t.texels.len()).sum());
+    let mut texels = Vec::with_capacity(packed_texel_words(&textures) as usize);
+    let linear16 = srgb8_to_linear16();
     for t in &textures {
         texture_infos.push(TextureInfo {
             offset: texels.len() as u32,
             width: t.width,
             height: t.height,
-            flags: if t.srgb { TEXTURE_SRGB } else { 0 },
+            flags: if t.srgb { TEXTURE_RGBA16 } else { 0 },
         });
-        texels.extend_from_slice(&t.texels);
+        if t.srgb {
+            for &texel in &t.texels {
+                let [r, g, b, a] = texel.to_le_bytes().map(usize::from);
+                texels.push(u32::from(linear16[r]) | u32::from(linear16[g]) << 16);
+                texels.push(u32::from(linear16[b]) | (a as u32 * 257) << 16);
+            }
+        } else {
+            texels.extend_from_slice(&t.texels);
+        }
     }
 
     let radius = {
@@ -379,24 +388,48 @@ pub fn pack_scene(
     packed
 }
 
-/// Mean linear colour of a texture (sRGB decoded when the texture is sRGB).
+/// The `u32` words the packed texel array of `textures` needs: one per RGBA8 texel, two per sRGB texel
+/// (stored as linear RGBA16, see `fovea_core::scene::TEXTURE_RGBA16`). The loaders refuse scenes whose
+/// textures need more than `u32::MAX`.
+#[must_use]
+pub fn packed_texel_words(textures: &[crate::texture::Texture]) -> u64 {
+    textures
+        .iter()
+        .map(|t| t.texels.len() as u64 * if t.srgb { 2 } else { 1 })
+        .sum()
+}
+
+/// The 16-bit unorm linear value of each 8-bit sRGB level (IEC 61966-2-1, evaluated in f64).
+fn srgb8_to_linear16() -> [u16; 256] {
+    std::array::from_fn(|i| {
+        let v = i as f64 / 255.0;
+        let linear = if v <= 0.04045 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        };
+        (linear * 65535.0).round() as u16
+    })
+}
+
+/// Mean linear colour of a texture, as its lookups see it (sRGB texels decoded like the packer does).
 fn mean_texture_color(t: &crate::texture::Texture) -> Vec3 {
     if t.texels.is_empty() {
         return Vec3::ONE;
     }
+    let linear16 = srgb8_to_linear16();
     let mut sum = glam::DVec3::ZERO;
     for &texel in &t.texels {
-        let c = fovea_core::material::texture::unpack_rgba8(texel).truncate();
-        let c = if t.srgb {
-            Vec3::new(
-                fovea_core::math::color::srgb_to_linear(c.x),
-                fovea_core::math::color::srgb_to_linear(c.y),
-                fovea_core::math::color::srgb_to_linear(c.z),
-            )
+        let [r, g, b, _] = texel.to_le_bytes();
+        sum += if t.srgb {
+            glam::DVec3::new(
+                f64::from(linear16[usize::from(r)]),
+                f64::from(linear16[usize::from(g)]),
+                f64::from(linear16[usize::from(b)]),
+            ) / 65535.0
         } else {
-            c
+            glam::DVec3::new(f64::from(r), f64::from(g), f64::from(b)) / 255.0
         };
-        sum += c.as_dvec3();
     }
     (sum / t.texels.len() as f64).as_vec3()
 }
@@ -436,5 +469,49 @@ mod tests {
         assert!((sum - 1.0).abs() < 1e-6, "{sum}");
         assert_eq!(packed.light_cdf.len(), 3);
         assert_eq!(packed.light_cdf[2], 1.0);
+    }
+
+    /// sRGB colour textures are stored as linear RGBA16 and looked up linear (filtered in linear space);
+    /// data textures stay RGBA8 as stored; the texel-word count matches the packed array.
+    #[test]
+    fn srgb_textures_are_packed_linear() {
+        use crate::texture::Texture;
+        use fovea_core::material::texture::sample_texture;
+        use glam::Vec2;
+        let mut colour = Texture::single_color("c", [128, 0, 255, 77], true);
+        colour.width = 2;
+        colour.texels = vec![
+            colour.texels[0],
+            crate::texture::pack_rgba8([0, 128, 255, 255]),
+        ];
+        let data = Texture::single_color("d", [128, 0, 255, 77], false);
+        let scene = LoadedScene {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            triangles: vec![[0, 1, 2]],
+            triangle_materials: vec![0],
+            materials: vec![Material::default()],
+            material_names: vec!["m".into()],
+            textures: vec![colour, data],
+            ..LoadedScene::default()
+        };
+        let words = packed_texel_words(&scene.textures);
+        let packed = pack_scene(scene, &Environment::None, &BvhBuildOptions::default());
+        assert_eq!(packed.texels.len() as u64, words);
+        assert_eq!(words, 2 * 2 + 1);
+        assert_eq!(packed.textures[0].flags, TEXTURE_RGBA16);
+        assert_eq!(packed.textures[1].flags, 0);
+        let view = packed.view();
+        // Texel centres: sRGB 128 is linear 0.21586 (16-bit 14146), 255 is 1; alpha 77 is 77/255.
+        let left = sample_texture(&view, 0, Vec2::new(0.25, 0.5));
+        assert_eq!(left.x, 14146.0 / 65535.0);
+        assert_eq!(left.y, 0.0);
+        assert_eq!(left.z, 1.0);
+        assert!((left.w - 77.0 / 255.0).abs() < 1e-7);
+        // Half way between the two texels: the mean of the linear values, not of the encoded ones.
+        let mid = sample_texture(&view, 0, Vec2::new(0.5, 0.5));
+        assert!((mid.x - 0.5 * 14146.0 / 65535.0).abs() < 1e-6, "{mid}");
+        assert!((mid.y - 0.5 * 14146.0 / 65535.0).abs() < 1e-6, "{mid}");
+        let d = sample_texture(&view, 1, Vec2::new(0.5, 0.5));
+        assert!((d.x - 128.0 / 255.0).abs() < 1e-7 && (d.w - 77.0 / 255.0).abs() < 1e-7);
     }
 }

@@ -1,7 +1,7 @@
 //! Alpha cut-outs: whether a hit point on a cut-out material is a hole that rays pass through.
 use glam::Vec2;
 
-use super::texture::sample_texture_alpha;
+use super::texture::sample_texture;
 use crate::scene::features::{FEATURE_ALPHA_CUTOUT, FEATURE_UVS};
 use crate::scene::{Features, SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
 
@@ -36,7 +36,7 @@ pub fn is_cut_out<F: Features>(scene: &SceneView<F>, triangle: u32, b1: f32, b2:
         } else {
             material.base_color_texture
         };
-        alpha *= sample_texture_alpha(scene, texture, uv);
+        alpha *= sample_texture(scene, texture, uv).w;
     }
     alpha < material.alpha_cutoff
 }

@@ -1,9 +1,9 @@
-//! Texture fetches from the packed RGBA8 texel array (bilinear filtering, REPEAT addressing).
+//! Texture fetches from the packed texel array (RGBA8 or linear RGBA16; bilinear filtering, REPEAT
+//! addressing).
 use glam::{Vec2, Vec4};
 
-use crate::math::color::srgb_to_linear;
 use crate::math::float::floor;
-use crate::scene::{SceneView, TextureInfo, TEXTURE_SRGB};
+use crate::scene::{SceneView, TextureInfo, TEXTURE_RGBA16};
 
 /// Decodes one packed RGBA8 texel to [0, 1] floats (no colour-space conversion).
 #[inline]
@@ -15,6 +15,18 @@ pub fn unpack_rgba8(texel: u32) -> Vec4 {
         ((texel >> 16) & 0xff) as f32,
         (texel >> 24) as f32,
     ) * (1.0 / 255.0)
+}
+
+/// Decodes one RGBA16 texel stored as two words (`R | G << 16`, `B | A << 16`) to [0, 1] floats.
+#[inline]
+#[must_use]
+pub fn unpack_rgba16(rg: u32, ba: u32) -> Vec4 {
+    Vec4::new(
+        (rg & 0xffff) as f32,
+        (rg >> 16) as f32,
+        (ba & 0xffff) as f32,
+        (ba >> 16) as f32,
+    ) * (1.0 / 65535.0)
 }
 
 /// Wraps an integer coordinate into `[0, size)`.
@@ -43,51 +55,23 @@ fn fetch<F: crate::scene::Features>(
     x: u32,
     y: u32,
 ) -> Vec4 {
-    let index = info.offset + y * info.width + x;
-    unpack_rgba8(scene.texels[index as usize])
+    let texel = y * info.width + x;
+    if info.flags & TEXTURE_RGBA16 != 0 {
+        let i = (info.offset + 2 * texel) as usize;
+        unpack_rgba16(scene.texels[i], scene.texels[i + 1])
+    } else {
+        unpack_rgba8(scene.texels[(info.offset + texel) as usize])
+    }
 }
 
-/// Samples texture `texture` at `uv` with bilinear filtering; sRGB textures come back linear (alpha stays
-/// linear). `uv` (0, 0) is the top-left corner of the image, as in glTF.
+/// Samples texture `texture` at `uv` with bilinear filtering (colour textures are linear, see
+/// [`TEXTURE_RGBA16`]). `uv` (0, 0) is the top-left corner of the image, as in glTF.
 #[must_use]
 pub fn sample_texture<F: crate::scene::Features>(
     scene: &SceneView<F>,
     texture: u32,
     uv: Vec2,
 ) -> Vec4 {
-    let (c, flags) = bilinear(scene, texture, uv);
-    if flags & TEXTURE_SRGB != 0 {
-        Vec4::new(
-            srgb_to_linear(c.x),
-            srgb_to_linear(c.y),
-            srgb_to_linear(c.z),
-            c.w,
-        )
-    } else {
-        c
-    }
-}
-
-/// The alpha channel of [`sample_texture`] (the same value), without decoding the colour channels: the
-/// alpha cut-out test runs for every candidate hit on a cut-out material during traversal, and three
-/// sRGB decodes there were a fifth of Lost Empire's render time on the CPU.
-#[must_use]
-pub fn sample_texture_alpha<F: crate::scene::Features>(
-    scene: &SceneView<F>,
-    texture: u32,
-    uv: Vec2,
-) -> f32 {
-    bilinear(scene, texture, uv).0.w
-}
-
-/// The bilinearly filtered, still encoded texel values at `uv`, and the texture's flags.
-#[inline]
-#[must_use]
-fn bilinear<F: crate::scene::Features>(
-    scene: &SceneView<F>,
-    texture: u32,
-    uv: Vec2,
-) -> (Vec4, u32) {
     let info = scene.textures[texture as usize];
     let fx = uv.x * info.width as f32 - 0.5;
     let fy = uv.y * info.height as f32 - 0.5;
@@ -116,5 +100,5 @@ fn bilinear<F: crate::scene::Features>(
     let c11 = fetch(scene, &info, x1, y1);
     let top = c00 + (c10 - c00) * tx;
     let bottom = c01 + (c11 - c01) * tx;
-    (top + (bottom - top) * ty, info.flags)
+    top + (bottom - top) * ty
 }

@@ -8,17 +8,6 @@ pub fn luminance(c: Vec3) -> f32 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
-/// sRGB transfer function, encoded value in [0, 1] to linear.
-#[inline]
-#[must_use]
-pub fn srgb_to_linear(v: f32) -> f32 {
-    if v <= 0.04045 {
-        v * (1.0 / 12.92)
-    } else {
-        super::float::powf((v + 0.055) * (1.0 / 1.055), 2.4)
-    }
-}
-
 /// sRGB transfer function, linear in [0, 1] to encoded.
 #[inline]
 #[must_use]

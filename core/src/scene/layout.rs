@@ -290,11 +290,16 @@ impl Material {
     }
 }
 
-/// [`TextureInfo::flags`]: texels are sRGB-encoded colour and are decoded to linear on fetch.
-pub const TEXTURE_SRGB: u32 = 1;
+/// [`TextureInfo::flags`]: the texels are RGBA16, two `u32` each (`R | G << 16`, `B | A << 16`, 16-bit
+/// unorm): the loader's sRGB colour textures, decoded to linear once when the scene is packed, so that a
+/// lookup needs no transfer function (three `powf` per lookup were a sixth of Lost Empire's CPU time) and
+/// filters linear values, as pbrt and GPUs' sRGB formats do. Without the flag, texels are RGBA8, one `u32`
+/// each (R in the low byte), used as stored.
+pub const TEXTURE_RGBA16: u32 = 1;
 
-/// Where one texture's RGBA8 texels lie in [`super::SceneView::texels`] (16 bytes). Texels are row-major,
-/// top row first, one `u32` each (R in the low byte). Addressing wraps (glTF's default REPEAT).
+/// Where one texture's texels lie in [`super::SceneView::texels`] (16 bytes): `offset` is the index of its
+/// first `u32`; texels are row-major, top row first, RGBA8 or, with [`TEXTURE_RGBA16`] in `flags`,
+/// RGBA16. Addressing wraps (glTF's default REPEAT).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TextureInfo {
