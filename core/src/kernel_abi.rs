@@ -50,9 +50,10 @@ pub const BINDING_LDR: u32 = 20;
 /// The frame's [`FrameParams`] (one element; a buffer rather than push constants because it is larger
 /// than the 128 bytes of push constants Vulkan guarantees).
 pub const BINDING_FRAME: u32 = 21;
-/// Nodes and triangle positions again, as one storage texel buffer (`R32G32B32A32_UINT`) that traversal
-/// reads ([`crate::bvh::source`]).
-pub const BINDING_GEOMETRY: u32 = 22;
+/// The scene's large arrays (nodes, triangle positions, triangle info, materials, normals, texture
+/// coordinates, texture infos and texels) again, as one storage texel buffer (`R32G32B32A32_UINT`)
+/// that core reads them from on the GPU ([`crate::scene::source`]).
+pub const BINDING_SCENE_TEXELS: u32 = 22;
 /// Number of bindings.
 pub const BINDING_COUNT: u32 = 23;
 
@@ -360,7 +361,7 @@ pub fn probe_eval(
 /// [`PROBE_OUTPUT_RECORDS`] output records. The GPU `probe_scene` entry point and the CPU side of the
 /// cross-backend tests both call this.
 #[must_use]
-pub fn probe_scene_eval<F: crate::scene::Features, S: crate::bvh::TraversalSource>(
+pub fn probe_scene_eval<F: crate::scene::Features, S: crate::scene::SceneSource>(
     selector: u32,
     scene: &crate::scene::SceneView<F>,
     source: &S,
@@ -383,6 +384,7 @@ pub fn probe_scene_eval<F: crate::scene::Features, S: crate::bvh::TraversalSourc
     } else if selector == PROBE_SCENE_SAMPLE_LIGHT {
         let s = crate::lights::sample_light(
             scene,
+            source,
             probe_vec3(r0),
             r1[0],
             glam::Vec2::new(r1[1], r1[2]),
@@ -399,10 +401,16 @@ pub fn probe_scene_eval<F: crate::scene::Features, S: crate::bvh::TraversalSourc
         let triangle = r0[3].to_bits();
         if (triangle as usize) < scene.triangles.len() {
             let p = probe_vec3(r0);
-            let s =
-                crate::lights::triangle::sample(scene, triangle, p, glam::Vec2::new(r1[0], r1[1]));
+            let s = crate::lights::triangle::sample(
+                scene,
+                source,
+                triangle,
+                p,
+                glam::Vec2::new(r1[0], r1[1]),
+            );
             let pdf_q = crate::lights::triangle::solid_angle_pdf(
                 scene,
+                source,
                 triangle,
                 p,
                 probe_vec3(inputs[base + 2]),

@@ -16,17 +16,17 @@
 // Entry points take one argument per binding.
 #![allow(clippy::too_many_arguments)]
 
-#[cfg(target_arch = "spirv")]
-use fovea_core::bvh::source::GeometryTexels;
-// Built for the host (a plain library), the geometry binding is the scene's own slices.
-#[cfg(not(target_arch = "spirv"))]
-use fovea_core::bvh::SceneSlices as GeometryTexels;
+// Built for the host (a plain library), the scene texel binding is the scene's own slices.
 use fovea_core::foveation::{block_extent, cell_mean_at, fill_pixel};
 use fovea_core::glam::Vec3;
 use fovea_core::integrator::{render_sample_stream, FrameParams};
 use fovea_core::kernel_abi::{self, GpuBlock, KernelPushConstants, WORKGROUP_SIZE};
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::features::FEATURES_ALL;
+#[cfg(not(target_arch = "spirv"))]
+use fovea_core::scene::SceneSlices as SceneTexels;
+#[cfg(target_arch = "spirv")]
+use fovea_core::scene::SceneTexels;
 use fovea_core::scene::{
     Bvh4Node, FeatureFlags, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleInfo,
     TrianglePositions,
@@ -59,7 +59,7 @@ const _: () = {
     assert!(kernel_abi::BINDING_HDR == 19);
     assert!(kernel_abi::BINDING_LDR == 20);
     assert!(kernel_abi::BINDING_FRAME == 21);
-    assert!(kernel_abi::BINDING_GEOMETRY == 22);
+    assert!(kernel_abi::BINDING_SCENE_TEXELS == 22);
     assert!(kernel_abi::BINDING_PROBE_INPUT == 15);
     assert!(kernel_abi::BINDING_PROBE_OUTPUT == 16);
     assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
@@ -105,7 +105,7 @@ pub fn render_samples(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] blocks: &[GpuBlock],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] samples: &mut [[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
-    #[spirv(descriptor_set = 0, binding = 22)] geometry: &GeometryTexels,
+    #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
 ) {
     let i = invocation_index(id, num_workgroups);
     if pc.spp == 0 {
@@ -132,7 +132,7 @@ pub fn render_samples(
     let invocations = num_workgroups.x * num_workgroups.y * WORKGROUP_SIZE;
     render_sample_stream(
         &scene,
-        geometry,
+        scene_texels,
         frame,
         blocks,
         pc.block_count,
@@ -295,7 +295,7 @@ pub fn probe_scene(
     environment_conditional_cdf: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] inputs: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] outputs: &mut [[f32; 4]],
-    #[spirv(descriptor_set = 0, binding = 22)] geometry: &GeometryTexels,
+    #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
 ) {
     let i = invocation_index(id, num_workgroups);
     if i >= pc.item_count {
@@ -319,7 +319,7 @@ pub fn probe_scene(
         environment_marginal_cdf,
         environment_conditional_cdf,
     };
-    let out = kernel_abi::probe_scene_eval(pc.spp, &scene, geometry, inputs, i);
+    let out = kernel_abi::probe_scene_eval(pc.spp, &scene, scene_texels, inputs, i);
     let base = (i * kernel_abi::PROBE_OUTPUT_RECORDS) as usize;
     outputs[base] = out[0];
     outputs[base + 1] = out[1];

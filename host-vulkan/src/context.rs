@@ -7,7 +7,8 @@ use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::{AllocationSizes, AllocatorDebugSettings, MemoryLocation};
 
 use fovea_core::kernel_abi::{
-    KernelPushConstants, BINDING_BLOCKS, BINDING_COUNT, BINDING_GEOMETRY, SPEC_CONSTANT_FEATURES,
+    KernelPushConstants, BINDING_BLOCKS, BINDING_COUNT, BINDING_SCENE_TEXELS,
+    SPEC_CONSTANT_FEATURES,
 };
 use fovea_core::scene::features::FEATURES_ALL;
 
@@ -599,6 +600,12 @@ impl VulkanContext {
                 limit: l.max_storage_buffer_range,
             });
         }
+        self.check_allocation(what, bytes)
+    }
+
+    /// Checks a buffer of `bytes` against `maxMemoryAllocationSize`; the error names the limit.
+    pub fn check_allocation(&self, what: &str, bytes: u64) -> Result<()> {
+        let l = &self.limits;
         if bytes > l.max_memory_allocation_size {
             return Err(VulkanError::TooLarge {
                 what: what.into(),
@@ -611,12 +618,12 @@ impl VulkanContext {
     }
 }
 
-/// Descriptor type of each binding: the chunk's block list is bound with a dynamic offset, the geometry
-/// as a storage texel buffer, everything else as a plain storage buffer.
+/// Descriptor type of each binding: the chunk's block list is bound with a dynamic offset, the scene
+/// texels as a storage texel buffer, everything else as a plain storage buffer.
 pub(crate) fn descriptor_type(binding: u32) -> vk::DescriptorType {
     if binding == BINDING_BLOCKS {
         vk::DescriptorType::STORAGE_BUFFER_DYNAMIC
-    } else if binding == BINDING_GEOMETRY {
+    } else if binding == BINDING_SCENE_TEXELS {
         vk::DescriptorType::STORAGE_TEXEL_BUFFER
     } else {
         vk::DescriptorType::STORAGE_BUFFER

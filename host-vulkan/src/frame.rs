@@ -231,14 +231,14 @@ fn write_start_timestamp(device: &ash::Device, cb: vk::CommandBuffer, query_pool
     }
 }
 
-/// The descriptor write of the geometry texel buffer (`BINDING_GEOMETRY`) of `set`.
-pub(crate) fn geometry_write<'a>(
+/// The descriptor write of the scene texel buffer (`BINDING_SCENE_TEXELS`) of `set`.
+pub(crate) fn scene_texels_write<'a>(
     set: vk::DescriptorSet,
     view: &'a [vk::BufferView; 1],
 ) -> vk::WriteDescriptorSet<'a> {
     vk::WriteDescriptorSet::default()
         .dst_set(set)
-        .dst_binding(fovea_core::kernel_abi::BINDING_GEOMETRY)
+        .dst_binding(fovea_core::kernel_abi::BINDING_SCENE_TEXELS)
         .descriptor_type(vk::DescriptorType::STORAGE_TEXEL_BUFFER)
         .texel_buffer_view(view)
 }
@@ -436,7 +436,7 @@ impl VulkanContext {
                     .range(range),
             ));
         }
-        let geometry = [scene.geometry_view()];
+        let scene_texels = [scene.texel_view()];
         let writes: Vec<vk::WriteDescriptorSet> = infos
             .iter()
             .map(|(binding, info)| {
@@ -446,9 +446,9 @@ impl VulkanContext {
                     .descriptor_type(crate::context::descriptor_type(*binding))
                     .buffer_info(std::slice::from_ref(info))
             })
-            .chain(std::iter::once(geometry_write(
+            .chain(std::iter::once(scene_texels_write(
                 self.descriptor_set,
-                &geometry,
+                &scene_texels,
             )))
             .collect();
         // SAFETY: the set is not in use by any pending command buffer, and every buffer and view is alive.

@@ -105,12 +105,12 @@ impl VulkanContext {
             selector,
             inputs,
             &extra,
-            Some(scene.geometry_view()),
+            Some(scene.texel_view()),
         )
     }
 
     /// Dispatches one probe entry point over `inputs` with its own descriptor set: the inputs and
-    /// outputs plus `extra` bindings (binding, descriptor) and, for the scene probe, the geometry texel
+    /// outputs plus `extra` bindings (binding, descriptor) and, for the scene probe, the scene texel
     /// buffer; returns the output records.
     fn dispatch_probe(
         &mut self,
@@ -118,7 +118,7 @@ impl VulkanContext {
         selector: u32,
         inputs: &[[f32; 4]],
         extra: &[(u32, vk::DescriptorBufferInfo)],
-        geometry: Option<vk::BufferView>,
+        scene_texels: Option<vk::BufferView>,
     ) -> Result<Vec<[f32; 4]>> {
         let stride = PROBE_INPUT_RECORDS as usize;
         if !inputs.len().is_multiple_of(stride) {
@@ -166,7 +166,8 @@ impl VulkanContext {
             (BINDING_PROBE_OUTPUT, whole(&output_buf)),
         ];
         bindings.extend_from_slice(extra);
-        let geometry: Vec<[vk::BufferView; 1]> = geometry.into_iter().map(|v| [v]).collect();
+        let scene_texels: Vec<[vk::BufferView; 1]> =
+            scene_texels.into_iter().map(|v| [v]).collect();
         let writes: Vec<vk::WriteDescriptorSet> = bindings
             .iter()
             .map(|(binding, info)| {
@@ -177,9 +178,9 @@ impl VulkanContext {
                     .buffer_info(std::slice::from_ref(info))
             })
             .chain(
-                geometry
+                scene_texels
                     .iter()
-                    .map(|v| crate::frame::geometry_write(set.set, v)),
+                    .map(|v| crate::frame::scene_texels_write(set.set, v)),
             )
             .collect();
         // SAFETY: the set is new and unused; every buffer and view is alive.

@@ -2,8 +2,13 @@
 use std::sync::Arc;
 
 use ash::vk;
-use fovea_core::kernel_abi::{BINDING_NODES, BINDING_TRIANGLES};
-use fovea_core::scene::{FeatureFlags, SceneGlobals, INVALID_INDEX};
+use fovea_core::kernel_abi::{
+    BINDING_ENVIRONMENT_CONDITIONAL, BINDING_ENVIRONMENT_MARGINAL, BINDING_ENVIRONMENT_TEXELS,
+    BINDING_GLOBALS, BINDING_LIGHTS, BINDING_LIGHT_CDF, BINDING_MATERIALS, BINDING_NODES,
+    BINDING_NORMALS, BINDING_TEXELS, BINDING_TEXTURES, BINDING_TRIANGLES, BINDING_TRIANGLE_INFO,
+    BINDING_TRIANGLE_LIGHT, BINDING_UVS,
+};
+use fovea_core::scene::{FeatureFlags, SceneGlobals, TexelOffsets, INVALID_INDEX};
 use fovea_scene::pack::PackedScene;
 
 use crate::buffer::GpuBuffer;
@@ -29,17 +34,18 @@ pub(crate) struct BufferRange {
 
 /// A packed scene on the device.
 ///
-/// The BVH nodes and the triangle positions share one buffer (the nodes, then the triangles from an
-/// offset aligned for storage-buffer bindings): traversal reads it whole as a storage texel buffer
-/// ([`fovea_core::bvh::source`], binding `BINDING_GEOMETRY`), and `BINDING_NODES` and
-/// `BINDING_TRIANGLES` bind its two parts as storage buffers for the rest of the kernel. Every other
-/// array has a buffer of its own.
+/// The arrays core reads through `SceneSource` (BVH nodes, triangles, triangle info, normals, texture
+/// coordinates, materials, texture infos, texels) share one buffer, each from an offset aligned for
+/// storage-buffer bindings: the kernel reads it whole as a storage texel buffer
+/// ([`fovea_core::scene::source`], binding `BINDING_SCENE_TEXELS`), and the arrays' own bindings bind
+/// their parts as storage buffers (the kernel still reads their lengths). Every other array has a
+/// buffer of its own.
 pub struct GpuScene {
     pub(crate) buffers: Vec<GpuBuffer>,
     /// Binding `b` (`BINDING_GLOBALS` ..= `BINDING_ENVIRONMENT_CONDITIONAL`) is `bindings[b]`.
     bindings: [BufferRange; SCENE_BINDINGS],
-    /// The geometry buffer as `R32G32B32A32_UINT` texels.
-    geometry_view: TexelView,
+    /// The scene texel buffer as `R32G32B32A32_UINT` texels.
+    texel_view: TexelView,
     /// Bytes uploaded.
     pub bytes: u64,
     /// The features `render_samples` is specialised for when rendering this scene: the scene's own
@@ -92,14 +98,14 @@ impl GpuScene {
             .collect()
     }
 
-    /// The geometry texel buffer's view (binding `BINDING_GEOMETRY`).
-    pub(crate) fn geometry_view(&self) -> vk::BufferView {
-        self.geometry_view.view
+    /// The scene texel buffer's view (binding `BINDING_SCENE_TEXELS`).
+    pub(crate) fn texel_view(&self) -> vk::BufferView {
+        self.texel_view.view
     }
 
     /// Uploads `packed` to `ctx`'s device. Every array must fit `maxStorageBufferRange` and
-    /// `maxMemoryAllocationSize`, the geometry buffer `maxTexelBufferElements`, and all of them the
-    /// largest device-local heap.
+    /// `maxMemoryAllocationSize`, the scene texel buffer `maxTexelBufferElements` and
+    /// `maxMemoryAllocationSize`, and all of them the largest device-local heap.
     ///
     /// An empty `triangle_light` of a scene with triangles is uploaded as `INVALID_INDEX` for every
     /// triangle (a 4-byte element cannot be made to look empty; "no triangle is a light" reads the same).
@@ -112,83 +118,131 @@ impl GpuScene {
                 packed.triangle_light.clone()
             };
 
-        // The geometry buffer: nodes, then triangles from an offset that suits both a storage-buffer
-        // binding and a texel index.
-        let node_bytes: &[u8] = bytemuck::cast_slice(&packed.nodes);
-        let triangle_bytes: &[u8] = bytemuck::cast_slice(&packed.triangles);
-        let triangle_offset = align_up(
-            node_bytes.len() as u64,
-            ctx.limits.min_storage_buffer_offset_alignment.max(16),
-        );
-        let geometry_size = triangle_offset + (triangle_bytes.len() as u64).max(16);
-        let texels = geometry_size / 16;
-        if texels > ctx.limits.max_texel_buffer_elements {
+        // The scene texel buffer: the arrays core reads through `SceneSource`, each from an offset that
+        // suits both a storage-buffer binding and a texel index (nodes first, at texel 0).
+        let sourced: [(u32, &str, &[u8]); 8] = [
+            (
+                BINDING_NODES,
+                "BVH nodes",
+                bytemuck::cast_slice(&packed.nodes),
+            ),
+            (
+                BINDING_TRIANGLES,
+                "triangles",
+                bytemuck::cast_slice(&packed.triangles),
+            ),
+            (
+                BINDING_TRIANGLE_INFO,
+                "triangle info",
+                bytemuck::cast_slice(&packed.triangle_info),
+            ),
+            (
+                BINDING_NORMALS,
+                "normals",
+                bytemuck::cast_slice(&packed.normals),
+            ),
+            (
+                BINDING_UVS,
+                "texture coordinates",
+                bytemuck::cast_slice(&packed.uvs),
+            ),
+            (
+                BINDING_MATERIALS,
+                "materials",
+                bytemuck::cast_slice(&packed.materials),
+            ),
+            (
+                BINDING_TEXTURES,
+                "texture infos",
+                bytemuck::cast_slice(&packed.textures),
+            ),
+            (
+                BINDING_TEXELS,
+                "texels",
+                bytemuck::cast_slice(&packed.texels),
+            ),
+        ];
+        let align = ctx.limits.min_storage_buffer_offset_alignment.max(16);
+        let mut offsets = [0u64; 8];
+        let mut texels_size = 0u64;
+        for (k, (_, what, data)) in sourced.iter().enumerate() {
+            ctx.check_size(what, data.len() as u64)?;
+            offsets[k] = align_up(texels_size, align);
+            // Every array, even an empty one, gets 16 bytes, so its binding lies inside the buffer.
+            texels_size = offsets[k] + (data.len() as u64).max(16);
+        }
+        let texel_count = texels_size / 16;
+        if texel_count > ctx.limits.max_texel_buffer_elements {
             return Err(VulkanError::TooLarge {
-                what: "the BVH and triangles (one texel buffer)".into(),
-                bytes: geometry_size,
+                what: "the scene's BVH, triangles, materials, vertex attributes and textures"
+                    .into(),
+                bytes: texels_size,
                 limit_name: "maxTexelBufferElements (16-byte texels)",
                 limit: ctx.limits.max_texel_buffer_elements * 16,
             });
         }
-        let triangle_texels = u32::try_from(triangle_offset / 16)
-            .map_err(|_| VulkanError::Invalid("the BVH is too large to index".into()))?;
-        let mut geometry = vec![0u8; geometry_size as usize];
-        geometry[..node_bytes.len()].copy_from_slice(node_bytes);
-        geometry[triangle_offset as usize..][..triangle_bytes.len()]
-            .copy_from_slice(triangle_bytes);
+        ctx.check_allocation("the scene texel buffer", texels_size)?;
+        let texel_offset = |k: usize| (offsets[k] / 16) as u32;
+        let mut scene_texels = vec![0u8; texels_size as usize];
+        for (k, (_, _, data)) in sourced.iter().enumerate() {
+            scene_texels[offsets[k] as usize..][..data.len()].copy_from_slice(data);
+        }
 
         let globals = [SceneGlobals {
-            triangle_texels,
+            texel_offsets: TexelOffsets {
+                triangles: texel_offset(1),
+                triangle_info: texel_offset(2),
+                normals: texel_offset(3),
+                uvs: texel_offset(4),
+                materials: texel_offset(5),
+                textures: texel_offset(6),
+                texels: texel_offset(7),
+                _pad: 0,
+            },
             ..packed.globals
         }];
-        // Binding order (`BINDING_GLOBALS` ..); the geometry's two bindings are `None` here.
-        let arrays: [(&str, Option<&[u8]>); SCENE_BINDINGS] = [
-            ("scene globals", Some(bytemuck::cast_slice(&globals))),
-            ("BVH nodes", None),
-            ("triangles", None),
+        // The other bindings, in binding order, with buffers of their own.
+        let own: [(u32, &str, &[u8]); 7] = [
             (
-                "triangle info",
-                Some(bytemuck::cast_slice(&packed.triangle_info)),
+                BINDING_GLOBALS,
+                "scene globals",
+                bytemuck::cast_slice(&globals),
             ),
-            ("normals", Some(bytemuck::cast_slice(&packed.normals))),
             (
-                "texture coordinates",
-                Some(bytemuck::cast_slice(&packed.uvs)),
+                BINDING_LIGHTS,
+                "lights",
+                bytemuck::cast_slice(&packed.lights),
             ),
-            ("materials", Some(bytemuck::cast_slice(&packed.materials))),
             (
-                "texture infos",
-                Some(bytemuck::cast_slice(&packed.textures)),
+                BINDING_LIGHT_CDF,
+                "light CDF",
+                bytemuck::cast_slice(&packed.light_cdf),
             ),
-            ("texels", Some(bytemuck::cast_slice(&packed.texels))),
-            ("lights", Some(bytemuck::cast_slice(&packed.lights))),
-            ("light CDF", Some(bytemuck::cast_slice(&packed.light_cdf))),
             (
+                BINDING_TRIANGLE_LIGHT,
                 "triangle lights",
-                Some(bytemuck::cast_slice(&triangle_light)),
+                bytemuck::cast_slice(&triangle_light),
             ),
             (
+                BINDING_ENVIRONMENT_TEXELS,
                 "environment texels",
-                Some(bytemuck::cast_slice(&packed.environment_texels)),
+                bytemuck::cast_slice(&packed.environment_texels),
             ),
             (
+                BINDING_ENVIRONMENT_MARGINAL,
                 "environment marginal CDF",
-                Some(bytemuck::cast_slice(&packed.environment_marginal_cdf)),
+                bytemuck::cast_slice(&packed.environment_marginal_cdf),
             ),
             (
+                BINDING_ENVIRONMENT_CONDITIONAL,
                 "environment conditional CDF",
-                Some(bytemuck::cast_slice(&packed.environment_conditional_cdf)),
+                bytemuck::cast_slice(&packed.environment_conditional_cdf),
             ),
         ];
-        ctx.check_size("BVH nodes", node_bytes.len() as u64)?;
-        ctx.check_size("triangles", triangle_bytes.len() as u64)?;
-        ctx.check_size("the BVH and triangles (one buffer)", geometry_size)?;
-        let mut total = geometry_size;
-        for (what, data) in &arrays {
-            if let Some(data) = data {
-                ctx.check_size(what, data.len() as u64)?;
-                total += (data.len() as u64).max(16);
-            }
+        let mut total = texels_size;
+        for (_, what, data) in &own {
+            ctx.check_size(what, data.len() as u64)?;
+            total += (data.len() as u64).max(16);
         }
         if total > ctx.limits.device_local_heap {
             return Err(VulkanError::TooLarge {
@@ -202,47 +256,43 @@ impl GpuScene {
         // An empty array is bound over `EMPTY_RANGE` bytes, so that it looks empty to the kernel.
         let range_of = |len: usize| if len == 0 { EMPTY_RANGE } else { len as u64 };
         let mut buffers = vec![ctx.upload(
-            "the BVH and triangles",
-            &geometry,
-            geometry_size,
+            "the scene texel buffer",
+            &scene_texels,
+            texels_size,
             vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER,
         )?];
+        drop(scene_texels);
         let mut bindings = [BufferRange::default(); SCENE_BINDINGS];
-        bindings[BINDING_NODES as usize] = BufferRange {
-            buffer: 0,
-            offset: 0,
-            range: range_of(node_bytes.len()),
-        };
-        bindings[BINDING_TRIANGLES as usize] = BufferRange {
-            buffer: 0,
-            offset: triangle_offset,
-            range: range_of(triangle_bytes.len()),
-        };
-        for (b, (what, data)) in arrays.iter().enumerate() {
-            if let Some(data) = data {
-                bindings[b] = BufferRange {
-                    buffer: buffers.len(),
-                    offset: 0,
-                    range: range_of(data.len()),
-                };
-                let size = (data.len() as u64).max(16);
-                buffers.push(ctx.upload(what, data, size, vk::BufferUsageFlags::empty())?);
-            }
+        for (k, (binding, _, data)) in sourced.iter().enumerate() {
+            bindings[*binding as usize] = BufferRange {
+                buffer: 0,
+                offset: offsets[k],
+                range: range_of(data.len()),
+            };
+        }
+        for (binding, what, data) in &own {
+            bindings[*binding as usize] = BufferRange {
+                buffer: buffers.len(),
+                offset: 0,
+                range: range_of(data.len()),
+            };
+            let size = (data.len() as u64).max(16);
+            buffers.push(ctx.upload(what, data, size, vk::BufferUsageFlags::empty())?);
         }
 
         let info = vk::BufferViewCreateInfo::default()
             .buffer(buffers[0].buffer)
             .format(vk::Format::R32G32B32A32_UINT)
             .offset(0)
-            .range(texels * 16);
-        // SAFETY: the buffer was created with STORAGE_TEXEL_BUFFER usage and is `texels * 16` bytes
+            .range(texel_count * 16);
+        // SAFETY: the buffer was created with STORAGE_TEXEL_BUFFER usage and is `texel_count * 16` bytes
         // long, within maxTexelBufferElements (checked above).
         let view = unsafe { ctx.shared.device.create_buffer_view(&info, None) }
             .during("vkCreateBufferView")?;
         Ok(Self {
             buffers,
             bindings,
-            geometry_view: TexelView {
+            texel_view: TexelView {
                 shared: ctx.shared.clone(),
                 view,
             },

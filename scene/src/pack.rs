@@ -220,6 +220,10 @@ pub fn pack_scene(
     let mut texels = Vec::with_capacity(packed_texel_words(&textures) as usize);
     let linear16 = srgb8_to_linear16();
     for t in &textures {
+        if t.srgb && texels.len() % 2 == 1 {
+            // RGBA16 textures start at an even word, so a texel's two words share one GPU texel.
+            texels.push(0);
+        }
         texture_infos.push(TextureInfo {
             offset: texels.len() as u32,
             width: t.width,
@@ -388,14 +392,15 @@ pub fn pack_scene(
     packed
 }
 
-/// The `u32` words the packed texel array of `textures` needs: one per RGBA8 texel, two per sRGB texel
-/// (stored as linear RGBA16, see `fovea_core::scene::TEXTURE_RGBA16`). The loaders refuse scenes whose
-/// textures need more than `u32::MAX`.
+/// At most the `u32` words the packed texel array of `textures` needs: one per RGBA8 texel, two per
+/// sRGB texel (stored as linear RGBA16, see `fovea_core::scene::TEXTURE_RGBA16`), and one of padding per
+/// texture (RGBA16 textures start at an even word). The loaders refuse scenes whose textures need more
+/// than `u32::MAX`.
 #[must_use]
 pub fn packed_texel_words(textures: &[crate::texture::Texture]) -> u64 {
     textures
         .iter()
-        .map(|t| t.texels.len() as u64 * if t.srgb { 2 } else { 1 })
+        .map(|t| t.texels.len() as u64 * if t.srgb { 2 } else { 1 } + 1)
         .sum()
 }
 
@@ -477,6 +482,7 @@ mod tests {
     fn srgb_textures_are_packed_linear() {
         use crate::texture::Texture;
         use fovea_core::material::texture::sample_texture;
+        use fovea_core::scene::SceneSlices;
         use glam::Vec2;
         let mut colour = Texture::single_color("c", [128, 0, 255, 77], true);
         colour.width = 2;
@@ -496,22 +502,23 @@ mod tests {
         };
         let words = packed_texel_words(&scene.textures);
         let packed = pack_scene(scene, &Environment::None, &BvhBuildOptions::default());
-        assert_eq!(packed.texels.len() as u64, words);
-        assert_eq!(words, 2 * 2 + 1);
+        assert!(packed.texels.len() as u64 <= words);
+        assert_eq!(packed.texels.len(), 2 * 2 + 1);
+        assert_eq!(packed.textures[0].offset % 2, 0);
         assert_eq!(packed.textures[0].flags, TEXTURE_RGBA16);
         assert_eq!(packed.textures[1].flags, 0);
         let view = packed.view();
         // Texel centres: sRGB 128 is linear 0.21586 (16-bit 14146), 255 is 1; alpha 77 is 77/255.
-        let left = sample_texture(&view, 0, Vec2::new(0.25, 0.5));
+        let left = sample_texture(&view, &SceneSlices, 0, Vec2::new(0.25, 0.5));
         assert_eq!(left.x, 14146.0 / 65535.0);
         assert_eq!(left.y, 0.0);
         assert_eq!(left.z, 1.0);
         assert!((left.w - 77.0 / 255.0).abs() < 1e-7);
         // Half way between the two texels: the mean of the linear values, not of the encoded ones.
-        let mid = sample_texture(&view, 0, Vec2::new(0.5, 0.5));
+        let mid = sample_texture(&view, &SceneSlices, 0, Vec2::new(0.5, 0.5));
         assert!((mid.x - 0.5 * 14146.0 / 65535.0).abs() < 1e-6, "{mid}");
         assert!((mid.y - 0.5 * 14146.0 / 65535.0).abs() < 1e-6, "{mid}");
-        let d = sample_texture(&view, 1, Vec2::new(0.5, 0.5));
+        let d = sample_texture(&view, &SceneSlices, 1, Vec2::new(0.5, 0.5));
         assert!((d.x - 128.0 / 255.0).abs() < 1e-7 && (d.w - 77.0 / 255.0).abs() < 1e-7);
     }
 }

@@ -10,12 +10,12 @@
 //!
 //! Without a Vulkan device the test prints a note and passes, except with `CI=true`. The validation
 //! layer is always on here and must stay silent.
-use fovea_core::bvh::SceneSlices;
 use fovea_core::foveation::fill::{cell_buffer_len, FILL_BILINEAR, FILL_REPLICATE};
 use fovea_core::foveation::regions::FoveationParams;
 use fovea_core::glam::{Vec2, Vec3};
 use fovea_core::integrator::FrameParams;
 use fovea_core::kernel_abi::*;
+use fovea_core::scene::SceneSlices;
 use fovea_core::scene::{Light, LIGHT_POINT};
 use fovea_scene::bvh::BvhBuildOptions;
 use fovea_scene::environment::Environment;
@@ -1080,6 +1080,7 @@ fn scene_functions_agree_across_backends() {
         let r = &inputs[i * STRIDE..];
         let s = fovea_core::lights::sample_light(
             &scene,
+            &SceneSlices,
             Vec3::from_slice(&r[0][..3]),
             r[1][0],
             Vec2::new(r[1][1], r[1][2]),

@@ -178,7 +178,7 @@ fn sample_stream_matches_per_sample_rendering() {
         for first in 0..stride.min(total) {
             render_sample_stream(
                 &scene.view(),
-                &fovea_core::bvh::SceneSlices,
+                &fovea_core::scene::SceneSlices,
                 &frame,
                 &blocks,
                 blocks.len() as u32,

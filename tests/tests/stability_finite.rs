@@ -27,6 +27,7 @@ use fovea_core::kernel_abi::*;
 use fovea_core::lights::{environment, power_heuristic, sample_light, triangle};
 use fovea_core::post::tonemap::tonemap_linear;
 use fovea_core::rng::SampleRng;
+use fovea_core::scene::SceneSlices;
 use fovea_core::scene::{Material, SceneView, MATERIAL_DOUBLE_SIDED_EMISSION};
 use fovea_scene::environment::Environment;
 use fovea_scene::pack::PackedScene;
@@ -804,8 +805,8 @@ fn light_sampling_and_mis_weights_are_finite_on_cpu() {
                     // The whole light list and each emitter directly.
                     let tri = emissive[rng.below(emissive.len() as u32) as usize];
                     for (what, s) in [
-                        ("sample_light", sample_light(&scene, p, u_select, u)),
-                        ("triangle::sample", triangle::sample(&scene, tri, p, u)),
+                        ("sample_light", sample_light(&scene, &SceneSlices, p, u_select, u)),
+                        ("triangle::sample", triangle::sample(&scene, &SceneSlices, tri, p, u)),
                         ("environment::sample", environment::sample(&scene, u)),
                     ] {
                         let ok = s.pdf.is_finite()
@@ -824,7 +825,7 @@ fn light_sampling_and_mis_weights_are_finite_on_cpu() {
                     }
                     // Densities a BSDF-sampled ray needs.
                     let q = shading_point(&mut rng, &scene);
-                    let pdf_t = triangle::solid_angle_pdf(&scene, tri, p, q);
+                    let pdf_t = triangle::solid_angle_pdf(&scene, &SceneSlices, tri, p, q);
                     let d = rng.adversarial_dir();
                     let pdf_e = environment::pdf(&scene, d);
                     let le = environment::radiance(&scene, d);

@@ -21,15 +21,14 @@
 //! huge (or infinite) finite-signed number, and never `0 * ∞`.
 use glam::{UVec4, Vec3, Vec4};
 
-use super::source::{SceneSlices, TraversalSource};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
 use crate::material::alpha::is_cut_out;
 use crate::math::lane_mask::{eq_mask, gt_mask, le_mask};
 use crate::scene::features::FEATURE_ALPHA_CUTOUT;
 use crate::scene::{
-    leaf_count, leaf_first, Bvh4Node, Features, SceneView, TrianglePositions, INVALID_INDEX,
-    SLOT_LEAF, TRIANGLE_ALPHA_CUTOUT,
+    leaf_count, leaf_first, Bvh4Node, Features, SceneSlices, SceneSource, SceneView,
+    TrianglePositions, INVALID_INDEX, SLOT_LEAF, TRIANGLE_ALPHA_CUTOUT,
 };
 
 /// Entries of the traversal stack. A node visit pushes its (up to four) hit children and pops the nearest,
@@ -186,8 +185,9 @@ fn near_far(min: Vec4, max: Vec4, negative: bool) -> (Vec4, Vec4) {
 /// feature set) none.
 #[inline]
 #[must_use]
-fn hit_is_cut_out<F: Features>(
+fn hit_is_cut_out<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
+    source: &S,
     triangle: u32,
     tri: &TrianglePositions,
     b1: f32,
@@ -195,7 +195,7 @@ fn hit_is_cut_out<F: Features>(
 ) -> bool {
     scene.features.has(FEATURE_ALPHA_CUTOUT)
         && tri.v0.w == TRIANGLE_ALPHA_CUTOUT
-        && is_cut_out(scene, triangle, b1, b2)
+        && is_cut_out(scene, source, triangle, b1, b2)
 }
 
 /// Where each of a node's four children goes when its hit children are pushed: child `i`'s rank is
@@ -284,7 +284,7 @@ fn push_child(
 // Index loops over local arrays: rust-gpu does not compile iterators over them.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn traverse<F: Features, S: TraversalSource>(
+fn traverse<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     ray: &Ray,
@@ -373,7 +373,7 @@ fn traverse<F: Features, S: TraversalSource>(
             while i < end {
                 let tri = source.triangle(scene, i);
                 let h = watertight.intersect(&tri, closest);
-                if h.hit && !hit_is_cut_out(scene, i, &tri, h.b1, h.b2) {
+                if h.hit && !hit_is_cut_out(scene, source, i, &tri, h.b1, h.b2) {
                     closest = h.t;
                     best = Hit {
                         t: h.t,
@@ -412,9 +412,9 @@ pub fn closest_hit<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32) -> 
     closest_hit_with(scene, &SceneSlices, ray, t_max)
 }
 
-/// [`closest_hit`] reading nodes and triangles from `source`.
+/// [`closest_hit`] reading the scene's arrays from `source`.
 #[must_use]
-pub fn closest_hit_with<F: Features, S: TraversalSource>(
+pub fn closest_hit_with<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     ray: &Ray,
@@ -430,9 +430,9 @@ pub fn any_hit<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32) -> bool
     any_hit_with(scene, &SceneSlices, ray, t_max)
 }
 
-/// [`any_hit`] reading nodes and triangles from `source`.
+/// [`any_hit`] reading the scene's arrays from `source`.
 #[must_use]
-pub fn any_hit_with<F: Features, S: TraversalSource>(
+pub fn any_hit_with<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     ray: &Ray,

@@ -7,12 +7,11 @@ use glam::Vec3;
 
 pub use path::{trace_path, trace_path_with, IntegratorSettings};
 
-use crate::bvh::{SceneSlices, TraversalSource};
 use crate::camera::Camera;
 use crate::foveation::{block_sample_position, FoveationParams, OwnedBlock};
 use crate::kernel_abi::GpuBlock;
 use crate::rng::SampleRng;
-use crate::scene::SceneView;
+use crate::scene::{SceneSlices, SceneSource, SceneView};
 
 /// Everything that is fixed for one frame (GPU layout; push constants or a small uniform buffer).
 #[repr(C)]
@@ -42,10 +41,9 @@ pub fn render_block_sample<F: crate::scene::Features>(
     render_block_sample_with(scene, &SceneSlices, frame, block, sample)
 }
 
-/// [`render_block_sample`] with traversal reading nodes and triangles from `source` (the GPU's texel
-/// buffer).
+/// [`render_block_sample`] reading the scene's large arrays from `source` (the GPU's texel buffer).
 #[must_use]
-pub fn render_block_sample_with<F: crate::scene::Features, S: TraversalSource>(
+pub fn render_block_sample_with<F: crate::scene::Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     frame: &FrameParams,
@@ -74,7 +72,7 @@ pub fn render_block_sample_with<F: crate::scene::Features, S: TraversalSource>(
 /// neighbouring lanes of a SIMD group still trace samples of one pixel or block side by side, which
 /// keeps their first rays coherent; starting each lane's next sample as soon as its own path ends (path
 /// regeneration) lost that and made Lost Empire frames 10 % slower there.
-pub fn render_sample_stream<F: crate::scene::Features, S: TraversalSource>(
+pub fn render_sample_stream<F: crate::scene::Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     frame: &FrameParams,

@@ -20,7 +20,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use crate::bvh::{any_hit_with, closest_hit_with, SceneSlices, TraversalSource};
+use crate::bvh::{any_hit_with, closest_hit_with};
 use crate::geometry::offset::{offset_ray_origin, SHADOW_RAY_T_MAX};
 use crate::geometry::Ray;
 use crate::lights::{
@@ -30,7 +30,7 @@ use crate::lights::{
 use crate::material::surface_point;
 use crate::math::color::is_finite3;
 use crate::rng::SampleRng;
-use crate::scene::{SceneView, INVALID_INDEX};
+use crate::scene::{SceneSlices, SceneSource, SceneView, INVALID_INDEX};
 
 /// [`IntegratorSettings::strategy`]: next-event estimation and BSDF sampling combined by MIS.
 pub const STRATEGY_MIS: u32 = 0;
@@ -84,9 +84,9 @@ pub fn trace_path<F: crate::scene::Features>(
     trace_path_with(scene, &SceneSlices, camera_ray, rng, settings)
 }
 
-/// [`trace_path`] with traversal reading nodes and triangles from `source` (the GPU's texel buffer).
+/// [`trace_path`] reading the scene's large arrays from `source` (the GPU's texel buffer).
 #[must_use]
-pub fn trace_path_with<F: crate::scene::Features, S: TraversalSource>(
+pub fn trace_path_with<F: crate::scene::Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     camera_ray: Ray,
@@ -121,12 +121,13 @@ pub fn trace_path_with<F: crate::scene::Features, S: TraversalSource>(
             break;
         }
 
-        let surface = surface_point(scene, &hit);
+        let surface = surface_point(scene, source, &hit);
         let wo_world = -ray.direction;
 
         // Emission found by this ray.
         let le = emitted_radiance(
             scene,
+            source,
             hit.triangle,
             hit.b1,
             hit.b2,
@@ -142,7 +143,13 @@ pub fn trace_path_with<F: crate::scene::Features, S: TraversalSource>(
                     let light = scene.triangle_light[hit.triangle as usize];
                     if light != INVALID_INDEX {
                         let light_pdf = scene.lights[light as usize].pmf
-                            * solid_angle_pdf(scene, hit.triangle, ray.origin, surface.position);
+                            * solid_angle_pdf(
+                                scene,
+                                source,
+                                hit.triangle,
+                                ray.origin,
+                                surface.position,
+                            );
                         weight = power_heuristic(bsdf_pdf, light_pdf);
                     }
                 }
@@ -174,7 +181,7 @@ pub fn trace_path_with<F: crate::scene::Features, S: TraversalSource>(
         if use_nee {
             let u_select = rng.next_1d();
             let u_light = rng.next_2d();
-            let ls = sample_light(scene, surface.position, u_select, u_light);
+            let ls = sample_light(scene, source, surface.position, u_select, u_light);
             if ls.pdf > 0.0 && ls.direction.dot(ng) > 0.0 {
                 let wi = frame.to_local(ls.direction);
                 let (f, pdf_b) = bsdf.eval_and_pdf(wi);

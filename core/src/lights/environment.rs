@@ -211,8 +211,7 @@ mod tests {
                     light_count: 1,
                     environment_integral: total as f32,
                     environment_light: 0,
-                    triangle_texels: 0,
-                    _pad: 0,
+                    ..SceneGlobals::default()
                 },
                 nodes: &[],
                 triangles: &[],

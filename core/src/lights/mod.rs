@@ -18,8 +18,8 @@ use crate::scene::features::{
     FEATURE_PUNCTUAL_LIGHTS,
 };
 use crate::scene::{
-    Features, SceneView, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT,
-    LIGHT_TRIANGLE,
+    Features, SceneSource, SceneView, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT,
+    LIGHT_SPOT, LIGHT_TRIANGLE,
 };
 
 /// Farthest distance a shadow ray towards an infinitely distant light travels.
@@ -64,8 +64,9 @@ impl LightSample {
 /// Picks a light with probability proportional to its power (`u_select`) and samples it from the shading
 /// point `p` (`u`).
 #[must_use]
-pub fn sample_light<F: Features>(
+pub fn sample_light<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
+    source: &S,
     p: Vec3,
     u_select: f32,
     u: Vec2,
@@ -79,7 +80,7 @@ pub fn sample_light<F: Features>(
     // Light kinds the scene lacks (by its feature set) are never tested for.
     let features = scene.features;
     let mut sample = if features.has(FEATURE_EMISSIVE_TRIANGLES) && light.kind == LIGHT_TRIANGLE {
-        triangle::sample(scene, light.index, p, u)
+        triangle::sample(scene, source, light.index, p, u)
     } else if features.has(FEATURE_ENVIRONMENT_CONSTANT | FEATURE_ENVIRONMENT_MAP)
         && light.kind == LIGHT_ENVIRONMENT
     {

@@ -9,13 +9,19 @@ use crate::material::texture::sample_texture;
 use crate::math::vec3_from;
 use crate::sampling::warp::square_to_uniform_triangle;
 use crate::scene::features::{FEATURE_EMISSION_TEXTURE, FEATURE_EMISSIVE_TRIANGLES};
-use crate::scene::{Features, SceneView, INVALID_INDEX, MATERIAL_DOUBLE_SIDED_EMISSION};
+use crate::scene::{
+    Features, SceneSource, SceneView, INVALID_INDEX, MATERIAL_DOUBLE_SIDED_EMISSION,
+};
 
 /// Vertex positions of `triangle`.
 #[inline]
 #[must_use]
-pub fn triangle_vertices<F: Features>(scene: &SceneView<F>, triangle: u32) -> [Vec3; 3] {
-    let t = scene.triangles[triangle as usize];
+pub fn triangle_vertices<F: Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    triangle: u32,
+) -> [Vec3; 3] {
+    let t = source.triangle(scene, triangle);
     [t.v0.truncate(), t.v1.truncate(), t.v2.truncate()]
 }
 
@@ -30,8 +36,9 @@ pub fn scaled_geometric_normal(v: &[Vec3; 3]) -> Vec3 {
 /// Radiance emitted by `triangle` at barycentrics (`b1`, `b2`) towards direction `w` (unit, pointing away
 /// from the surface). Zero on the back face of one-sided emitters.
 #[must_use]
-pub fn emitted_radiance<F: Features>(
+pub fn emitted_radiance<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
+    source: &S,
     triangle: u32,
     b1: f32,
     b2: f32,
@@ -41,7 +48,7 @@ pub fn emitted_radiance<F: Features>(
     if !scene.features.has(FEATURE_EMISSIVE_TRIANGLES) {
         return Vec3::ZERO;
     }
-    let material = &scene.materials[scene.triangle_info[triangle as usize].material as usize];
+    let material = &source.material(scene, source.triangle_info(scene, triangle).material);
     if !material.is_emissive() {
         return Vec3::ZERO;
     }
@@ -50,8 +57,8 @@ pub fn emitted_radiance<F: Features>(
     }
     let mut radiance = vec3_from(material.emission);
     if scene.features.has(FEATURE_EMISSION_TEXTURE) && material.emission_texture != INVALID_INDEX {
-        let uv = interpolate_uv(scene, triangle, b1, b2);
-        radiance *= sample_texture(scene, material.emission_texture, uv).truncate();
+        let uv = interpolate_uv(scene, source, triangle, b1, b2);
+        radiance *= sample_texture(scene, source, material.emission_texture, uv).truncate();
     }
     radiance
 }
@@ -60,8 +67,14 @@ pub fn emitted_radiance<F: Features>(
 /// from `p` by uniform area sampling: `|p - q|² / (|cos θ_q| · area)`.
 #[inline]
 #[must_use]
-pub fn solid_angle_pdf<F: Features>(scene: &SceneView<F>, triangle: u32, p: Vec3, q: Vec3) -> f32 {
-    let v = triangle_vertices(scene, triangle);
+pub fn solid_angle_pdf<F: Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    triangle: u32,
+    p: Vec3,
+    q: Vec3,
+) -> f32 {
+    let v = triangle_vertices(scene, source, triangle);
     let n2 = scaled_geometric_normal(&v);
     let double_area = n2.length();
     let to_p = p - q;
@@ -76,8 +89,14 @@ pub fn solid_angle_pdf<F: Features>(scene: &SceneView<F>, triangle: u32, p: Vec3
 
 /// Samples a point on `triangle` uniformly by area, as seen from `p`.
 #[must_use]
-pub fn sample<F: Features>(scene: &SceneView<F>, triangle: u32, p: Vec3, u: Vec2) -> LightSample {
-    let v = triangle_vertices(scene, triangle);
+pub fn sample<F: Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    triangle: u32,
+    p: Vec3,
+    u: Vec2,
+) -> LightSample {
+    let v = triangle_vertices(scene, source, triangle);
     let n2 = scaled_geometric_normal(&v);
     let b = square_to_uniform_triangle(u);
     let q = v[0] * (1.0 - b.x - b.y) + v[1] * b.x + v[2] * b.y;
@@ -91,7 +110,7 @@ pub fn sample<F: Features>(scene: &SceneView<F>, triangle: u32, p: Vec3, u: Vec2
     let w = to_p / dist;
     let ng = n2 / double_area;
     let cos_q = ng.dot(w);
-    let radiance = emitted_radiance(scene, triangle, b.x, b.y, w, ng);
+    let radiance = emitted_radiance(scene, source, triangle, b.x, b.y, w, ng);
     let cos_area = cos_q.abs() * 0.5 * double_area;
     if !(cos_area > 0.0) || radiance == Vec3::ZERO {
         return LightSample::none();
@@ -113,7 +132,7 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::math::pack_vec3;
-    use crate::scene::{Material, TriangleInfo, TrianglePositions};
+    use crate::scene::{Material, SceneSlices, TriangleInfo, TrianglePositions};
     use crate::test_support::chi2::{
         chi2_test, family_share, geometric, join, sample_count, uniform_cos, Grid,
     };
@@ -254,19 +273,25 @@ mod tests {
                 n,
                 77 + k as u64,
                 |rng| {
-                    let s = sample(&sc, 0, p, Vec2::new(rng.uniform(), rng.uniform()));
+                    let s = sample(
+                        &sc,
+                        &SceneSlices,
+                        0,
+                        p,
+                        Vec2::new(rng.uniform(), rng.uniform()),
+                    );
                     if s.pdf <= 0.0 {
                         return None;
                     }
                     let q = hit(&v, p, s.direction, 1e-5)
                         .expect("sampled direction misses the triangle");
-                    let pdf = solid_angle_pdf(&sc, 0, p, q);
+                    let pdf = solid_angle_pdf(&sc, &SceneSlices, 0, p, q);
                     max_rel = max_rel.max((pdf - s.pdf).abs() / s.pdf);
                     assert_eq!(s.radiance, emission);
                     Some(s.direction)
                 },
                 |w| match hit(&v, p, w, 0.0) {
-                    Some(q) => solid_angle_pdf(&sc, 0, p, q) as f64,
+                    Some(q) => solid_angle_pdf(&sc, &SceneSlices, 0, p, q) as f64,
                     None => 0.0,
                 },
             )

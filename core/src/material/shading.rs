@@ -12,7 +12,7 @@ use crate::scene::features::{
     FEATURE_BASE_COLOR_TEXTURE, FEATURE_LOBE_ANISOTROPY, FEATURE_METALLIC_ROUGHNESS_TEXTURE,
     FEATURE_NORMAL_TEXTURE, FEATURE_SHADING_NORMALS, FEATURE_UVS,
 };
-use crate::scene::{Features, SceneView, INVALID_INDEX};
+use crate::scene::{Features, SceneSource, SceneView, INVALID_INDEX};
 
 /// Everything the integrator needs at a hit point.
 #[derive(Clone, Copy, Debug)]
@@ -32,24 +32,28 @@ pub struct SurfacePoint {
 
 /// Builds the shading point for `hit` (which must be a hit).
 #[must_use]
-pub fn surface_point<F: Features>(scene: &SceneView<F>, hit: &Hit) -> SurfacePoint {
+pub fn surface_point<F: Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    hit: &Hit,
+) -> SurfacePoint {
     let triangle = hit.triangle;
     let (b1, b2) = (hit.b1, hit.b2);
     let b0 = 1.0 - b1 - b2;
-    let v = triangle_vertices(scene, triangle);
+    let v = triangle_vertices(scene, source, triangle);
     let position = v[0] * b0 + v[1] * b1 + v[2] * b2;
     let magnitude = crate::geometry::offset::triangle_magnitude(&v);
     let ng = scaled_geometric_normal(&v).normalize_or(Vec3::Z);
-    let info = scene.triangle_info[triangle as usize];
-    let material = scene.materials[info.material as usize];
-    let uv = interpolate_uv(scene, triangle, b1, b2);
+    let info = source.triangle_info(scene, triangle);
+    let material = source.material(scene, info.material);
+    let uv = interpolate_uv(scene, source, triangle, b1, b2);
 
     // Interpolated vertex normal, if the scene has them for all three vertices.
     let mut ns = ng;
     if scene.features.has(FEATURE_SHADING_NORMALS) && !scene.normals.is_empty() {
-        let n0 = vec3_from(scene.normals[info.vertices[0] as usize]);
-        let n1 = vec3_from(scene.normals[info.vertices[1] as usize]);
-        let n2 = vec3_from(scene.normals[info.vertices[2] as usize]);
+        let n0 = vec3_from(source.normal(scene, info.vertices[0]));
+        let n1 = vec3_from(source.normal(scene, info.vertices[1]));
+        let n2 = vec3_from(source.normal(scene, info.vertices[2]));
         if n0 != Vec3::ZERO && n1 != Vec3::ZERO && n2 != Vec3::ZERO {
             let n = (n0 * b0 + n1 * b1 + n2 * b2).normalize_or(ng);
             ns = if n.dot(ng) < 0.0 { -n } else { n };
@@ -64,9 +68,9 @@ pub fn surface_point<F: Features>(scene: &SceneView<F>, hit: &Hit) -> SurfacePoi
         || (scene.features.has(FEATURE_LOBE_ANISOTROPY) && !(material.anisotropic == 0.0));
     let mut tangent = Vec3::ZERO;
     if needs_tangent && scene.features.has(FEATURE_UVS) && !scene.uvs.is_empty() {
-        let t0 = Vec2::from(scene.uvs[info.vertices[0] as usize]);
-        let t1 = Vec2::from(scene.uvs[info.vertices[1] as usize]);
-        let t2 = Vec2::from(scene.uvs[info.vertices[2] as usize]);
+        let t0 = Vec2::from(source.uv(scene, info.vertices[0]));
+        let t1 = Vec2::from(source.uv(scene, info.vertices[1]));
+        let t2 = Vec2::from(source.uv(scene, info.vertices[2]));
         let duv1 = t1 - t0;
         let duv2 = t2 - t0;
         let det = duv1.x * duv2.y - duv1.y * duv2.x;
@@ -84,7 +88,7 @@ pub fn surface_point<F: Features>(scene: &SceneView<F>, hit: &Hit) -> SurfacePoi
         && material.normal_texture != INVALID_INDEX
         && tangent != Vec3::ZERO
     {
-        let t = sample_texture(scene, material.normal_texture, uv);
+        let t = sample_texture(scene, source, material.normal_texture, uv);
         let m = Vec3::new(
             (2.0 * t.x - 1.0) * material.normal_scale,
             (2.0 * t.y - 1.0) * material.normal_scale,
@@ -99,14 +103,14 @@ pub fn surface_point<F: Features>(scene: &SceneView<F>, hit: &Hit) -> SurfacePoi
     if scene.features.has(FEATURE_BASE_COLOR_TEXTURE)
         && material.base_color_texture != INVALID_INDEX
     {
-        base_color *= sample_texture(scene, material.base_color_texture, uv).truncate();
+        base_color *= sample_texture(scene, source, material.base_color_texture, uv).truncate();
     }
     let mut metallic = material.metallic;
     let mut roughness = material.roughness;
     if scene.features.has(FEATURE_METALLIC_ROUGHNESS_TEXTURE)
         && material.metallic_roughness_texture != INVALID_INDEX
     {
-        let t = sample_texture(scene, material.metallic_roughness_texture, uv);
+        let t = sample_texture(scene, source, material.metallic_roughness_texture, uv);
         roughness *= t.y;
         metallic *= t.z;
     }
@@ -172,7 +176,7 @@ mod tests {
                 b1: 0.25,
                 b2: 0.25,
             };
-            let s = surface_point(&view, &hit);
+            let s = surface_point(&view, &crate::scene::SceneSlices, &hit);
             let f = s.frame;
             for v in [f.x, f.y, f.z] {
                 assert!(

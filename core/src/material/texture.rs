@@ -3,7 +3,7 @@
 use glam::{Vec2, Vec4};
 
 use crate::math::float::floor;
-use crate::scene::{SceneView, TextureInfo, TEXTURE_RGBA16};
+use crate::scene::{SceneSource, SceneView, TextureInfo, TEXTURE_RGBA16};
 
 /// Decodes one packed RGBA8 texel to [0, 1] floats (no colour-space conversion).
 #[inline]
@@ -49,30 +49,32 @@ fn next_wrapped(i: u32, size: u32) -> u32 {
 
 /// Texel (`x`, `y`) of the texture, both already wrapped.
 #[inline]
-fn fetch<F: crate::scene::Features>(
+fn fetch<F: crate::scene::Features, S: SceneSource>(
     scene: &SceneView<F>,
+    source: &S,
     info: &TextureInfo,
     x: u32,
     y: u32,
 ) -> Vec4 {
     let texel = y * info.width + x;
     if info.flags & TEXTURE_RGBA16 != 0 {
-        let i = (info.offset + 2 * texel) as usize;
-        unpack_rgba16(scene.texels[i], scene.texels[i + 1])
+        let [rg, ba] = source.texel_pair(scene, info.offset + 2 * texel);
+        unpack_rgba16(rg, ba)
     } else {
-        unpack_rgba8(scene.texels[(info.offset + texel) as usize])
+        unpack_rgba8(source.texel(scene, info.offset + texel))
     }
 }
 
 /// Samples texture `texture` at `uv` with bilinear filtering (colour textures are linear, see
 /// [`TEXTURE_RGBA16`]). `uv` (0, 0) is the top-left corner of the image, as in glTF.
 #[must_use]
-pub fn sample_texture<F: crate::scene::Features>(
+pub fn sample_texture<F: crate::scene::Features, S: SceneSource>(
     scene: &SceneView<F>,
+    source: &S,
     texture: u32,
     uv: Vec2,
 ) -> Vec4 {
-    let info = scene.textures[texture as usize];
+    let info = source.texture(scene, texture);
     let fx = uv.x * info.width as f32 - 0.5;
     let fy = uv.y * info.height as f32 - 0.5;
     // Keep coordinates in a range where f32 -> i32 cannot overflow (absurd or non-finite UVs).
@@ -94,10 +96,10 @@ pub fn sample_texture<F: crate::scene::Features>(
     // targets, a scalar division per lane on lavapipe).
     let (x0, y0) = (wrap(x0 as i32, info.width), wrap(y0 as i32, info.height));
     let (x1, y1) = (next_wrapped(x0, info.width), next_wrapped(y0, info.height));
-    let c00 = fetch(scene, &info, x0, y0);
-    let c10 = fetch(scene, &info, x1, y0);
-    let c01 = fetch(scene, &info, x0, y1);
-    let c11 = fetch(scene, &info, x1, y1);
+    let c00 = fetch(scene, source, &info, x0, y0);
+    let c10 = fetch(scene, source, &info, x1, y0);
+    let c01 = fetch(scene, source, &info, x0, y1);
+    let c11 = fetch(scene, source, &info, x1, y1);
     let top = c00 + (c10 - c00) * tx;
     let bottom = c01 + (c11 - c01) * tx;
     top + (bottom - top) * ty

@@ -6,8 +6,8 @@
 //! rust-gpu). Absent references are [`INVALID_INDEX`]; booleans are bits in a `u32` flags word.
 //!
 //! The two types traversal reads, [`Bvh4Node`] and [`TrianglePositions`], hold `Vec4`/`UVec4` rather
-//! than `[f32; 4]`, so that they map onto 16-byte texels one to one: the GPU reads them from a texel
-//! buffer ([`crate::bvh::source`]).
+//! than `[f32; 4]`. Every type the GPU reads from its scene texel buffer ([`super::source`]) is a whole
+//! number of 16-byte texels.
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec4, Vec4};
 
@@ -350,7 +350,7 @@ pub const ENVIRONMENT_CONSTANT: u32 = 1;
 /// [`SceneGlobals::environment_kind`]: an equirectangular HDR map scaled by `environment_radiance`.
 pub const ENVIRONMENT_MAP: u32 = 2;
 
-/// Scene-wide constants (48 bytes).
+/// Scene-wide constants (80 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct SceneGlobals {
@@ -366,8 +366,23 @@ pub struct SceneGlobals {
     pub environment_integral: f32,
     /// Index of the environment in the light list, or [`INVALID_INDEX`] when there is none.
     pub environment_light: u32,
-    /// The first texel of the triangle positions in the GPU's geometry texel buffer
-    /// ([`crate::bvh::source`]); set by the Vulkan host when it uploads the scene, unused on the CPU.
-    pub triangle_texels: u32,
+    pub _pad: [u32; 2],
+    /// Where the arrays start in the GPU's scene texel buffer; set by the Vulkan host when it uploads the
+    /// scene, unused on the CPU.
+    pub texel_offsets: TexelOffsets,
+}
+
+/// The first texel of each array in the GPU's scene texel buffer ([`super::source`]); the BVH nodes
+/// start at texel 0.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct TexelOffsets {
+    pub triangles: u32,
+    pub triangle_info: u32,
+    pub materials: u32,
+    pub normals: u32,
+    pub uvs: u32,
+    pub textures: u32,
+    pub texels: u32,
     pub _pad: u32,
 }

@@ -1,0 +1,258 @@
+//! Where core reads the scene's large arrays: the BVH nodes and triangle positions traversal tests, and
+//! what shading reads at a hit (triangle info, materials, vertex normals and texture coordinates,
+//! texture infos and texels).
+//!
+//! On the CPU from the [`SceneView`]'s slices ([`SceneSlices`]). On the GPU from one storage texel
+//! buffer that holds all of them ([`SceneTexels`], `R32G32B32A32_UINT`): each array starts at the texel
+//! named in [`SceneGlobals::texel_offsets`](crate::scene::SceneGlobals::texel_offsets) (nodes at 0) and
+//! holds the same bytes as the slice, so a 16-byte element is one texel, a [`Bvh4Node`] seven, and two
+//! texture coordinates or four texture words share one.
+//!
+//! Why a texel buffer: lavapipe (Mesa 25) compiles a storage-buffer load whose offset differs between
+//! invocations into a loop over the 8 lanes with a bounds check per component, but a texel-buffer read
+//! into a branch-free gather; traversal is mostly such loads, and reading nodes and triangles through a
+//! texel buffer made frames 31-36 % faster there (README, "lavapipe"). rust-gpu cannot keep an image
+//! inside a struct, so the source is an argument of its own next to the [`SceneView`] rather than one of
+//! its fields.
+use crate::scene::{
+    Bvh4Node, Features, Material, SceneView, TextureInfo, TriangleInfo, TrianglePositions,
+};
+
+/// Texels (16 bytes each) per [`Bvh4Node`].
+pub const NODE_TEXELS: u32 = 7;
+/// Texels per [`TrianglePositions`].
+pub const TRIANGLE_TEXELS: u32 = 3;
+/// Texels per [`Material`].
+pub const MATERIAL_TEXELS: u32 = 7;
+
+const _: () = {
+    assert!(core::mem::size_of::<Bvh4Node>() == NODE_TEXELS as usize * 16);
+    assert!(core::mem::size_of::<TrianglePositions>() == TRIANGLE_TEXELS as usize * 16);
+    assert!(core::mem::size_of::<Material>() == MATERIAL_TEXELS as usize * 16);
+    assert!(core::mem::size_of::<TriangleInfo>() == 16);
+    assert!(core::mem::size_of::<TextureInfo>() == 16);
+};
+
+/// Reads the scene's large arrays (see the module documentation). Indices are those of the
+/// [`SceneView`]'s slices.
+pub trait SceneSource {
+    /// Node `index` of the BVH (root 0).
+    fn node<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Bvh4Node;
+    /// The positions of triangle `index` (BVH leaf order).
+    fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions;
+    /// Vertex indices and material of triangle `index`.
+    fn triangle_info<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TriangleInfo;
+    /// Material `index`.
+    fn material<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Material;
+    /// Shading normal of vertex `index` (the scene must have normals).
+    fn normal<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 4];
+    /// Texture coordinates of vertex `index` (the scene must have them).
+    fn uv<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 2];
+    /// Texture `index`'s record.
+    fn texture<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TextureInfo;
+    /// Word `index` of the packed texture texels.
+    fn texel<F: Features>(&self, scene: &SceneView<F>, index: u32) -> u32;
+    /// Words `index` and `index + 1` of the packed texture texels, for an even `index` (an RGBA16
+    /// texel; the packer starts RGBA16 textures at even words).
+    fn texel_pair<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [u32; 2];
+}
+
+/// Reads the [`SceneView`]'s slices: the CPU's source.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SceneSlices;
+
+impl SceneSource for SceneSlices {
+    #[inline(always)]
+    fn node<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Bvh4Node {
+        scene.nodes[index as usize]
+    }
+
+    #[inline(always)]
+    fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions {
+        scene.triangles[index as usize]
+    }
+
+    #[inline(always)]
+    fn triangle_info<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TriangleInfo {
+        scene.triangle_info[index as usize]
+    }
+
+    #[inline(always)]
+    fn material<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Material {
+        scene.materials[index as usize]
+    }
+
+    #[inline(always)]
+    fn normal<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 4] {
+        scene.normals[index as usize]
+    }
+
+    #[inline(always)]
+    fn uv<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 2] {
+        scene.uvs[index as usize]
+    }
+
+    #[inline(always)]
+    fn texture<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TextureInfo {
+        scene.textures[index as usize]
+    }
+
+    #[inline(always)]
+    fn texel<F: Features>(&self, scene: &SceneView<F>, index: u32) -> u32 {
+        scene.texels[index as usize]
+    }
+
+    #[inline(always)]
+    fn texel_pair<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [u32; 2] {
+        [
+            scene.texels[index as usize],
+            scene.texels[index as usize + 1],
+        ]
+    }
+}
+
+/// The GPU's scene texel buffer (see the module documentation).
+#[cfg(target_arch = "spirv")]
+pub type SceneTexels = spirv_std::Image!(buffer, format = rgba32ui, sampled = false);
+
+#[cfg(target_arch = "spirv")]
+mod texels {
+    use super::*;
+    use glam::{UVec4, Vec4};
+
+    /// The four words of a texel as the floats they hold.
+    #[inline(always)]
+    fn floats(u: UVec4) -> Vec4 {
+        Vec4::new(
+            f32::from_bits(u.x),
+            f32::from_bits(u.y),
+            f32::from_bits(u.z),
+            f32::from_bits(u.w),
+        )
+    }
+
+    /// The four words of a texel as an array of floats.
+    #[inline(always)]
+    fn float_array(u: UVec4) -> [f32; 4] {
+        floats(u).to_array()
+    }
+
+    impl SceneSource for SceneTexels {
+        #[inline(always)]
+        fn node<F: Features>(&self, _scene: &SceneView<F>, index: u32) -> Bvh4Node {
+            let t = index * NODE_TEXELS;
+            Bvh4Node {
+                min_x: floats(self.read(t)),
+                max_x: floats(self.read(t + 1)),
+                min_y: floats(self.read(t + 2)),
+                max_y: floats(self.read(t + 3)),
+                min_z: floats(self.read(t + 4)),
+                max_z: floats(self.read(t + 5)),
+                slots: self.read(t + 6),
+            }
+        }
+
+        #[inline(always)]
+        fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions {
+            let t = scene.globals.texel_offsets.triangles + index * TRIANGLE_TEXELS;
+            TrianglePositions {
+                v0: floats(self.read(t)),
+                v1: floats(self.read(t + 1)),
+                v2: floats(self.read(t + 2)),
+            }
+        }
+
+        #[inline(always)]
+        fn triangle_info<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TriangleInfo {
+            let w: UVec4 = self.read(scene.globals.texel_offsets.triangle_info + index);
+            TriangleInfo {
+                vertices: [w.x, w.y, w.z],
+                material: w.w,
+            }
+        }
+
+        #[inline(always)]
+        fn material<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Material {
+            let t = scene.globals.texel_offsets.materials + index * MATERIAL_TEXELS;
+            let factors: UVec4 = self.read(t + 2);
+            let more: UVec4 = self.read(t + 3);
+            let last: UVec4 = self.read(t + 4);
+            let textures: UVec4 = self.read(t + 5);
+            let alpha: UVec4 = self.read(t + 6);
+            Material {
+                base_color: float_array(self.read(t)),
+                emission: float_array(self.read(t + 1)),
+                metallic: f32::from_bits(factors.x),
+                roughness: f32::from_bits(factors.y),
+                anisotropic: f32::from_bits(factors.z),
+                specular: f32::from_bits(factors.w),
+                specular_tint: f32::from_bits(more.x),
+                sheen: f32::from_bits(more.y),
+                sheen_tint: f32::from_bits(more.z),
+                clearcoat: f32::from_bits(more.w),
+                clearcoat_gloss: f32::from_bits(last.x),
+                alpha_cutoff: f32::from_bits(last.y),
+                normal_scale: f32::from_bits(last.z),
+                flags: last.w,
+                base_color_texture: textures.x,
+                metallic_roughness_texture: textures.y,
+                normal_texture: textures.z,
+                emission_texture: textures.w,
+                alpha_texture: alpha.x,
+                _pad: [0; 3],
+            }
+        }
+
+        #[inline(always)]
+        fn normal<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 4] {
+            float_array(self.read(scene.globals.texel_offsets.normals + index))
+        }
+
+        #[inline(always)]
+        fn uv<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 2] {
+            let w: UVec4 = self.read(scene.globals.texel_offsets.uvs + index / 2);
+            let (u, v) = if index & 1 == 0 {
+                (w.x, w.y)
+            } else {
+                (w.z, w.w)
+            };
+            [f32::from_bits(u), f32::from_bits(v)]
+        }
+
+        #[inline(always)]
+        fn texture<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TextureInfo {
+            let w: UVec4 = self.read(scene.globals.texel_offsets.textures + index);
+            TextureInfo {
+                offset: w.x,
+                width: w.y,
+                height: w.z,
+                flags: w.w,
+            }
+        }
+
+        #[inline(always)]
+        fn texel<F: Features>(&self, scene: &SceneView<F>, index: u32) -> u32 {
+            let w: UVec4 = self.read(scene.globals.texel_offsets.texels + index / 4);
+            let k = index & 3;
+            if k == 0 {
+                w.x
+            } else if k == 1 {
+                w.y
+            } else if k == 2 {
+                w.z
+            } else {
+                w.w
+            }
+        }
+
+        #[inline(always)]
+        fn texel_pair<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [u32; 2] {
+            let w: UVec4 = self.read(scene.globals.texel_offsets.texels + index / 4);
+            if index & 2 == 0 {
+                [w.x, w.y]
+            } else {
+                [w.z, w.w]
+            }
+        }
+    }
+}
