@@ -50,12 +50,14 @@ pub const BINDING_LDR: u32 = 20;
 /// The frame's [`FrameParams`] (one element; a buffer rather than push constants because it is larger
 /// than the 128 bytes of push constants Vulkan guarantees).
 pub const BINDING_FRAME: u32 = 21;
-/// The scene's large arrays (nodes, triangle positions, triangle info, materials, normals, texture
-/// coordinates, texture infos and texels) again, as one storage texel buffer (`R32G32B32A32_UINT`)
+/// The scene's large arrays (nodes, triangle blocks and positions, triangle info, materials, normals,
+/// texture coordinates, texture infos and texels) again, as one storage texel buffer (`R32G32B32A32_UINT`)
 /// that core reads them from on the GPU ([`crate::scene::source`]).
 pub const BINDING_SCENE_TEXELS: u32 = 22;
+/// `TriangleBlock` array (the leaves' triangles four at a time).
+pub const BINDING_TRIANGLE_BLOCKS: u32 = 23;
 /// Number of bindings.
-pub const BINDING_COUNT: u32 = 23;
+pub const BINDING_COUNT: u32 = 24;
 
 /// Specialization constant id of `render_samples`' feature mask (`FEATURE_*` bits; default every
 /// feature). The host sets it per scene when it creates the pipeline.

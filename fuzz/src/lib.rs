@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 
 use fovea_core::bvh::traverse::closest_hit;
 use fovea_core::geometry::Ray;
-use fovea_core::scene::INVALID_INDEX;
+use fovea_core::scene::{
+    leaf_count, leaf_first, BLOCK_LANE_CUTOUT, INVALID_INDEX, TEXTURE_RGBA16,
+};
 use fovea_scene::bvh::{BvhBuildOptions, MAX_NODE_DEPTH};
 use fovea_scene::environment::Environment;
 use fovea_scene::mesh::{load_scene_from, LoadOptions};
@@ -142,9 +144,34 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
         }
     }
     for t in &p.textures {
-        let end = t.offset as u64 + u64::from(t.width) * u64::from(t.height);
+        let words = if t.flags & TEXTURE_RGBA16 != 0 { 2 } else { 1 };
+        let end = t.offset as u64 + words * u64::from(t.width) * u64::from(t.height);
         assert!(t.width > 0 && t.height > 0 && end <= p.texels.len() as u64);
+        assert!(words == 1 || t.offset % 2 == 0, "RGBA16 textures start at an even word");
     }
+    // Every leaf names blocks that exist, whose first `count` lanes hold its triangles, each triangle
+    // exactly once over all leaves.
+    let mut seen = vec![false; triangles];
+    for node in &p.nodes {
+        for slot in 0..4 {
+            if !node.is_leaf_slot(slot) {
+                continue;
+            }
+            let word = node.slot(slot);
+            let (first, count) = (leaf_first(word) as usize, leaf_count(word) as usize);
+            for k in 0..count.div_ceil(4) * 4 {
+                let lane = p.blocks[first + k / 4].index[k % 4];
+                if k < count {
+                    let t = (lane & !BLOCK_LANE_CUTOUT) as usize;
+                    assert!(t < triangles && !seen[t], "leaf lane {k} names triangle {t}");
+                    seen[t] = true;
+                } else {
+                    assert_eq!(lane, INVALID_INDEX);
+                }
+            }
+        }
+    }
+    assert!(seen.iter().all(|&s| s), "every triangle is in a leaf");
     if !p.lights.is_empty() {
         assert_eq!(p.light_cdf.len(), p.lights.len() + 1);
         assert!(p.light_cdf.windows(2).all(|w| w[0] <= w[1]));

@@ -28,8 +28,8 @@ use fovea_core::scene::SceneSlices as SceneTexels;
 #[cfg(target_arch = "spirv")]
 use fovea_core::scene::SceneTexels;
 use fovea_core::scene::{
-    Bvh4Node, FeatureFlags, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleInfo,
-    TrianglePositions,
+    Bvh4Node, FeatureFlags, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleBlock,
+    TriangleInfo, TrianglePositions,
 };
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
@@ -60,6 +60,7 @@ const _: () = {
     assert!(kernel_abi::BINDING_LDR == 20);
     assert!(kernel_abi::BINDING_FRAME == 21);
     assert!(kernel_abi::BINDING_SCENE_TEXELS == 22);
+    assert!(kernel_abi::BINDING_TRIANGLE_BLOCKS == 23);
     assert!(kernel_abi::BINDING_PROBE_INPUT == 15);
     assert!(kernel_abi::BINDING_PROBE_OUTPUT == 16);
     assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
@@ -106,6 +107,7 @@ pub fn render_samples(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] samples: &mut [[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
     #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 23)] triangle_blocks: &[TriangleBlock],
 ) {
     let i = invocation_index(id, num_workgroups);
     if pc.spp == 0 {
@@ -116,6 +118,7 @@ pub fn render_samples(
         globals: *globals,
         nodes,
         triangles,
+        blocks: triangle_blocks,
         triangle_info,
         normals,
         uvs,
@@ -296,6 +299,7 @@ pub fn probe_scene(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] inputs: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] outputs: &mut [[f32; 4]],
     #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 23)] triangle_blocks: &[TriangleBlock],
 ) {
     let i = invocation_index(id, num_workgroups);
     if i >= pc.item_count {
@@ -306,6 +310,7 @@ pub fn probe_scene(
         globals: *globals,
         nodes,
         triangles,
+        blocks: triangle_blocks,
         triangle_info,
         normals,
         uvs,

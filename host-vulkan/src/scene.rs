@@ -5,8 +5,8 @@ use ash::vk;
 use fovea_core::kernel_abi::{
     BINDING_ENVIRONMENT_CONDITIONAL, BINDING_ENVIRONMENT_MARGINAL, BINDING_ENVIRONMENT_TEXELS,
     BINDING_GLOBALS, BINDING_LIGHTS, BINDING_LIGHT_CDF, BINDING_MATERIALS, BINDING_NODES,
-    BINDING_NORMALS, BINDING_TEXELS, BINDING_TEXTURES, BINDING_TRIANGLES, BINDING_TRIANGLE_INFO,
-    BINDING_TRIANGLE_LIGHT, BINDING_UVS,
+    BINDING_NORMALS, BINDING_TEXELS, BINDING_TEXTURES, BINDING_TRIANGLES, BINDING_TRIANGLE_BLOCKS,
+    BINDING_TRIANGLE_INFO, BINDING_TRIANGLE_LIGHT, BINDING_UVS,
 };
 use fovea_core::scene::{FeatureFlags, SceneGlobals, TexelOffsets, INVALID_INDEX};
 use fovea_scene::pack::PackedScene;
@@ -16,8 +16,9 @@ use crate::context::VulkanContext;
 use crate::error::{Result, VkContext, VulkanError};
 use crate::instance::Shared;
 
-/// Number of scene bindings (`BINDING_GLOBALS` ..= `BINDING_ENVIRONMENT_CONDITIONAL`).
-pub const SCENE_BINDINGS: usize = 15;
+/// Number of scene bindings (`BINDING_GLOBALS` ..= `BINDING_ENVIRONMENT_CONDITIONAL` and
+/// `BINDING_TRIANGLE_BLOCKS`).
+pub const SCENE_BINDINGS: usize = 16;
 
 /// Descriptor range of an empty array: 4 bytes, so the kernel's `OpArrayLength` is 0 for every element type
 /// of 8 bytes or more (an empty array must look empty: core tests `normals.is_empty()`, `uvs.is_empty()`,
@@ -42,8 +43,8 @@ pub(crate) struct BufferRange {
 /// buffer of its own.
 pub struct GpuScene {
     pub(crate) buffers: Vec<GpuBuffer>,
-    /// Binding `b` (`BINDING_GLOBALS` ..= `BINDING_ENVIRONMENT_CONDITIONAL`) is `bindings[b]`.
-    bindings: [BufferRange; SCENE_BINDINGS],
+    /// Where each scene binding points: `(binding, range)`.
+    bindings: Vec<(u32, BufferRange)>,
     /// The scene texel buffer as `R32G32B32A32_UINT` texels.
     texel_view: TexelView,
     /// Bytes uploaded.
@@ -87,13 +88,12 @@ impl GpuScene {
     pub(crate) fn buffer_infos(&self) -> Vec<(u32, vk::DescriptorBufferInfo)> {
         self.bindings
             .iter()
-            .enumerate()
             .map(|(b, r)| {
                 let info = vk::DescriptorBufferInfo::default()
                     .buffer(self.buffers[r.buffer].buffer)
                     .offset(r.offset)
                     .range(r.range);
-                (b as u32, info)
+                (*b, info)
             })
             .collect()
     }
@@ -120,11 +120,16 @@ impl GpuScene {
 
         // The scene texel buffer: the arrays core reads through `SceneSource`, each from an offset that
         // suits both a storage-buffer binding and a texel index (nodes first, at texel 0).
-        let sourced: [(u32, &str, &[u8]); 8] = [
+        let sourced: [(u32, &str, &[u8]); 9] = [
             (
                 BINDING_NODES,
                 "BVH nodes",
                 bytemuck::cast_slice(&packed.nodes),
+            ),
+            (
+                BINDING_TRIANGLE_BLOCKS,
+                "triangle blocks",
+                bytemuck::cast_slice(&packed.blocks),
             ),
             (
                 BINDING_TRIANGLES,
@@ -163,7 +168,7 @@ impl GpuScene {
             ),
         ];
         let align = ctx.limits.min_storage_buffer_offset_alignment.max(16);
-        let mut offsets = [0u64; 8];
+        let mut offsets = [0u64; 9];
         let mut texels_size = 0u64;
         for (k, (_, what, data)) in sourced.iter().enumerate() {
             ctx.check_size(what, data.len() as u64)?;
@@ -190,14 +195,14 @@ impl GpuScene {
 
         let globals = [SceneGlobals {
             texel_offsets: TexelOffsets {
-                triangles: texel_offset(1),
-                triangle_info: texel_offset(2),
-                normals: texel_offset(3),
-                uvs: texel_offset(4),
-                materials: texel_offset(5),
-                textures: texel_offset(6),
-                texels: texel_offset(7),
-                _pad: 0,
+                blocks: texel_offset(1),
+                triangles: texel_offset(2),
+                triangle_info: texel_offset(3),
+                normals: texel_offset(4),
+                uvs: texel_offset(5),
+                materials: texel_offset(6),
+                textures: texel_offset(7),
+                texels: texel_offset(8),
             },
             ..packed.globals
         }];
@@ -262,20 +267,22 @@ impl GpuScene {
             vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER,
         )?];
         drop(scene_texels);
-        let mut bindings = [BufferRange::default(); SCENE_BINDINGS];
+        let mut bindings = Vec::with_capacity(SCENE_BINDINGS);
         for (k, (binding, _, data)) in sourced.iter().enumerate() {
-            bindings[*binding as usize] = BufferRange {
+            let range = BufferRange {
                 buffer: 0,
                 offset: offsets[k],
                 range: range_of(data.len()),
             };
+            bindings.push((*binding, range));
         }
         for (binding, what, data) in &own {
-            bindings[*binding as usize] = BufferRange {
+            let range = BufferRange {
                 buffer: buffers.len(),
                 offset: 0,
                 range: range_of(data.len()),
             };
+            bindings.push((*binding, range));
             let size = (data.len() as u64).max(16);
             buffers.push(ctx.upload(what, data, size, vk::BufferUsageFlags::empty())?);
         }

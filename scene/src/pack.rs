@@ -5,13 +5,14 @@ use std::time::Instant;
 
 use fovea_core::lights::power;
 use fovea_core::scene::{
-    Bvh4Node, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleInfo,
+    Bvh4Node, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleBlock, TriangleInfo,
     TrianglePositions, ENVIRONMENT_CONSTANT, ENVIRONMENT_MAP, ENVIRONMENT_NONE, INVALID_INDEX,
     LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
-    MATERIAL_ALPHA_CUTOUT, MATERIAL_DOUBLE_SIDED_EMISSION, TEXTURE_RGBA16, TRIANGLE_ALPHA_CUTOUT,
+    MATERIAL_ALPHA_CUTOUT, MATERIAL_DOUBLE_SIDED_EMISSION, TEXTURE_RGBA16,
 };
 use glam::{Vec3, Vec4};
 
+use crate::bvh::blocks::pack_leaf_blocks;
 use crate::bvh::{build_bvh, BvhBuildOptions, BvhStats};
 use crate::environment::{build_cdf, Environment, EnvironmentTables};
 use crate::mesh::LoadedScene;
@@ -36,6 +37,7 @@ pub struct PackedScene {
     pub globals: SceneGlobals,
     pub nodes: Vec<Bvh4Node>,
     pub triangles: Vec<TrianglePositions>,
+    pub blocks: Vec<TriangleBlock>,
     pub triangle_info: Vec<TriangleInfo>,
     pub normals: Vec<[f32; 4]>,
     pub uvs: Vec<[f32; 2]>,
@@ -75,6 +77,7 @@ impl PackedScene {
             globals: self.globals,
             nodes: &self.nodes,
             triangles: &self.triangles,
+            blocks: &self.blocks,
             triangle_info: &self.triangle_info,
             normals: &self.normals,
             uvs: &self.uvs,
@@ -97,6 +100,7 @@ impl PackedScene {
         }
         bytes(&self.nodes)
             + bytes(&self.triangles)
+            + bytes(&self.blocks)
             + bytes(&self.triangle_info)
             + bytes(&self.normals)
             + bytes(&self.uvs)
@@ -171,21 +175,18 @@ pub fn pack_scene(
         bounds_max = Vec3::ZERO;
     }
 
-    let bvh = build_bvh(&input_triangles, bvh_options);
-    // Leaf order; `v0.w` marks the triangles whose material has an alpha cut-out.
+    let mut bvh = build_bvh(&input_triangles, bvh_options);
     let ordered_triangles: Vec<TrianglePositions> = bvh
         .triangle_order
         .iter()
-        .map(|&i| {
-            let mut t = input_triangles[i as usize];
-            let material = &materials[triangle_materials[i as usize] as usize];
-            if material.flags & MATERIAL_ALPHA_CUTOUT != 0 {
-                t.v0.w = TRIANGLE_ALPHA_CUTOUT;
-            }
-            t
-        })
+        .map(|&i| input_triangles[i as usize])
         .collect();
     drop(input_triangles);
+    // The leaves' triangles four at a time, marked where their material has an alpha cut-out.
+    let blocks = pack_leaf_blocks(&mut bvh.nodes, &ordered_triangles, |i| {
+        let material = triangle_materials[bvh.triangle_order[i] as usize];
+        materials[material as usize].flags & MATERIAL_ALPHA_CUTOUT != 0
+    });
     let triangle_info: Vec<TriangleInfo> = bvh
         .triangle_order
         .iter()
@@ -364,6 +365,7 @@ pub fn pack_scene(
         globals,
         nodes: bvh.nodes,
         triangles: ordered_triangles,
+        blocks,
         triangle_info,
         normals: packed_normals,
         uvs: packed_uvs,

@@ -21,14 +21,14 @@
 //! huge (or infinite) finite-signed number, and never `0 * ∞`.
 use glam::{UVec4, Vec3, Vec4};
 
-use crate::geometry::triangle::WatertightRay;
+use crate::geometry::triangle::{BlockTest, WatertightRay};
 use crate::geometry::Ray;
 use crate::material::alpha::is_cut_out;
 use crate::math::lane_mask::{eq_mask, gt_mask, le_mask};
 use crate::scene::features::FEATURE_ALPHA_CUTOUT;
 use crate::scene::{
     leaf_count, leaf_first, Bvh4Node, Features, SceneSlices, SceneSource, SceneView,
-    TrianglePositions, INVALID_INDEX, SLOT_LEAF, TRIANGLE_ALPHA_CUTOUT,
+    BLOCK_LANE_CUTOUT, INVALID_INDEX, SLOT_LEAF,
 };
 
 /// Entries of the traversal stack. A node visit pushes its (up to four) hit children and pops the nearest,
@@ -180,22 +180,43 @@ fn near_far(min: Vec4, max: Vec4, negative: bool) -> (Vec4, Vec4) {
     }
 }
 
-/// Whether a candidate hit on `triangle` (positions `tri`) lies in a cut-out hole. Triangles of opaque
-/// materials cost one test of `tri.v0.w` ([`TRIANGLE_ALPHA_CUTOUT`]); scenes without cut-outs (by their
-/// feature set) none.
-#[inline]
-#[must_use]
-fn hit_is_cut_out<F: Features, S: SceneSource>(
+/// Lane `k` of a leaf block (`lane` its [`TriangleBlock::index`] word): if [`WatertightRay::test_block`]
+/// left it a candidate and it is hit in `(0, closest)` outside any cut-out hole, records the hit in
+/// `best` and `closest` and returns `true`. Triangles of opaque materials skip the cut-out test with one
+/// bit test ([`BLOCK_LANE_CUTOUT`]); scenes without cut-outs (by their feature set) with none.
+#[inline(always)]
+fn test_block_lane<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
-    triangle: u32,
-    tri: &TrianglePositions,
-    b1: f32,
-    b2: f32,
+    watertight: &WatertightRay,
+    test: &BlockTest,
+    k: usize,
+    lane: u32,
+    closest: &mut f32,
+    best: &mut Hit,
 ) -> bool {
-    scene.features.has(FEATURE_ALPHA_CUTOUT)
-        && tri.v0.w == TRIANGLE_ALPHA_CUTOUT
-        && is_cut_out(scene, source, triangle, b1, b2)
+    if test.candidates & (1 << k) == 0 {
+        return false;
+    }
+    let h = watertight.block_lane_hit(test, k, *closest);
+    if !h.hit {
+        return false;
+    }
+    let triangle = lane & !BLOCK_LANE_CUTOUT;
+    if scene.features.has(FEATURE_ALPHA_CUTOUT)
+        && lane & BLOCK_LANE_CUTOUT != 0
+        && is_cut_out(scene, source, triangle, h.b1, h.b2)
+    {
+        return false;
+    }
+    *closest = h.t;
+    *best = Hit {
+        t: h.t,
+        triangle,
+        b1: h.b1,
+        b2: h.b2,
+    };
+    true
 }
 
 /// Where each of a node's four children goes when its hit children are pushed: child `i`'s rank is
@@ -367,25 +388,36 @@ fn traverse<F: Features, S: SceneSource>(
                 }
             }
         } else {
-            let first = leaf_first(item);
-            let end = first + leaf_count(item);
-            let mut i = first;
-            while i < end {
-                let tri = source.triangle(scene, i);
-                let h = watertight.intersect(&tri, closest);
-                if h.hit && !hit_is_cut_out(scene, source, i, &tri, h.b1, h.b2) {
-                    closest = h.t;
-                    best = Hit {
-                        t: h.t,
-                        triangle: i,
-                        b1: h.b1,
-                        b2: h.b2,
-                    };
-                    if any {
+            // A leaf: its blocks, four triangles per SIMD test; the lanes of a block are then
+            // finished in order, so the first of equally near hits wins, as one by one.
+            let mut b = leaf_first(item);
+            // Triangles not yet tested; a block's lanes beyond them are unused.
+            let mut left = leaf_count(item);
+            while left > 0 {
+                let block = source.block(scene, b);
+                let mut test = watertight.test_block(&block);
+                if left < 4 {
+                    test.candidates &= (1 << left) - 1;
+                }
+                if test.candidates != 0 {
+                    let (w, t, lanes) = (&watertight, &test, source.block_lanes(scene, b));
+                    let (c, h) = (&mut closest, &mut best);
+                    // Unrolled by hand (see `push_child`).
+                    if test_block_lane(scene, source, w, t, 0, lanes.x, c, h) && any {
+                        return best;
+                    }
+                    if test_block_lane(scene, source, w, t, 1, lanes.y, c, h) && any {
+                        return best;
+                    }
+                    if test_block_lane(scene, source, w, t, 2, lanes.z, c, h) && any {
+                        return best;
+                    }
+                    if test_block_lane(scene, source, w, t, 3, lanes.w, c, h) && any {
                         return best;
                     }
                 }
-                i += 1;
+                b += 1;
+                left -= left.min(4);
             }
         }
         if !next {
@@ -446,7 +478,9 @@ mod tests {
     extern crate std;
 
     use super::*;
-    use crate::scene::{leaf_slot, Material, TriangleInfo, MATERIAL_ALPHA_CUTOUT};
+    use crate::scene::{
+        leaf_slot, Material, TriangleBlock, TriangleInfo, TrianglePositions, MATERIAL_ALPHA_CUTOUT,
+    };
     use glam::Vec3;
 
     fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
@@ -460,16 +494,37 @@ mod tests {
     fn view<'a>(
         nodes: &'a [Bvh4Node],
         triangles: &'a [TrianglePositions],
+        blocks: &'a [TriangleBlock],
         info: &'a [TriangleInfo],
         materials: &'a [Material],
     ) -> SceneView<'a> {
         SceneView {
             nodes,
             triangles,
+            blocks,
             triangle_info: info,
             materials,
             ..SceneView::empty()
         }
+    }
+
+    /// One block per triangle, the triangle in lane 0 (so a leaf word `leaf_slot(i, 1)` names triangle
+    /// `i`, as in a built BVH); `cut_out` lists the triangles whose material has an alpha cut-out.
+    fn blocks_of(triangles: &[TrianglePositions], cut_out: &[u32]) -> std::vec::Vec<TriangleBlock> {
+        triangles
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let mut block = TriangleBlock::EMPTY;
+                let flag = if cut_out.contains(&(i as u32)) {
+                    BLOCK_LANE_CUTOUT
+                } else {
+                    0
+                };
+                block.set_lane(0, t, i as u32 | flag);
+                block
+            })
+            .collect()
     }
 
     /// Slot `slot` of `node` becomes a box around z-layer `z` (as the builder writes it, slightly larger
@@ -514,7 +569,7 @@ mod tests {
     #[test]
     fn empty_scene_has_no_hits() {
         let materials = [Material::default()];
-        let scene = view(&[], &[], &[], &materials);
+        let scene = view(&[], &[], &[], &[], &materials);
         let ray = Ray::new(Vec3::ZERO, Vec3::Z);
         assert!(!closest_hit(&scene, &ray, f32::INFINITY).is_hit());
         assert!(!any_hit(&scene, &ray, f32::INFINITY));
@@ -525,7 +580,8 @@ mod tests {
     fn closest_and_any_hit_on_two_layers() {
         let (nodes, triangles, info) = two_layers();
         let materials = [Material::default(), Material::default()];
-        let scene = view(&nodes, &triangles, &info, &materials);
+        let blocks = blocks_of(&triangles, &[]);
+        let scene = view(&nodes, &triangles, &blocks, &info, &materials);
         // Axis-aligned rays (two zero direction components) through the interior, an edge and a vertex.
         for origin in [
             Vec3::new(0.0, 0.0, 0.0),
@@ -564,16 +620,16 @@ mod tests {
 
     #[test]
     fn alpha_cut_out_triangles_are_skipped() {
-        let (nodes, mut triangles, info) = two_layers();
-        // Triangle 1 (the near layer) has material 1, which the packer marks in its positions.
-        triangles[1].v0.w = TRIANGLE_ALPHA_CUTOUT;
+        let (nodes, triangles, info) = two_layers();
+        // Triangle 1 (the near layer) has material 1, which the packer marks in its block lane.
+        let blocks = blocks_of(&triangles, &[1]);
         let hole = Material {
             flags: MATERIAL_ALPHA_CUTOUT,
             base_color: [0.8, 0.8, 0.8, 0.0],
             ..Material::default()
         };
         let materials = [Material::default(), hole];
-        let scene = view(&nodes, &triangles, &info, &materials);
+        let scene = view(&nodes, &triangles, &blocks, &info, &materials);
         let ray = Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::Z);
         let h = closest_hit(&scene, &ray, f32::INFINITY);
         assert_eq!(h.triangle, 0);
@@ -587,7 +643,7 @@ mod tests {
             ..hole
         };
         let materials = [Material::default(), solid];
-        let scene = view(&nodes, &triangles, &info, &materials);
+        let scene = view(&nodes, &triangles, &blocks, &info, &materials);
         assert_eq!(closest_hit(&scene, &ray, f32::INFINITY).triangle, 1);
     }
 
@@ -722,7 +778,8 @@ mod tests {
             }
             nodes.push(node);
         }
-        let scene = view(&nodes, &triangles, &info, &materials);
+        let blocks = blocks_of(&triangles, &[]);
+        let scene = view(&nodes, &triangles, &blocks, &info, &materials);
         let ray = Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::Z);
         let h = closest_hit(&scene, &ray, f32::INFINITY);
         assert_eq!(h.triangle, 1);

@@ -18,7 +18,8 @@
 use glam::{Vec3, Vec4};
 
 use super::ray::Ray;
-use crate::scene::TrianglePositions;
+use crate::math::lane_mask::{eq_mask, gt_mask, lane};
+use crate::scene::{TriangleBlock, TrianglePositions};
 
 /// The result of one ray-triangle test: `hit` is true if the ray meets the triangle at `0 < t < t_max`;
 /// `b1` and `b2` are then the barycentric coordinates of `v1` and `v2` (`v0`'s is `1 - b1 - b2`).
@@ -42,6 +43,19 @@ impl TriangleHit {
             hit: false,
         }
     }
+}
+
+/// What [`WatertightRay::test_block`] found for the four lanes of a [`TriangleBlock`].
+#[derive(Clone, Copy, Debug)]
+pub struct BlockTest {
+    /// Bit `k` set: lane `k` may be hit (finish it with [`WatertightRay::block_lane_hit`]).
+    pub candidates: u32,
+    /// The sheared vertices `ax, ay, bx, by, cx, cy` of every lane.
+    sheared: [Vec4; 6],
+    /// Their edge functions `u, v, w` (before any exact recomputation).
+    edges: [Vec4; 3],
+    /// The permuted vertex depths `az, bz, cz` (before scaling by `Sz`) of every lane.
+    depth: [Vec4; 3],
 }
 
 /// Per-ray precomputation of the watertight test (Woop et al. 2013, Sec. 3.1): the axis permutation
@@ -167,9 +181,103 @@ impl WatertightRay {
         let cy = c.y - self.sy * c.z;
 
         // Scaled barycentrics: edge functions of the edges opposite v0, v1, v2.
-        let mut u = cx * by - cy * bx;
-        let mut v = ax * cy - ay * cx;
-        let mut w = bx * ay - by * ax;
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        self.intersect_sheared([ax, ay, bx, by, cx, cy], [u, v, w], [a.z, b.z, c.z], t_max)
+    }
+
+    /// The four triangles of `block` at once, as far as the edge test: which lanes may hit (the same
+    /// lanes [`Self::intersect`] would not reject at its sign or determinant test; lanes whose edge
+    /// functions rounded to zero are included, since their exact test is scalar), and the sheared
+    /// vertices that [`Self::block_lane_hit`] finishes each candidate lane from. Every lane's numbers are
+    /// computed by the same operations as [`Self::intersect`]'s, so a lane's result is bit-identical.
+    #[inline]
+    #[must_use]
+    pub fn test_block(&self, block: &TriangleBlock) -> BlockTest {
+        let pick = |x: Vec4, y: Vec4, z: Vec4, k: u32| -> Vec4 {
+            if k == 0 {
+                x
+            } else if k == 1 {
+                y
+            } else {
+                z
+            }
+        };
+        let o = self.origin;
+        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
+        let a = [
+            pick(block.v0x, block.v0y, block.v0z, kx) - Vec4::splat(o.x),
+            pick(block.v0x, block.v0y, block.v0z, ky) - Vec4::splat(o.y),
+            pick(block.v0x, block.v0y, block.v0z, kz) - Vec4::splat(o.z),
+        ];
+        let b = [
+            pick(block.v1x, block.v1y, block.v1z, kx) - Vec4::splat(o.x),
+            pick(block.v1x, block.v1y, block.v1z, ky) - Vec4::splat(o.y),
+            pick(block.v1x, block.v1y, block.v1z, kz) - Vec4::splat(o.z),
+        ];
+        let c = [
+            pick(block.v2x, block.v2y, block.v2z, kx) - Vec4::splat(o.x),
+            pick(block.v2x, block.v2y, block.v2z, ky) - Vec4::splat(o.y),
+            pick(block.v2x, block.v2y, block.v2z, kz) - Vec4::splat(o.z),
+        ];
+        let (sx, sy) = (Vec4::splat(self.sx), Vec4::splat(self.sy));
+        let ax = a[0] - sx * a[2];
+        let ay = a[1] - sy * a[2];
+        let bx = b[0] - sx * b[2];
+        let by = b[1] - sy * b[2];
+        let cx = c[0] - sx * c[2];
+        let cy = c[1] - sy * c[2];
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let zero = Vec4::ZERO;
+        let rounded_to_zero = eq_mask(u, zero) | eq_mask(v, zero) | eq_mask(w, zero);
+        let negative = gt_mask(zero, u) | gt_mask(zero, v) | gt_mask(zero, w);
+        let positive = gt_mask(u, zero) | gt_mask(v, zero) | gt_mask(w, zero);
+        let degenerate = eq_mask(u + v + w, zero);
+        BlockTest {
+            candidates: (rounded_to_zero | !((negative & positive) | degenerate)) & 0xF,
+            sheared: [ax, ay, bx, by, cx, cy],
+            edges: [u, v, w],
+            depth: [a[2], b[2], c[2]],
+        }
+    }
+
+    /// Lane `k` of a [`Self::test_block`] result tested in `(0, t_max)`: the hit
+    /// [`Self::intersect`] gives that triangle.
+    #[inline]
+    #[must_use]
+    pub fn block_lane_hit(&self, test: &BlockTest, k: usize, t_max: f32) -> TriangleHit {
+        let (s, e, d) = (&test.sheared, &test.edges, &test.depth);
+        self.intersect_sheared(
+            [
+                lane(s[0], k),
+                lane(s[1], k),
+                lane(s[2], k),
+                lane(s[3], k),
+                lane(s[4], k),
+                lane(s[5], k),
+            ],
+            [lane(e[0], k), lane(e[1], k), lane(e[2], k)],
+            [lane(d[0], k), lane(d[1], k), lane(d[2], k)],
+            t_max,
+        )
+    }
+
+    /// [`Self::intersect`] from the sheared vertices `[ax, ay, bx, by, cx, cy]`, their edge functions
+    /// `[u, v, w]` and the permuted (unscaled) depths `[az, bz, cz]` on.
+    #[inline]
+    #[must_use]
+    fn intersect_sheared(
+        &self,
+        sheared: [f32; 6],
+        edges: [f32; 3],
+        depth: [f32; 3],
+        t_max: f32,
+    ) -> TriangleHit {
+        let [ax, ay, bx, by, cx, cy] = sheared;
+        let [mut u, mut v, mut w] = edges;
 
         // Fallback (paper: double precision) when an edge function rounded to zero.
         if u == 0.0 || v == 0.0 || w == 0.0 {
@@ -188,9 +296,9 @@ impl WatertightRay {
         }
 
         // Scaled hit distance, range-checked against the scaled interval before dividing.
-        let az = self.sz * a.z;
-        let bz = self.sz * b.z;
-        let cz = self.sz * c.z;
+        let az = self.sz * depth[0];
+        let bz = self.sz * depth[1];
+        let cz = self.sz * depth[2];
         let t_scaled = u * az + v * bz + w * cz;
         let (t_scaled, det_abs) = if det < 0.0 {
             (-t_scaled, -det)
@@ -334,6 +442,81 @@ mod tests {
             }
         }
         out
+    }
+
+    /// The block test finishes every lane exactly as the single-triangle test does: same hits, same
+    /// bits, for random and grid triangles (shared edges and vertices, so edge functions that round to
+    /// zero), rays aimed at edges and vertices, and padded lanes (degenerate, never hit).
+    #[test]
+    fn block_lanes_match_the_single_triangle_test() {
+        let mut rng = TestRng(17);
+        let (_, mut mesh) = grid(6, &mut rng);
+        let origin = Vec3::new(0.4, 0.3, 2.0);
+        let mut rays: Vec<Ray> = targets(&mesh, &mut rng)
+            .into_iter()
+            .map(|p| Ray::new(origin, p - origin))
+            .collect();
+        for _ in 0..300 {
+            let o = Vec3::new(
+                rng.range(-2.0, 2.0),
+                rng.range(-2.0, 2.0),
+                rng.range(-2.0, 2.0),
+            );
+            let d = Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+            rays.push(Ray::new(o, d));
+        }
+        for _ in 0..200 {
+            let mut v = || {
+                Vec3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                )
+            };
+            mesh.push(tri(v(), v(), v()));
+        }
+        // Degenerate lanes, as the packer pads a leaf's last block with.
+        mesh.push(TrianglePositions::default());
+        for chunk in mesh.chunks(4) {
+            let mut block = TriangleBlock::EMPTY;
+            for (k, t) in chunk.iter().enumerate() {
+                block.set_lane(k, t, k as u32);
+            }
+            for ray in &rays {
+                let w = WatertightRay::new(ray);
+                let test = w.test_block(&block);
+                for t_max in [f32::INFINITY, 1.5, 0.7] {
+                    for k in 0..4 {
+                        let lane = if k < chunk.len() {
+                            chunk[k]
+                        } else {
+                            TrianglePositions::default()
+                        };
+                        let single = w.intersect(&lane, t_max);
+                        let by_block = if test.candidates & (1 << k) != 0 {
+                            w.block_lane_hit(&test, k, t_max)
+                        } else {
+                            TriangleHit::miss()
+                        };
+                        assert_eq!(single.hit, by_block.hit, "lane {k} of {chunk:?}, {ray:?}");
+                        if single.hit {
+                            assert_eq!(
+                                (single.t.to_bits(), single.b1.to_bits(), single.b2.to_bits()),
+                                (
+                                    by_block.t.to_bits(),
+                                    by_block.b1.to_bits(),
+                                    by_block.b2.to_bits()
+                                )
+                            );
+                        }
+                    }
+                }
+            }
+        }
     }
 
     #[test]

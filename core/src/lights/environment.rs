@@ -215,6 +215,7 @@ mod tests {
                 },
                 nodes: &[],
                 triangles: &[],
+                blocks: &[],
                 triangle_info: &[],
                 normals: &[],
                 uvs: &[],

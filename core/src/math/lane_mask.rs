@@ -1,11 +1,27 @@
 //! Bit masks of four-lane comparisons (bit `i` set where lane `i` compares true), for traversal's slab
-//! test and child ordering.
+//! test, child ordering and triangle blocks, and reading one lane by value.
 //!
 //! On the CPU these are glam's SIMD comparisons (one compare and one `movmskps`). On the GPU they are
 //! written lane by lane: glam's scalar `BVec4A`, which its `Vec4` comparisons return there, builds each
 //! lane's mask by indexing a two-entry local array with the boolean, and lavapipe turns every dynamically
 //! indexed local array into a loop over its lanes. Both give the same bits.
 use glam::Vec4;
+
+/// Lane `k` (0 to 3) of `v`, read by value with selects: indexing a vector in place makes rust-gpu select
+/// between pointers, which SPIR-V's logical addressing does not allow.
+#[inline(always)]
+#[must_use]
+pub fn lane(v: Vec4, k: usize) -> f32 {
+    if k == 0 {
+        v.x
+    } else if k == 1 {
+        v.y
+    } else if k == 2 {
+        v.z
+    } else {
+        v.w
+    }
+}
 
 /// Bit `i` set where `a[i] <= b[i]`.
 #[inline(always)]

@@ -44,15 +44,18 @@ pub const SLOT_LEAF: u32 = 1 << 31;
 pub const SLOT_EMPTY: u32 = INVALID_INDEX;
 /// A leaf's triangle count minus one sits in the 4 bits from here.
 const LEAF_COUNT_SHIFT: u32 = 27;
-/// A leaf's first triangle sits in the low 27 bits.
+/// A leaf's first triangle or block sits in the low 27 bits.
 const LEAF_FIRST_MASK: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
-/// Most triangles one leaf may hold (what its 4-bit count can say).
+/// Most triangles one leaf may hold: what its 4-bit count can say. The builder keeps leaves at this many
+/// triangles or fewer.
 pub const MAX_LEAF_TRIANGLES: u32 = 16;
-/// Triangle indices of leaves stay below this (27 bits); `first + count` at most this.
+/// Leaf triangle and block indices stay below this (27 bits); `first + count` at most this.
 pub const MAX_LEAF_TRIANGLE_INDEX: u32 = 1 << LEAF_COUNT_SHIFT;
 
-/// The slot word of a leaf holding triangles `first .. first + count` (`1 <= count <=
-/// MAX_LEAF_TRIANGLES`, `first + count <= MAX_LEAF_TRIANGLE_INDEX`).
+/// The slot word of a leaf of `count` triangles (`1 <= count <= MAX_LEAF_TRIANGLES`) from `first` (`first
+/// + count <= MAX_LEAF_TRIANGLE_INDEX`): in a built BVH (`fovea_scene::bvh::Bvh`) `first` is the first of
+/// the triangles in the leaf-ordered arrays; once packed, the first of the `ceil(count / 4)`
+/// [`TriangleBlock`]s that hold them (the packer rewrites each leaf's word).
 #[inline]
 #[must_use]
 pub const fn leaf_slot(first: u32, count: u32) -> u32 {
@@ -80,8 +83,9 @@ pub const fn leaf_count(slot: u32) -> u32 {
 /// "Getting rid of packets"; Dammertz et al. 2008, "Shallow bounding volume hierarchies"). Slot `i` is
 /// described by one word, `slots[i]`:
 /// - an interior node: its index, below [`SLOT_LEAF`];
-/// - a leaf: [`leaf_slot`]`(first, count)`, the triangles `first .. first + count` of the (BVH-ordered)
-///   triangle arrays, read back with [`leaf_first`] and [`leaf_count`];
+/// - a leaf of `count` triangles: [`leaf_slot`]`(first, count)`, the triangles in the blocks `first ..`
+///   of [`super::SceneView::blocks`] (in a built, not yet packed, BVH, the triangles `first .. first +
+///   count` of the leaf-ordered arrays), read back with [`leaf_first`] and [`leaf_count`];
 /// - empty: [`SLOT_EMPTY`]. An empty slot's box is inverted (`min = f32::MAX`, `max = -f32::MAX`),
 ///   which the slab test (with near and far planes chosen by the ray's direction signs) always misses,
 ///   so it is never entered. (Read as a leaf, the word would end past [`MAX_LEAF_TRIANGLE_INDEX`].)
@@ -186,10 +190,8 @@ impl Default for Bvh4Node {
     }
 }
 
-/// World-space vertex positions of one triangle (48 bytes), in BVH leaf order. `v0.w` is
-/// [`TRIANGLE_ALPHA_CUTOUT`] when the triangle's material has an alpha cut-out (so traversal runs the
-/// cut-out test only for such triangles, without reading their material first), else 0; `v1.w` and
-/// `v2.w` are 0.
+/// World-space vertex positions of one triangle (48 bytes; `w` is unused and zero), in BVH leaf order:
+/// what shading and light sampling read. Traversal tests [`TriangleBlock`]s instead.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TrianglePositions {
@@ -198,8 +200,62 @@ pub struct TrianglePositions {
     pub v2: Vec4,
 }
 
-/// [`TrianglePositions::v0`]'s `w` for a triangle whose material has an alpha cut-out.
-pub const TRIANGLE_ALPHA_CUTOUT: f32 = 1.0;
+/// Up to four triangles of one BVH leaf, structure of arrays (160 bytes), which traversal tests with one
+/// SIMD watertight test: lane `k` of each vector is triangle `index[k]`'s. A leaf's triangles fill
+/// `ceil(count / 4)` consecutive blocks, and a packed BVH's leaf slot words name blocks
+/// ([`leaf_slot`]). Unused lanes of a leaf's last block have degenerate positions (all zero: never hit)
+/// and `index` [`INVALID_INDEX`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct TriangleBlock {
+    pub v0x: Vec4,
+    pub v0y: Vec4,
+    pub v0z: Vec4,
+    pub v1x: Vec4,
+    pub v1y: Vec4,
+    pub v1z: Vec4,
+    pub v2x: Vec4,
+    pub v2y: Vec4,
+    pub v2z: Vec4,
+    /// Each lane's triangle ([`super::SceneView::triangles`] index), with [`BLOCK_LANE_CUTOUT`] set
+    /// when its material has an alpha cut-out (so traversal runs the cut-out test only for such
+    /// triangles, without reading their material first).
+    pub index: UVec4,
+}
+
+/// [`TriangleBlock::index`]: the lane's triangle has an alpha cut-out material.
+pub const BLOCK_LANE_CUTOUT: u32 = 1 << 31;
+
+impl TriangleBlock {
+    /// A block of four unused lanes.
+    pub const EMPTY: Self = Self {
+        v0x: Vec4::ZERO,
+        v0y: Vec4::ZERO,
+        v0z: Vec4::ZERO,
+        v1x: Vec4::ZERO,
+        v1y: Vec4::ZERO,
+        v1z: Vec4::ZERO,
+        v2x: Vec4::ZERO,
+        v2y: Vec4::ZERO,
+        v2z: Vec4::ZERO,
+        index: UVec4::splat(INVALID_INDEX),
+    };
+
+    /// Puts triangle `index` (positions `t`, cut-out flag included in `index`) in lane `lane`.
+    #[inline]
+    pub fn set_lane(&mut self, lane: usize, t: &TrianglePositions, index: u32) {
+        self.v0x[lane] = t.v0.x;
+        self.v0y[lane] = t.v0.y;
+        self.v0z[lane] = t.v0.z;
+        self.v1x[lane] = t.v1.x;
+        self.v1y[lane] = t.v1.y;
+        self.v1z[lane] = t.v1.z;
+        self.v2x[lane] = t.v2.x;
+        self.v2y[lane] = t.v2.y;
+        self.v2z[lane] = t.v2.z;
+        self.index[lane] = index;
+    }
+}
 
 /// What shading needs to know about one triangle besides its positions (16 bytes), in BVH leaf order.
 ///
@@ -384,5 +440,5 @@ pub struct TexelOffsets {
     pub uvs: u32,
     pub textures: u32,
     pub texels: u32,
-    pub _pad: u32,
+    pub blocks: u32,
 }

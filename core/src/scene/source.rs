@@ -1,6 +1,6 @@
-//! Where core reads the scene's large arrays: the BVH nodes and triangle positions traversal tests, and
-//! what shading reads at a hit (triangle info, materials, vertex normals and texture coordinates,
-//! texture infos and texels).
+//! Where core reads the scene's large arrays: the BVH nodes and triangle blocks traversal tests, and
+//! what shading reads at a hit (triangle positions and info, materials, vertex normals and texture
+//! coordinates, texture infos and texels).
 //!
 //! On the CPU from the [`SceneView`]'s slices ([`SceneSlices`]). On the GPU from one storage texel
 //! buffer that holds all of them ([`SceneTexels`], `R32G32B32A32_UINT`): each array starts at the texel
@@ -15,7 +15,8 @@
 //! inside a struct, so the source is an argument of its own next to the [`SceneView`] rather than one of
 //! its fields.
 use crate::scene::{
-    Bvh4Node, Features, Material, SceneView, TextureInfo, TriangleInfo, TrianglePositions,
+    Bvh4Node, Features, Material, SceneView, TextureInfo, TriangleBlock, TriangleInfo,
+    TrianglePositions,
 };
 
 /// Texels (16 bytes each) per [`Bvh4Node`].
@@ -24,11 +25,14 @@ pub const NODE_TEXELS: u32 = 7;
 pub const TRIANGLE_TEXELS: u32 = 3;
 /// Texels per [`Material`].
 pub const MATERIAL_TEXELS: u32 = 7;
+/// Texels per [`TriangleBlock`].
+pub const BLOCK_TEXELS: u32 = 10;
 
 const _: () = {
     assert!(core::mem::size_of::<Bvh4Node>() == NODE_TEXELS as usize * 16);
     assert!(core::mem::size_of::<TrianglePositions>() == TRIANGLE_TEXELS as usize * 16);
     assert!(core::mem::size_of::<Material>() == MATERIAL_TEXELS as usize * 16);
+    assert!(core::mem::size_of::<TriangleBlock>() == BLOCK_TEXELS as usize * 16);
     assert!(core::mem::size_of::<TriangleInfo>() == 16);
     assert!(core::mem::size_of::<TextureInfo>() == 16);
 };
@@ -40,6 +44,12 @@ pub trait SceneSource {
     fn node<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Bvh4Node;
     /// The positions of triangle `index` (BVH leaf order).
     fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions;
+    /// The positions of triangle block `index`, which leaves name (its `index` field is not read: see
+    /// [`Self::block_lanes`]).
+    fn block<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TriangleBlock;
+    /// The [`TriangleBlock::index`] words of triangle block `index`, read apart because a ray usually
+    /// hits none of a block's triangles.
+    fn block_lanes<F: Features>(&self, scene: &SceneView<F>, index: u32) -> glam::UVec4;
     /// Vertex indices and material of triangle `index`.
     fn triangle_info<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TriangleInfo;
     /// Material `index`.
@@ -70,6 +80,16 @@ impl SceneSource for SceneSlices {
     #[inline(always)]
     fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions {
         scene.triangles[index as usize]
+    }
+
+    #[inline(always)]
+    fn block<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TriangleBlock {
+        scene.blocks[index as usize]
+    }
+
+    #[inline(always)]
+    fn block_lanes<F: Features>(&self, scene: &SceneView<F>, index: u32) -> glam::UVec4 {
+        scene.blocks[index as usize].index
     }
 
     #[inline(always)]
@@ -160,6 +180,28 @@ mod texels {
                 v1: floats(self.read(t + 1)),
                 v2: floats(self.read(t + 2)),
             }
+        }
+
+        #[inline(always)]
+        fn block<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TriangleBlock {
+            let t = scene.globals.texel_offsets.blocks + index * BLOCK_TEXELS;
+            TriangleBlock {
+                v0x: floats(self.read(t)),
+                v0y: floats(self.read(t + 1)),
+                v0z: floats(self.read(t + 2)),
+                v1x: floats(self.read(t + 3)),
+                v1y: floats(self.read(t + 4)),
+                v1z: floats(self.read(t + 5)),
+                v2x: floats(self.read(t + 6)),
+                v2y: floats(self.read(t + 7)),
+                v2z: floats(self.read(t + 8)),
+                index: UVec4::ZERO,
+            }
+        }
+
+        #[inline(always)]
+        fn block_lanes<F: Features>(&self, scene: &SceneView<F>, index: u32) -> UVec4 {
+            self.read(scene.globals.texel_offsets.blocks + index * BLOCK_TEXELS + 9)
         }
 
         #[inline(always)]

@@ -2,7 +2,8 @@
 //! function takes. The CPU host builds it from `Vec`s, the GPU kernel from storage buffers.
 use super::features::{FeatureFlags, Features};
 use super::layout::{
-    Bvh4Node, Light, Material, SceneGlobals, TextureInfo, TriangleInfo, TrianglePositions,
+    Bvh4Node, Light, Material, SceneGlobals, TextureInfo, TriangleBlock, TriangleInfo,
+    TrianglePositions,
 };
 
 /// The packed scene as borrowed slices. Arrays a scene does not need are empty.
@@ -19,6 +20,9 @@ pub struct SceneView<'a, F: Features = FeatureFlags> {
     pub nodes: &'a [Bvh4Node],
     /// Triangle positions in BVH leaf order.
     pub triangles: &'a [TrianglePositions],
+    /// The leaves' triangles four at a time, which traversal tests ([`TriangleBlock`]); leaf slot words
+    /// of `nodes` index it.
+    pub blocks: &'a [TriangleBlock],
     /// Per-triangle vertex indices and material, parallel to `triangles`.
     pub triangle_info: &'a [TriangleInfo],
     /// Per-vertex shading normals (`xyz`, `w` unused). Empty when the scene has no shading normals; a zero
@@ -54,6 +58,7 @@ impl SceneView<'_> {
             globals: SceneGlobals::default(),
             nodes: &[],
             triangles: &[],
+            blocks: &[],
             triangle_info: &[],
             normals: &[],
             uvs: &[],
@@ -80,6 +85,7 @@ impl<'a, F: Features> SceneView<'a, F> {
             globals: self.globals,
             nodes: self.nodes,
             triangles: self.triangles,
+            blocks: self.blocks,
             triangle_info: self.triangle_info,
             normals: self.normals,
             uvs: self.uvs,

@@ -15,6 +15,7 @@ use fovea_core::scene::BvhNode;
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
+use super::blocks::blocks_for;
 use super::MAX_DEPTH;
 
 /// Most bins per axis; `bin_count` is clamped to `2..=MAX_BINS`.
@@ -293,7 +294,9 @@ fn best_split(bins: &Bins, binning: &Binning) -> Option<Split> {
             if count == 0 || right_count[i] == 0 {
                 continue;
             }
-            let cost = acc.half_area() * count as f32 + right_area[i] * right_count[i] as f32;
+            // Leaves are tested four triangles at a time, so the cost counts blocks of four.
+            let cost = acc.half_area() * blocks_for(count as usize) as f32
+                + right_area[i] * blocks_for(right_count[i] as usize) as f32;
             if best.is_none_or(|b| cost < b.cost) {
                 best = Some(Split {
                     axis,
@@ -500,9 +503,9 @@ pub(super) fn build_node(
                 let split_cost = if area > 0.0 {
                     ctx.traversal_cost + ctx.intersection_cost * best.cost / area
                 } else {
-                    ctx.traversal_cost + ctx.intersection_cost * n as f32
+                    ctx.traversal_cost + ctx.intersection_cost * blocks_for(n) as f32
                 };
-                let leaf_cost = ctx.intersection_cost * n as f32;
+                let leaf_cost = ctx.intersection_cost * blocks_for(n) as f32;
                 if n <= ctx.max_leaf && leaf_cost <= split_cost {
                     None
                 } else {

@@ -10,6 +10,7 @@
 //! Boxes are widened by a few ulps so that they strictly contain their triangles; leaves keep the binary
 //! builder's leaf order, which is the order of the packed triangle arrays.
 mod binary;
+pub mod blocks;
 mod collapse;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -83,8 +84,9 @@ pub struct BvhStats {
     pub sah_cost: f64,
 }
 
-/// The surface area heuristic cost of a 4-wide tree (MacDonald and Booth 1990): every node visit costs
-/// `traversal_cost` and every triangle test `intersection_cost`, each weighted by the probability that
+/// The surface area heuristic cost of a 4-wide tree (MacDonald and Booth 1990) of a built BVH (leaves
+/// name triangles): every node visit costs `traversal_cost` and every test of a leaf block (up to four
+/// triangles at once) `intersection_cost`, each weighted by the probability that
 /// a random ray through the root's box enters the box of the node or leaf (ratio of surface areas). The
 /// root is always visited; an empty tree costs 0.
 #[must_use]
@@ -123,7 +125,7 @@ pub fn sah_cost(nodes: &[Bvh4Node], traversal_cost: f64, intersection_cost: f64)
     for node in nodes {
         for slot in (0..4).filter(|&s| !node.is_empty_slot(s)) {
             let cost = if node.is_leaf_slot(slot) {
-                intersection_cost * f64::from(leaf_count(node.slot(slot)))
+                intersection_cost * blocks::blocks_for(leaf_count(node.slot(slot)) as usize) as f64
             } else {
                 traversal_cost
             };
@@ -227,7 +229,7 @@ mod tests {
     use fovea_core::geometry::triangle::WatertightRay;
     use fovea_core::geometry::Ray;
     use fovea_core::scene::{leaf_first, leaf_slot, SLOT_EMPTY};
-    use fovea_core::scene::{Material, SceneView, TriangleInfo};
+    use fovea_core::scene::{Material, SceneView, TriangleBlock, TriangleInfo};
     use glam::{UVec4, Vec3, Vec4};
 
     /// SplitMix64 for reproducible test data.
@@ -286,9 +288,12 @@ mod tests {
     }
 
     /// The packed scene arrays a traversal needs, in BVH leaf order.
+    /// A built BVH (leaves name triangles, as [`validate`] checks) and its packed traversal form.
     struct Packed {
         bvh: Bvh,
+        nodes: Vec<Bvh4Node>,
         triangles: Vec<TrianglePositions>,
+        blocks: Vec<TriangleBlock>,
         info: Vec<TriangleInfo>,
         materials: Vec<Material>,
     }
@@ -306,9 +311,13 @@ mod tests {
                 .map(|&i| input[i as usize])
                 .collect();
             let info = vec![TriangleInfo::default(); triangles.len()];
+            let mut nodes = bvh.nodes.clone();
+            let blocks = blocks::pack_leaf_blocks(&mut nodes, &triangles, |_| false);
             Self {
                 bvh,
+                nodes,
                 triangles,
+                blocks,
                 info,
                 materials: vec![Material::default()],
             }
@@ -317,8 +326,9 @@ mod tests {
         fn view(&self) -> SceneView<'_> {
             SceneView {
                 features: fovea_core::scene::FeatureFlags::ALL,
-                nodes: &self.bvh.nodes,
+                nodes: &self.nodes,
                 triangles: &self.triangles,
+                blocks: &self.blocks,
                 triangle_info: &self.info,
                 materials: &self.materials,
                 ..SceneView::empty()
@@ -539,8 +549,8 @@ mod tests {
 
     #[test]
     fn sah_cost_of_known_trees() {
-        // Two stacked triangles stay one leaf (SAH: a split costs 1 + (1 + 1) / 2 = 2, no less than two
-        // tests), so the tree costs one root visit plus two tests.
+        // Two stacked triangles stay one leaf, one block (SAH: a split costs 1 + (1 + 1) / 2 = 2, more
+        // than the leaf's one block test), so the tree costs one root visit plus one block test.
         let tri = |z: f32| TrianglePositions {
             v0: Vec4::new(0.0, 0.0, z, 0.0),
             v1: Vec4::new(1.0, 0.0, z, 0.0),
@@ -548,7 +558,7 @@ mod tests {
         };
         let two = build_bvh(&[tri(0.0), tri(0.5)], &BvhBuildOptions::default());
         let cost = two.stats.sah_cost;
-        assert!((cost - 3.0).abs() < 1e-6, "{cost}");
+        assert!((cost - 2.0).abs() < 1e-6, "{cost}");
         let mut root = Bvh4Node::EMPTY;
         root.min_x = Vec4::new(0.0, 0.0, f32::MAX, f32::MAX);
         root.max_x = Vec4::new(1.0, 1.0, -f32::MAX, -f32::MAX);
@@ -557,8 +567,9 @@ mod tests {
         root.min_z = Vec4::new(0.0, 0.5, f32::MAX, f32::MAX);
         root.max_z = Vec4::new(0.5, 1.0, -f32::MAX, -f32::MAX);
         root.slots = UVec4::new(leaf_slot(0, 3), leaf_slot(3, 5), SLOT_EMPTY, SLOT_EMPTY);
-        // Unit cube root (half area 3); two leaves of half area 1 + 0.5 + 0.5 = 2 each.
-        let expected = 1.0 + (2.0 * 3.0 + 2.0 * 5.0) / 3.0;
+        // Unit cube root (half area 3); two leaves of half area 1 + 0.5 + 0.5 = 2 each, of one block (3
+        // triangles) and two blocks (5).
+        let expected = 1.0 + (2.0 * 1.0 + 2.0 * 2.0) / 3.0;
         assert!((sah_cost(&[root], 1.0, 1.0) - expected).abs() < 1e-9);
         assert_eq!(sah_cost(&[], 1.0, 1.0), 0.0);
         // The metric ranks builder settings: 32 bins beat 2 on a random soup.
