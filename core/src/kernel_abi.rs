@@ -47,7 +47,7 @@ pub const BINDING_CELL_MEANS: u32 = 18;
 pub const BINDING_HDR: u32 = 19;
 /// The tone-mapped image (RGBA8 packed in `u32`, width × height).
 pub const BINDING_LDR: u32 = 20;
-/// The frame's [`FrameParams`] (one element; a buffer rather than push constants because it is larger
+/// The frame's [`FrameParams`](crate::integrator::FrameParams) (one element; a buffer rather than push constants because it is larger
 /// than the 128 bytes of push constants Vulkan guarantees).
 pub const BINDING_FRAME: u32 = 21;
 /// The scene's large arrays (nodes, triangle blocks and positions, triangle info, materials, normals,

@@ -25,7 +25,7 @@
 //!
 //! where Ê_x(w) bounds the directional albedo of layer x from above (clearcoat: 0.25 · clearcoat ·
 //! Schlick(0.04, cos θ); specular: Schlick(cspec0, cos θ), per channel) and A_base is the directional
-//! albedo of the diffuse-plus-sheen base (the diffuse part in closed form, [`diffuse_albedo`]). Taking
+//! albedo of the diffuse-plus-sheen base (the diffuse part in closed form, `diffuse_albedo`). Taking
 //! the max over both directions keeps f symmetric in wo and wi, and for every wo
 //! ∫ f cos θi dωi ≤ Ê_cc + (1 - Ê_cc) (Ê_spec + (1 - Ê_spec) · 1) = 1. Materials whose base albedo is
 //! below one everywhere (any base colour up to about 0.64 at roughness 1, up to 1 at roughness 0) keep

@@ -256,6 +256,21 @@ fn child_ranks(entry: Vec4, mask: u32, any: bool) -> UVec4 {
     )
 }
 
+/// Lane `k` (0 to 3) of `v`, read by value with selects, as `lane_mask::lane` does for floats.
+#[inline(always)]
+#[must_use]
+fn lane_u32(v: UVec4, k: usize) -> u32 {
+    if k == 0 {
+        v.x
+    } else if k == 1 {
+        v.y
+    } else if k == 2 {
+        v.z
+    } else {
+        v.w
+    }
+}
+
 /// The slot of the lowest set bit of a non-zero 4-bit mask (no intrinsics, for the GPU's sake).
 #[inline]
 #[must_use]
@@ -400,20 +415,19 @@ fn traverse<F: Features, S: SceneSource>(
                     test.candidates &= (1 << left) - 1;
                 }
                 if test.candidates != 0 {
-                    let (w, t, lanes) = (&watertight, &test, source.block_lanes(scene, b));
-                    let (c, h) = (&mut closest, &mut best);
-                    // Unrolled by hand (see `push_child`).
-                    if test_block_lane(scene, source, w, t, 0, lanes.x, c, h) && any {
-                        return best;
-                    }
-                    if test_block_lane(scene, source, w, t, 1, lanes.y, c, h) && any {
-                        return best;
-                    }
-                    if test_block_lane(scene, source, w, t, 2, lanes.z, c, h) && any {
-                        return best;
-                    }
-                    if test_block_lane(scene, source, w, t, 3, lanes.w, c, h) && any {
-                        return best;
+                    let lanes = source.block_lanes(scene, b);
+                    // One lane at a time, lowest first. A loop rather than four unrolled calls: a GPU
+                    // that runs both sides of every branch (lavapipe before Mesa 24.3) then runs the
+                    // lane's finishing code and cut-out test once per candidate, not four times.
+                    let mut pending = test.candidates;
+                    while pending != 0 {
+                        let k = lowest_slot(pending);
+                        pending &= pending - 1;
+                        let (w, t, c, h) = (&watertight, &test, &mut closest, &mut best);
+                        let word = lane_u32(lanes, k);
+                        if test_block_lane(scene, source, w, t, k, word, c, h) && any {
+                            return best;
+                        }
                     }
                 }
                 b += 1;

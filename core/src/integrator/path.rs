@@ -10,7 +10,7 @@
 //! **Numerical guards.** GPU compilers may assume that no NaN or infinity occurs and fold NaN tests
 //! away, so the estimate is kept finite by guarding the *inputs* of every risky operation rather than by
 //! filtering results: every division is by a pdf tested `> 0` first (written `!(pdf > 0)` so a NaN
-//! fails too), directions are normalised with fallbacks ([`crate::sampling::ggx_vndf::normalize_or_zero`],
+//! fails too), directions are normalised with fallbacks (`ggx_vndf::normalize_or_zero`,
 //! `normalize_or`), cosines are tested against the shading and geometric normals before use, and MIS
 //! weights are total ([`power_heuristic`]). The one remaining output guard is the final one at the end of
 //! [`trace_path`]: a non-finite estimate becomes 0 and a finite one is capped at [`RADIANCE_LIMIT`]; it

@@ -143,7 +143,7 @@ fn exp_kernel(r: f32) -> f32 {
     p * z + r + 1.0
 }
 
-/// `e^x`; `+∞` above [`EXP_MAX_ARG`], `0` below [`EXP_MIN_ARG`], NaN for NaN.
+/// `e^x`; `+∞` above `EXP_MAX_ARG`, `0` below `EXP_MIN_ARG`, NaN for NaN.
 #[inline]
 #[must_use]
 pub fn exp(x: f32) -> f32 {

@@ -3,7 +3,7 @@
 //! coordinates, texture infos and texels).
 //!
 //! On the CPU from the [`SceneView`]'s slices ([`SceneSlices`]). On the GPU from one storage texel
-//! buffer that holds all of them ([`SceneTexels`], `R32G32B32A32_UINT`): each array starts at the texel
+//! buffer that holds all of them (`SceneTexels`, `R32G32B32A32_UINT`): each array starts at the texel
 //! named in [`SceneGlobals::texel_offsets`](crate::scene::SceneGlobals::texel_offsets) (nodes at 0) and
 //! holds the same bytes as the slice, so a 16-byte element is one texel, a [`Bvh4Node`] seven, and two
 //! texture coordinates or four texture words share one.
