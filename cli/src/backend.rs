@@ -184,7 +184,7 @@ impl Renderer {
         match self {
             Self::Cpu(cpu) => cpu_device_name(cpu.pool.current_num_threads()),
             #[cfg(feature = "vulkan")]
-            Self::Vulkan(v) => v.ctx.device_name().to_string(),
+            Self::Vulkan(v) => v.ctx.device_description(),
         }
     }
 
@@ -304,7 +304,7 @@ fn print_vulkan_devices() {
                 println!(
                     "vulkan {}  {}  [{}, Vulkan {major}.{minor}.{patch}]{}",
                     d.index,
-                    d.name,
+                    d.description(),
                     d.device_type,
                     d.unsuitable
                         .map(|r| format!("  unusable: {r}"))

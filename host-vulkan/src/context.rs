@@ -446,6 +446,14 @@ impl VulkanContext {
         &self.info.name
     }
 
+    /// The device's name and its driver, e.g.
+    /// "llvmpipe (LLVM 15.0.6, 256 bits); llvmpipe, Mesa 25.0.7 (LLVM 15.0.6)": what reports print,
+    /// since lavapipe's speed depends on the Mesa version more than on the device.
+    #[must_use]
+    pub fn device_description(&self) -> String {
+        self.info.description()
+    }
+
     /// Whether frame times come from GPU timestamps (else wall time around the submissions).
     #[must_use]
     pub fn has_timestamps(&self) -> bool {

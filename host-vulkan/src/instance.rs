@@ -149,6 +149,30 @@ impl InstanceHandle {
         unsafe { self.instance.enumerate_physical_devices() }.during("vkEnumeratePhysicalDevices")
     }
 
+    /// The driver's name and version string (e.g. "llvmpipe, Mesa 25.0.7 (LLVM 15.0.6)"), from
+    /// `VkPhysicalDeviceDriverProperties` (core in Vulkan 1.2); empty if the driver leaves it blank.
+    fn driver(&self, pd: vk::PhysicalDevice) -> String {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        // SAFETY: `pd` was enumerated from this instance, which was created for Vulkan 1.2, and the
+        // caller checked that the device supports 1.2 (where the query and the struct are core).
+        unsafe {
+            self.instance
+                .get_physical_device_properties2(pd, &mut props)
+        };
+        let text = |c: Result<&std::ffi::CStr, _>| {
+            c.map(|c| c.to_string_lossy().trim().to_string())
+                .unwrap_or_default()
+        };
+        let name = text(driver.driver_name_as_c_str());
+        let info = text(driver.driver_info_as_c_str());
+        match (name.is_empty(), info.is_empty()) {
+            (false, false) => format!("{name}, {info}"),
+            (false, true) => name,
+            _ => info,
+        }
+    }
+
     /// Describes one physical device.
     pub fn describe(&self, index: usize, pd: vk::PhysicalDevice) -> DeviceInfo {
         // SAFETY: `pd` was enumerated from this instance.
@@ -163,6 +187,11 @@ impl InstanceHandle {
             .map(|c| c.to_string_lossy().into_owned())
             .unwrap_or_else(|_| "unnamed device".into());
         let v = props.api_version;
+        let driver = if v >= vk::API_VERSION_1_2 {
+            self.driver(pd)
+        } else {
+            String::new()
+        };
         let has_compute = queues
             .iter()
             .any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE));
@@ -176,6 +205,7 @@ impl InstanceHandle {
         DeviceInfo {
             index,
             name,
+            driver,
             device_type: device_type_name(props.device_type),
             api_version: [
                 vk::api_version_major(v),
@@ -206,6 +236,8 @@ pub struct DeviceInfo {
     /// Position in the loader's list (what `--device` takes).
     pub index: usize,
     pub name: String,
+    /// The driver and its version, e.g. "llvmpipe, Mesa 25.0.7 (LLVM 15.0.6)"; empty if unknown.
+    pub driver: String,
     /// "discrete", "integrated", "virtual", "cpu" or "other".
     pub device_type: &'static str,
     /// Vulkan version the device supports: major, minor, patch.
@@ -214,6 +246,18 @@ pub struct DeviceInfo {
     pub preference: u32,
     /// Why the device cannot run fovea, if it cannot.
     pub unsuitable: Option<String>,
+}
+
+impl DeviceInfo {
+    /// The name, then the driver if known: "NAME; DRIVER".
+    #[must_use]
+    pub fn description(&self) -> String {
+        if self.driver.is_empty() {
+            self.name.clone()
+        } else {
+            format!("{}; {}", self.name, self.driver)
+        }
+    }
 }
 
 fn device_type_name(t: vk::PhysicalDeviceType) -> &'static str {
@@ -308,6 +352,7 @@ mod tests {
         DeviceInfo {
             index,
             name: format!("dev{index}"),
+            driver: String::new(),
             device_type: "other",
             api_version: [1, 3, 0],
             preference,

@@ -214,7 +214,7 @@ fn small_scenes_render_alike_on_cpu_and_vulkan() {
         return;
     };
     let log = ctx.validation_log();
-    let device = ctx.device_name().to_string();
+    let device = ctx.device_description();
     let mut rows = Vec::new();
     for case in cases() {
         if !case.path.exists() {
@@ -337,7 +337,7 @@ fn lost_empire_full_frame_renders_alike() {
          FLIP {:.3e}; CPU {:.0} ms, GPU {:.0} ms ({} chunks, {} idle invocations, plan {:.1} ms, upload \
          {upload_ms:.0} ms)",
         gpu_stats.render.primary_samples,
-        ctx.device_name(),
+        &ctx.device_description(),
         100.0 * f.within,
         f.max_abs,
         f.mean_flip,

@@ -613,7 +613,7 @@ fn core_functions_agree_across_backends() {
         return;
     };
     let log = ctx.validation_log();
-    let device = ctx.device_name().to_string();
+    let device = ctx.device_description();
     let mut rng = Rng(0x5eed_f00d);
     let n = 4096;
     let frame = probe_frame();
@@ -1095,7 +1095,7 @@ fn scene_functions_agree_across_backends() {
         return;
     };
     let log = ctx.validation_log();
-    let device = ctx.device_name().to_string();
+    let device = ctx.device_description();
     let gpu_scene = ctx.upload_scene(&packed).expect("the scene uploads");
     let n = 8192;
     let mut rows: Vec<Row> = Vec::new();

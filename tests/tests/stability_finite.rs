@@ -528,7 +528,7 @@ fn probe_functions_are_finite_on_vulkan() {
         return;
     };
     let log = ctx.validation_log();
-    let device = ctx.device_name().to_string();
+    let device = ctx.device_description();
     run_cases(&device, |selector, inputs| {
         ctx.run_probe(selector, inputs)
             .unwrap_or_else(|e| panic!("probe {selector}: {e}"))
@@ -949,7 +949,7 @@ fn scene_functions_are_finite_on_vulkan() {
         return;
     };
     let log = ctx.validation_log();
-    let device = ctx.device_name().to_string();
+    let device = ctx.device_description();
     let total = pick(1usize << 20, 10_000_000);
     let start = Instant::now();
     for (env_name, env) in [
@@ -1232,7 +1232,7 @@ fn frames_are_finite_without_the_final_guard_on_vulkan() {
                 .count();
             eprintln!(
                 "{} {name}, strategy {strategy}: {w}x{h} x {spp} spp, {bad} non-finite pixels, {lit} lit, {:.2} s",
-                ctx.device_name(),
+                &ctx.device_description(),
                 start.elapsed().as_secs_f64()
             );
             assert_eq!(bad, 0, "{name} strategy {strategy}");
