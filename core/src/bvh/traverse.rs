@@ -24,7 +24,7 @@ use glam::{UVec4, Vec3, Vec4};
 use crate::geometry::triangle::{BlockTest, WatertightRay};
 use crate::geometry::Ray;
 use crate::material::alpha::is_cut_out;
-use crate::math::lane_mask::{eq_mask, gt_mask, le_mask};
+use crate::math::lane_mask::{eq_mask, gt_mask, lane_u32, le_mask};
 use crate::scene::features::FEATURE_ALPHA_CUTOUT;
 use crate::scene::{
     leaf_count, leaf_first, Bvh4Node, Features, SceneSlices, SceneSource, SceneView,
@@ -254,21 +254,6 @@ fn child_ranks(entry: Vec4, mask: u32, any: bool) -> UVec4 {
         rank(2, entry.z),
         rank(3, entry.w),
     )
-}
-
-/// Lane `k` (0 to 3) of `v`, read by value with selects, as `lane_mask::lane` does for floats.
-#[inline(always)]
-#[must_use]
-fn lane_u32(v: UVec4, k: usize) -> u32 {
-    if k == 0 {
-        v.x
-    } else if k == 1 {
-        v.y
-    } else if k == 2 {
-        v.z
-    } else {
-        v.w
-    }
 }
 
 /// The slot of the lowest set bit of a non-zero 4-bit mask (no intrinsics, for the GPU's sake).

@@ -5,13 +5,28 @@
 //! written lane by lane: glam's scalar `BVec4A`, which its `Vec4` comparisons return there, builds each
 //! lane's mask by indexing a two-entry local array with the boolean, and lavapipe turns every dynamically
 //! indexed local array into a loop over its lanes. Both give the same bits.
-use glam::Vec4;
+use glam::{UVec4, Vec4};
 
 /// Lane `k` (0 to 3) of `v`, read by value with selects: indexing a vector in place makes rust-gpu select
 /// between pointers, which SPIR-V's logical addressing does not allow.
 #[inline(always)]
 #[must_use]
 pub fn lane(v: Vec4, k: usize) -> f32 {
+    if k == 0 {
+        v.x
+    } else if k == 1 {
+        v.y
+    } else if k == 2 {
+        v.z
+    } else {
+        v.w
+    }
+}
+
+/// Lane `k` (0 to 3) of `v`, read by value with selects, as [`lane`] does for floats.
+#[inline(always)]
+#[must_use]
+pub fn lane_u32(v: UVec4, k: usize) -> u32 {
     if k == 0 {
         v.x
     } else if k == 1 {

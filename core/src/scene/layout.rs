@@ -8,6 +8,7 @@
 //! The two types traversal reads, [`Bvh4Node`] and [`TrianglePositions`], hold `Vec4`/`UVec4` rather
 //! than `[f32; 4]`. Every type the GPU reads from its scene texel buffer ([`super::source`]) is a whole
 //! number of 16-byte texels.
+use crate::math::lane_mask::lane_u32;
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec4, Vec4};
 
@@ -123,7 +124,7 @@ impl Bvh4Node {
     #[inline(always)]
     #[must_use]
     pub fn slot(&self, i: usize) -> u32 {
-        component(self.slots, i)
+        lane_u32(self.slots, i)
     }
 
     /// Whether slot `i` is empty.
@@ -166,21 +167,6 @@ impl Bvh4Node {
         self.max_x[i] = max[0];
         self.max_y[i] = max[1];
         self.max_z[i] = max[2];
-    }
-}
-
-/// Component `i` (0 to 3) of `v`, picked with selects.
-#[inline(always)]
-#[must_use]
-fn component(v: UVec4, i: usize) -> u32 {
-    if i == 0 {
-        v.x
-    } else if i == 1 {
-        v.y
-    } else if i == 2 {
-        v.z
-    } else {
-        v.w
     }
 }
 

@@ -138,6 +138,7 @@ pub type SceneTexels = spirv_std::Image!(buffer, format = rgba32ui, sampled = fa
 #[cfg(target_arch = "spirv")]
 mod texels {
     use super::*;
+    use crate::math::lane_mask::lane_u32;
     use glam::{UVec4, Vec4};
 
     /// The four words of a texel as the floats they hold.
@@ -275,16 +276,7 @@ mod texels {
         #[inline(always)]
         fn texel<F: Features>(&self, scene: &SceneView<F>, index: u32) -> u32 {
             let w: UVec4 = self.read(scene.globals.texel_offsets.texels + index / 4);
-            let k = index & 3;
-            if k == 0 {
-                w.x
-            } else if k == 1 {
-                w.y
-            } else if k == 2 {
-                w.z
-            } else {
-                w.w
-            }
+            lane_u32(w, (index & 3) as usize)
         }
 
         #[inline(always)]
