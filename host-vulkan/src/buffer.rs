@@ -111,6 +111,26 @@ impl GpuBuffer {
         Ok(())
     }
 
+    /// Fills a host-visible buffer with zeros, then copies each `(offset, bytes)` part to its offset.
+    pub fn write_parts(&mut self, parts: &[(u64, &[u8])]) -> Result<()> {
+        let mapped = self.mapped()?;
+        let len = mapped.len();
+        if let Some((offset, bytes)) = parts
+            .iter()
+            .find(|(offset, bytes)| offset.saturating_add(bytes.len() as u64) > len as u64)
+        {
+            return Err(VulkanError::Invalid(format!(
+                "{} bytes at {offset} do not fit a {len}-byte buffer",
+                bytes.len()
+            )));
+        }
+        mapped.fill(0);
+        for (offset, bytes) in parts {
+            mapped[*offset as usize..][..bytes.len()].copy_from_slice(bytes);
+        }
+        Ok(())
+    }
+
     /// Reads `count` elements from the start of a host-visible buffer.
     pub fn read<T: bytemuck::Pod>(&mut self, count: usize) -> Result<Vec<T>> {
         let n = count * std::mem::size_of::<T>();

@@ -560,20 +560,24 @@ impl VulkanContext {
         result.map_err(|e| self.poison_on_fatal(e))
     }
 
-    /// Copies `data` into a new device-local storage buffer (with `extra_usage` besides) through a
-    /// staging buffer.
-    pub(crate) fn upload<T: bytemuck::Pod>(
+    /// A new device-local storage buffer of `size` bytes (with `extra_usage` besides) holding each
+    /// `(offset, bytes)` part at its offset and zeros elsewhere, written straight into a staging buffer.
+    pub(crate) fn upload(
         &mut self,
         what: &str,
-        data: &[T],
+        parts: &[(u64, &[u8])],
         size: u64,
         extra_usage: vk::BufferUsageFlags,
     ) -> Result<GpuBuffer> {
-        let bytes = std::mem::size_of_val(data) as u64;
+        let end = parts
+            .iter()
+            .map(|(offset, bytes)| offset + bytes.len() as u64)
+            .max()
+            .unwrap_or(0);
         let dst = GpuBuffer::new(
             &self.shared,
             what,
-            size.max(bytes),
+            size.max(end),
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | extra_usage,
             MemoryLocation::GpuOnly,
         )?;
@@ -584,9 +588,7 @@ impl VulkanContext {
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        let mut padded = vec![0u8; dst.size as usize];
-        padded[..bytes as usize].copy_from_slice(bytemuck::cast_slice(data));
-        staging.write(&padded)?;
+        staging.write_parts(parts)?;
         let (src_buf, dst_buf, n) = (staging.buffer, dst.buffer, dst.size);
         self.submit_and_wait("a scene upload", CHUNK_TIMEOUT, |device, cb| {
             let region = [vk::BufferCopy::default().size(n)];

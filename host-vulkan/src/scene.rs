@@ -187,22 +187,22 @@ impl GpuScene {
             });
         }
         ctx.check_allocation("the scene texel buffer", texels_size)?;
-        let texel_offset = |k: usize| (offsets[k] / 16) as u32;
-        let mut scene_texels = vec![0u8; texels_size as usize];
-        for (k, (_, _, data)) in sourced.iter().enumerate() {
-            scene_texels[offsets[k] as usize..][..data.len()].copy_from_slice(data);
-        }
+        // The first texel of the array bound at `binding`.
+        let texel_offset = |binding: u32| {
+            let k = sourced.iter().position(|(b, ..)| *b == binding);
+            k.map_or(0, |k| (offsets[k] / 16) as u32)
+        };
 
         let globals = [SceneGlobals {
             texel_offsets: TexelOffsets {
-                blocks: texel_offset(1),
-                triangles: texel_offset(2),
-                triangle_info: texel_offset(3),
-                normals: texel_offset(4),
-                uvs: texel_offset(5),
-                materials: texel_offset(6),
-                textures: texel_offset(7),
-                texels: texel_offset(8),
+                blocks: texel_offset(BINDING_TRIANGLE_BLOCKS),
+                triangles: texel_offset(BINDING_TRIANGLES),
+                triangle_info: texel_offset(BINDING_TRIANGLE_INFO),
+                normals: texel_offset(BINDING_NORMALS),
+                uvs: texel_offset(BINDING_UVS),
+                materials: texel_offset(BINDING_MATERIALS),
+                textures: texel_offset(BINDING_TEXTURES),
+                texels: texel_offset(BINDING_TEXELS),
             },
             ..packed.globals
         }];
@@ -260,13 +260,17 @@ impl GpuScene {
 
         // An empty array is bound over `EMPTY_RANGE` bytes, so that it looks empty to the kernel.
         let range_of = |len: usize| if len == 0 { EMPTY_RANGE } else { len as u64 };
+        let parts: Vec<(u64, &[u8])> = sourced
+            .iter()
+            .zip(offsets)
+            .map(|((_, _, data), offset)| (offset, *data))
+            .collect();
         let mut buffers = vec![ctx.upload(
             "the scene texel buffer",
-            &scene_texels,
+            &parts,
             texels_size,
             vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER,
         )?];
-        drop(scene_texels);
         let mut bindings = Vec::with_capacity(SCENE_BINDINGS);
         for (k, (binding, _, data)) in sourced.iter().enumerate() {
             let range = BufferRange {
@@ -284,7 +288,7 @@ impl GpuScene {
             };
             bindings.push((*binding, range));
             let size = (data.len() as u64).max(16);
-            buffers.push(ctx.upload(what, data, size, vk::BufferUsageFlags::empty())?);
+            buffers.push(ctx.upload(what, &[(0, data)], size, vk::BufferUsageFlags::empty())?);
         }
 
         let info = vk::BufferViewCreateInfo::default()
