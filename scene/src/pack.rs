@@ -233,9 +233,9 @@ pub fn pack_scene(
         });
         if t.srgb {
             for &texel in &t.texels {
-                let [r, g, b, a] = texel.to_le_bytes().map(usize::from);
-                texels.push(u32::from(linear16[r]) | u32::from(linear16[g]) << 16);
-                texels.push(u32::from(linear16[b]) | (a as u32 * 257) << 16);
+                let [r, g, b, a] = srgb_texel_to_linear16(texel, &linear16).map(u32::from);
+                texels.push(r | g << 16);
+                texels.push(b | a << 16);
             }
         } else {
             texels.extend_from_slice(&t.texels);
@@ -258,6 +258,8 @@ pub fn pack_scene(
     let mut emissive_triangle_count = 0;
     if materials.iter().any(|m| m.is_emissive()) {
         triangle_light = vec![INVALID_INDEX; ordered_triangles.len()];
+        // Each emission texture's mean colour, averaged once however many triangles use it.
+        let mut texture_means: Vec<Option<Vec3>> = vec![None; textures.len()];
         for (i, (t, info)) in ordered_triangles.iter().zip(&triangle_info).enumerate() {
             let m = &materials[info.material as usize];
             if !m.is_emissive() {
@@ -270,7 +272,9 @@ pub fn pack_scene(
             }
             let mut radiance = Vec3::from_slice(&m.emission);
             if m.emission_texture != INVALID_INDEX {
-                radiance *= mean_texture_color(&textures[m.emission_texture as usize]);
+                let k = m.emission_texture as usize;
+                radiance *= *texture_means[k]
+                    .get_or_insert_with(|| mean_texture_color(&textures[k], &linear16));
             }
             let p = power::triangle_power(
                 radiance,
@@ -419,23 +423,32 @@ fn srgb8_to_linear16() -> [u16; 256] {
     })
 }
 
-/// Mean linear colour of a texture, as its lookups see it (sRGB texels decoded like the packer does).
-fn mean_texture_color(t: &crate::texture::Texture) -> Vec3 {
+/// An RGBA8 sRGB texel as 16-bit unorm linear RGBA (`linear16` from [`srgb8_to_linear16`]; alpha is
+/// linear already and only widened).
+fn srgb_texel_to_linear16(texel: u32, linear16: &[u16; 256]) -> [u16; 4] {
+    let [r, g, b, a] = texel.to_le_bytes();
+    [
+        linear16[usize::from(r)],
+        linear16[usize::from(g)],
+        linear16[usize::from(b)],
+        u16::from(a) * 257,
+    ]
+}
+
+/// Mean linear colour of a texture, as its lookups see it (sRGB texels decoded as the packer stores
+/// them).
+fn mean_texture_color(t: &crate::texture::Texture, linear16: &[u16; 256]) -> Vec3 {
     if t.texels.is_empty() {
         return Vec3::ONE;
     }
-    let linear16 = srgb8_to_linear16();
     let mut sum = glam::DVec3::ZERO;
     for &texel in &t.texels {
-        let [r, g, b, _] = texel.to_le_bytes();
         sum += if t.srgb {
-            glam::DVec3::new(
-                f64::from(linear16[usize::from(r)]),
-                f64::from(linear16[usize::from(g)]),
-                f64::from(linear16[usize::from(b)]),
-            ) / 65535.0
+            let [r, g, b, _] = srgb_texel_to_linear16(texel, linear16).map(f64::from);
+            glam::DVec3::new(r, g, b) / 65535.0
         } else {
-            glam::DVec3::new(f64::from(r), f64::from(g), f64::from(b)) / 255.0
+            let [r, g, b, _] = texel.to_le_bytes().map(f64::from);
+            glam::DVec3::new(r, g, b) / 255.0
         };
     }
     (sum / t.texels.len() as f64).as_vec3()
