@@ -38,8 +38,8 @@ fi
 # --- lavapipe from Mesa 25 on Debian 12 -------------------------------------------------------------------
 # Debian 12's own lavapipe (Mesa 22.3) masks every branch, both sides of every `if` always run, and renders
 # fovea's kernel about 3x slower than Mesa 25.0 from bookworm-backports, which skips branches no lane takes
-# (README, "lavapipe"). So on bookworm, lavapipe comes from backports (it needs only a newer libdrm; other
-# Mesa packages are left alone). FOVEA_SYSTEM_LAVAPIPE=1 keeps the distribution's version.
+# (README, "lavapipe against the CPU host"). So on bookworm, lavapipe comes from backports (it needs only a
+# newer libdrm; other Mesa packages are left alone). FOVEA_SYSTEM_LAVAPIPE=1 keeps the distribution's version.
 if [ "${FOVEA_SYSTEM_LAVAPIPE:-0}" != 1 ] && command -v apt-get >/dev/null 2>&1 &&
   grep -q '^VERSION_CODENAME=bookworm' /etc/os-release 2>/dev/null; then
   lvp_version=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || true)

@@ -47,8 +47,8 @@ pub const BINDING_CELL_MEANS: u32 = 18;
 pub const BINDING_HDR: u32 = 19;
 /// The tone-mapped image (RGBA8 packed in `u32`, width × height).
 pub const BINDING_LDR: u32 = 20;
-/// The frame's [`FrameParams`](crate::integrator::FrameParams) (one element; a buffer rather than push constants because it is larger
-/// than the 128 bytes of push constants Vulkan guarantees).
+/// The frame's [`FrameParams`](crate::integrator::FrameParams) (one element; a buffer rather than push
+/// constants because it is larger than the 128 bytes of push constants Vulkan guarantees).
 pub const BINDING_FRAME: u32 = 21;
 /// The scene's large arrays (nodes, triangle blocks and positions, triangle info, materials, normals,
 /// texture coordinates, texture infos and texels) again, as one storage texel buffer (`R32G32B32A32_UINT`)
@@ -90,8 +90,8 @@ impl GpuBlock {
 ///
 /// `render_samples` renders the chunk's `block_count · spp` samples, sample `i` being sample `i % spp` of
 /// block `i / spp` (all blocks of a chunk belong to one region, so they share `spp`), about
-/// [`SAMPLES_PER_INVOCATION`] per invocation. `reduce_blocks` runs one invocation per block of the chunk. `cell_means`, `fill` and `tonemap`
-/// run one invocation per cell or pixel, `item_count` in all.
+/// [`SAMPLES_PER_INVOCATION`] per invocation. `reduce_blocks` runs one invocation per block of the
+/// chunk. `cell_means`, `fill` and `tonemap` run one invocation per cell or pixel, `item_count` in all.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct KernelPushConstants {
@@ -359,8 +359,9 @@ pub fn probe_eval(
 }
 
 /// Evaluates scene probe item `item` with `selector` (one of the `PROBE_SCENE_*` selectors) over
-/// `scene`, traversing through `source` (the GPU's texel buffer, or the CPU's slices): reads `inputs[item · PROBE_INPUT_RECORDS ..]` and returns the item's
-/// [`PROBE_OUTPUT_RECORDS`] output records. The GPU `probe_scene` entry point and the CPU side of the
+/// `scene`, traversing through `source` (the GPU's texel buffer, or the CPU's slices): reads
+/// `inputs[item · PROBE_INPUT_RECORDS ..]` and returns the item's [`PROBE_OUTPUT_RECORDS`] output
+/// records. The GPU `probe_scene` entry point and the CPU side of the
 /// cross-backend tests both call this.
 #[must_use]
 pub fn probe_scene_eval<F: crate::scene::Features, S: crate::scene::SceneSource>(

@@ -35,7 +35,7 @@ fn run(out: &Path) -> Result<(), String> {
     let kernel = root.join("gpu-kernel");
     let target_dir = root.join("target").join("spirv");
 
-    // ImageBuffer: the geometry texel buffer traversal reads (core's `bvh::source`).
+    // ImageBuffer: the scene texel buffer core reads its large arrays from (core's `scene::source`).
     let mut builder =
         SpirvBuilder::new(&kernel, TARGET).capability(spirv_builder::Capability::ImageBuffer);
     builder.toolchain_overwrite = Some(NIGHTLY.into());

@@ -16,13 +16,13 @@
 // Entry points take one argument per binding.
 #![allow(clippy::too_many_arguments)]
 
-// Built for the host (a plain library), the scene texel binding is the scene's own slices.
 use fovea_core::foveation::{block_extent, cell_mean_at, fill_pixel};
 use fovea_core::glam::Vec3;
 use fovea_core::integrator::{render_sample_stream, FrameParams};
 use fovea_core::kernel_abi::{self, GpuBlock, KernelPushConstants, WORKGROUP_SIZE};
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::features::FEATURES_ALL;
+// Built for the host (a plain library), the scene texel binding is the scene's own slices.
 #[cfg(not(target_arch = "spirv"))]
 use fovea_core::scene::SceneSlices as SceneTexels;
 #[cfg(target_arch = "spirv")]
@@ -78,7 +78,7 @@ pub fn invocation_index(id: UVec3, num_workgroups: UVec3) -> u32 {
 
 /// Pass 1a: the chunk's `block_count · spp` samples into `samples` (rgb, w = 0; sample `i` is sample
 /// `i % spp` of block `i / spp`), invocation `i` rendering samples `i`, `i + n`, `i + 2n`, ... for `n`
-/// invocations in the dispatch, one path segment at a time (core's `render_sample_stream`). `features`
+/// invocations in the dispatch, one sample after another (core's `render_sample_stream`). `features`
 /// is a specialization constant: the host sets the scene's feature mask when it creates the pipeline, so
 /// the driver drops the code of absent features.
 #[spirv(compute(threads(64)))]

@@ -337,7 +337,7 @@ fn lost_empire_full_frame_renders_alike() {
          FLIP {:.3e}; CPU {:.0} ms, GPU {:.0} ms ({} chunks, {} idle invocations, plan {:.1} ms, upload \
          {upload_ms:.0} ms)",
         gpu_stats.render.primary_samples,
-        &ctx.device_description(),
+        ctx.device_description(),
         100.0 * f.within,
         f.max_abs,
         f.mean_flip,

@@ -1232,7 +1232,7 @@ fn frames_are_finite_without_the_final_guard_on_vulkan() {
                 .count();
             eprintln!(
                 "{} {name}, strategy {strategy}: {w}x{h} x {spp} spp, {bad} non-finite pixels, {lit} lit, {:.2} s",
-                &ctx.device_description(),
+                ctx.device_description(),
                 start.elapsed().as_secs_f64()
             );
             assert_eq!(bad, 0, "{name} strategy {strategy}");

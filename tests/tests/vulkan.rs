@@ -83,7 +83,7 @@ fn cornell_box_on_vulkan_matches_the_cpu_host() {
         "Cornell {W}x{H} foveated, CPU vs {}: {:.4} % of pixels within 1e-3 rel / 1e-4 abs, {:.4} % within \
          1e-2 / 1e-3, max abs diff {:.3e}, mean abs diff {:.3e}; means {cpu_mean} vs {gpu_mean}; \
          CPU {:.1} ms, GPU {:.1} ms ({} chunks, {} idle invocations)",
-        &ctx.device_description(),
+        ctx.device_description(),
         100.0 * d.within,
         100.0 * d.within_loose,
         d.max_abs,

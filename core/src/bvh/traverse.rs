@@ -180,10 +180,10 @@ fn near_far(min: Vec4, max: Vec4, negative: bool) -> (Vec4, Vec4) {
     }
 }
 
-/// Lane `k` of a leaf block (`lane` its [`TriangleBlock::index`] word): if [`WatertightRay::test_block`]
-/// left it a candidate and it is hit in `(0, closest)` outside any cut-out hole, records the hit in
-/// `best` and `closest` and returns `true`. Triangles of opaque materials skip the cut-out test with one
-/// bit test ([`BLOCK_LANE_CUTOUT`]); scenes without cut-outs (by their feature set) with none.
+/// Candidate lane `k` of a leaf block (`lane` its [`TriangleBlock::index`] word): if it is hit in
+/// `(0, closest)` outside any cut-out hole, records the hit in `best` and `closest` and returns `true`.
+/// Triangles of opaque materials skip the cut-out test with one bit test ([`BLOCK_LANE_CUTOUT`]);
+/// scenes without cut-outs (by their feature set) with none.
 #[inline(always)]
 fn test_block_lane<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
@@ -195,9 +195,6 @@ fn test_block_lane<F: Features, S: SceneSource>(
     closest: &mut f32,
     best: &mut Hit,
 ) -> bool {
-    if test.candidates & (1 << k) == 0 {
-        return false;
-    }
     let h = watertight.block_lane_hit(test, k, *closest);
     if !h.hit {
         return false;
@@ -408,9 +405,9 @@ fn traverse<F: Features, S: SceneSource>(
                     while pending != 0 {
                         let k = lowest_slot(pending);
                         pending &= pending - 1;
-                        let (w, t, c, h) = (&watertight, &test, &mut closest, &mut best);
                         let word = lane_u32(lanes, k);
-                        if test_block_lane(scene, source, w, t, k, word, c, h) && any {
+                        let (w, c, h) = (&watertight, &mut closest, &mut best);
+                        if test_block_lane(scene, source, w, &test, k, word, c, h) && any {
                             return best;
                         }
                     }

@@ -195,32 +195,28 @@ impl WatertightRay {
     #[inline]
     #[must_use]
     pub fn test_block(&self, block: &TriangleBlock) -> BlockTest {
-        let pick = |x: Vec4, y: Vec4, z: Vec4, k: u32| -> Vec4 {
-            if k == 0 {
-                x
-            } else if k == 1 {
-                y
-            } else {
-                z
-            }
+        // A vertex's components (four lanes each) relative to the origin, in the permuted frame, as
+        // `relative` computes one vertex.
+        let (o, (kx, ky, kz)) = (self.origin, (self.kx, self.ky, self.kz));
+        let relative = |x: Vec4, y: Vec4, z: Vec4| -> [Vec4; 3] {
+            let pick = |k: u32| -> Vec4 {
+                if k == 0 {
+                    x
+                } else if k == 1 {
+                    y
+                } else {
+                    z
+                }
+            };
+            [
+                pick(kx) - Vec4::splat(o.x),
+                pick(ky) - Vec4::splat(o.y),
+                pick(kz) - Vec4::splat(o.z),
+            ]
         };
-        let o = self.origin;
-        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
-        let a = [
-            pick(block.v0x, block.v0y, block.v0z, kx) - Vec4::splat(o.x),
-            pick(block.v0x, block.v0y, block.v0z, ky) - Vec4::splat(o.y),
-            pick(block.v0x, block.v0y, block.v0z, kz) - Vec4::splat(o.z),
-        ];
-        let b = [
-            pick(block.v1x, block.v1y, block.v1z, kx) - Vec4::splat(o.x),
-            pick(block.v1x, block.v1y, block.v1z, ky) - Vec4::splat(o.y),
-            pick(block.v1x, block.v1y, block.v1z, kz) - Vec4::splat(o.z),
-        ];
-        let c = [
-            pick(block.v2x, block.v2y, block.v2z, kx) - Vec4::splat(o.x),
-            pick(block.v2x, block.v2y, block.v2z, ky) - Vec4::splat(o.y),
-            pick(block.v2x, block.v2y, block.v2z, kz) - Vec4::splat(o.z),
-        ];
+        let a = relative(block.v0x, block.v0y, block.v0z);
+        let b = relative(block.v1x, block.v1y, block.v1z);
+        let c = relative(block.v2x, block.v2y, block.v2z);
         let (sx, sy) = (Vec4::splat(self.sx), Vec4::splat(self.sy));
         let ax = a[0] - sx * a[2];
         let ay = a[1] - sy * a[2];

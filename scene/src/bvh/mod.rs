@@ -287,7 +287,6 @@ mod tests {
             .collect()
     }
 
-    /// The packed scene arrays a traversal needs, in BVH leaf order.
     /// A built BVH (leaves name triangles, as [`validate`] checks) and its packed traversal form.
     struct Packed {
         bvh: Bvh,
