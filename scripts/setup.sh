@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Installs what fovea needs on a fresh Debian or Ubuntu machine. Idempotent and quiet; safe to run again.
-# - a Rust toolchain (cargo >= 1.85) and a C compiler for crates with build scripts;
+# - a Rust toolchain (cargo >= 1.87, the workspace's rust-version) and a C compiler for crates with build scripts;
 # - for the Vulkan backend: the SPIR-V tools (spirv-val, spirv-opt), a Vulkan loader, Mesa's drivers (lavapipe
 #   runs the kernel on the CPU where there is no GPU), vulkaninfo and the validation layers;
 # - the pinned nightly that rust-gpu builds the kernel with (see README, "GPU build").
 set -euo pipefail
 
 NIGHTLY=nightly-2026-08-15
+MIN_RUST=1.87
 NIGHTLY_COMPONENTS=(rust-src rustc-dev llvm-tools)
 
 # --- apt packages -----------------------------------------------------------------------------------------
@@ -65,9 +66,15 @@ if ! command -v cargo >/dev/null 2>&1; then
   if [ -x "$HOME/.cargo/bin/cargo" ]; then
     export PATH="$HOME/.cargo/bin:$PATH"
   else
-    echo "setup: cargo not found. Install Rust 1.85 or newer (https://rustup.rs) and run again." >&2
+    echo "setup: cargo not found. Install Rust ${MIN_RUST} or newer (https://rustup.rs) and run again." >&2
     exit 1
   fi
+fi
+# The workspace's `rust-version`: an older cargo would stop with a less direct message.
+cargo_version=$(cargo --version | awk '{print $2}')
+if [ "$(printf '%s\n%s\n' "$MIN_RUST" "${cargo_version%%-*}" | sort -V | head -1)" != "$MIN_RUST" ]; then
+  echo "setup: cargo ${cargo_version} is older than ${MIN_RUST}, which fovea needs; run 'rustup update stable'." >&2
+  exit 1
 fi
 
 # --- the kernel's nightly ---------------------------------------------------------------------------------
