@@ -26,14 +26,17 @@ impl SplitMix64 {
         lo + (hi - lo) * self.uniform()
     }
 
+    /// Uniform in the cube [-h, h)³ (x, y, z drawn in that order).
+    pub(crate) fn in_cube(&mut self, h: f32) -> Vec3 {
+        let x = self.range(-h, h);
+        let y = self.range(-h, h);
+        Vec3::new(x, y, self.range(-h, h))
+    }
+
     /// A uniformly distributed unit vector (rejection sampling in the unit ball).
     pub(crate) fn unit_vector(&mut self) -> Vec3 {
         loop {
-            let v = Vec3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
+            let v = self.in_cube(1.0);
             let l = v.length_squared();
             if l > 1e-4 && l <= 1.0 {
                 return v / crate::math::float::sqrt(l);

@@ -453,27 +453,13 @@ mod tests {
             .map(|p| Ray::new(origin, p - origin))
             .collect();
         for _ in 0..300 {
-            let o = Vec3::new(
-                rng.range(-2.0, 2.0),
-                rng.range(-2.0, 2.0),
-                rng.range(-2.0, 2.0),
-            );
-            let d = Vec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
+            let o = rng.in_cube(2.0);
+            let d = rng.in_cube(1.0);
             rays.push(Ray::new(o, d));
         }
         for _ in 0..200 {
-            let mut v = || {
-                Vec3::new(
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                )
-            };
-            mesh.push(tri(v(), v(), v()));
+            let (a, b, c) = (rng.in_cube(1.0), rng.in_cube(1.0), rng.in_cube(1.0));
+            mesh.push(tri(a, b, c));
         }
         // Degenerate lanes, as the packer pads a leaf's last block with.
         mesh.push(TrianglePositions::default());
@@ -560,21 +546,9 @@ mod tests {
     fn both_windings_hit_with_consistent_barycentrics() {
         let mut rng = TestRng(7);
         for _ in 0..2000 {
-            let v0 = Vec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
-            let v1 = Vec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
-            let v2 = Vec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
+            let v0 = rng.in_cube(1.0);
+            let v1 = rng.in_cube(1.0);
+            let v2 = rng.in_cube(1.0);
             if (v1 - v0).cross(v2 - v0).length() < 1e-2 {
                 continue;
             }
