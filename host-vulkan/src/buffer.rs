@@ -111,7 +111,8 @@ impl GpuBuffer {
         Ok(())
     }
 
-    /// Fills a host-visible buffer with zeros, then copies each `(offset, bytes)` part to its offset.
+    /// Copies each `(offset, bytes)` part of a host-visible buffer to its offset and fills the bytes no
+    /// part covers with zeros (each byte is written once: scene uploads are up to gigabytes).
     pub fn write_parts(&mut self, parts: &[(u64, &[u8])]) -> Result<()> {
         let mapped = self.mapped()?;
         let len = mapped.len();
@@ -124,10 +125,19 @@ impl GpuBuffer {
                 bytes.len()
             )));
         }
-        mapped.fill(0);
-        for (offset, bytes) in parts {
-            mapped[*offset as usize..][..bytes.len()].copy_from_slice(bytes);
+        let mut sorted: Vec<&(u64, &[u8])> = parts.iter().collect();
+        sorted.sort_by_key(|(offset, _)| *offset);
+        // `covered`: bytes below it are written (zeroed or copied).
+        let mut covered = 0;
+        for (offset, bytes) in sorted {
+            let start = *offset as usize;
+            if start > covered {
+                mapped[covered..start].fill(0);
+            }
+            mapped[start..][..bytes.len()].copy_from_slice(bytes);
+            covered = covered.max(start + bytes.len());
         }
+        mapped[covered..].fill(0);
         Ok(())
     }
 
