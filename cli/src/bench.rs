@@ -15,7 +15,7 @@ use clap::{Args, Subcommand};
 use fovea_core::camera::Camera;
 use fovea_core::foveation::display::{paper_params_for_display, DisplayGeometry};
 use fovea_core::integrator::{FrameParams, IntegratorSettings};
-use fovea_scene::bvh::{build_bvh, BvhBuildOptions};
+use fovea_scene::bvh::{build_bvh_indexed, BvhBuildOptions};
 use fovea_scene::environment::Environment;
 use fovea_scene::mesh::{load_scene, LoadOptions};
 use fovea_scene::pack::pack_scene;
@@ -96,12 +96,12 @@ fn bench_build(scene: Option<&Path>, runs: u32) -> Result<serde_json::Value> {
         .map(Path::to_path_buf)
         .unwrap_or_else(default_scene_path);
     let loaded = load_scene(&path, &LoadOptions::default())?;
-    let triangles = fovea_scene::pack::triangle_positions(&loaded.positions, &loaded.triangles);
+    let (positions, triangles) = (&loaded.positions, &loaded.triangles);
     let mut times = Vec::new();
     let mut bvh_stats = None;
     for _ in 0..runs {
         let start = Instant::now();
-        let bvh = build_bvh(&triangles, &BvhBuildOptions::default());
+        let bvh = build_bvh_indexed(positions, triangles, &BvhBuildOptions::default());
         times.push(start.elapsed().as_secs_f64() * 1e3);
         bvh_stats = Some(bvh.stats);
     }

@@ -13,7 +13,7 @@ use fovea_core::scene::{
 use glam::{Vec3, Vec4};
 
 use crate::bvh::blocks::pack_leaf_blocks;
-use crate::bvh::{build_bvh, BvhBuildOptions, BvhStats};
+use crate::bvh::{build_bvh_indexed, BvhBuildOptions, BvhStats};
 use crate::environment::{build_cdf, Environment, EnvironmentTables};
 use crate::mesh::LoadedScene;
 
@@ -121,24 +121,14 @@ impl PackedScene {
     }
 }
 
-/// The vertex positions of every triangle in the layout the BVH builder and the kernels read.
-#[must_use]
-pub fn triangle_positions(
-    positions: &[[f32; 3]],
-    triangles: &[[u32; 3]],
-) -> Vec<TrianglePositions> {
-    let position = |i: u32| -> Vec4 {
+/// The vertex positions of the triangle with vertex indices `t`, in the layout the kernels read.
+#[inline]
+fn triangle_at(positions: &[[f32; 3]], t: [u32; 3]) -> TrianglePositions {
+    let [v0, v1, v2] = t.map(|i| {
         let p = positions[i as usize];
         Vec4::new(p[0], p[1], p[2], 0.0)
-    };
-    triangles
-        .iter()
-        .map(|t| TrianglePositions {
-            v0: position(t[0]),
-            v1: position(t[1]),
-            v2: position(t[2]),
-        })
-        .collect()
+    });
+    TrianglePositions { v0, v1, v2 }
 }
 
 /// Packs `scene` lit additionally by `environment`, building the BVH with `bvh_options`.
@@ -160,7 +150,6 @@ pub fn pack_scene(
         ..
     } = scene;
 
-    let input_triangles = triangle_positions(&positions, &triangles);
     // Bounds of the vertices the triangles use (an unused far-away vertex must not move the camera).
     let mut bounds_min = Vec3::splat(f32::MAX);
     let mut bounds_max = Vec3::splat(f32::MIN);
@@ -175,18 +164,15 @@ pub fn pack_scene(
         bounds_max = Vec3::ZERO;
     }
 
-    let mut bvh = build_bvh(&input_triangles, bvh_options);
+    // Peak memory is set here: the build's temporaries next to the loaded scene. The loaded arrays are
+    // dropped as soon as their leaf-ordered copies exist.
+    let mut bvh = build_bvh_indexed(&positions, &triangles, bvh_options);
     let ordered_triangles: Vec<TrianglePositions> = bvh
         .triangle_order
         .iter()
-        .map(|&i| input_triangles[i as usize])
+        .map(|&i| triangle_at(&positions, triangles[i as usize]))
         .collect();
-    drop(input_triangles);
-    // The leaves' triangles four at a time, marked where their material has an alpha cut-out.
-    let blocks = pack_leaf_blocks(&mut bvh.nodes, &ordered_triangles, |i| {
-        let material = triangle_materials[bvh.triangle_order[i] as usize];
-        materials[material as usize].flags & MATERIAL_ALPHA_CUTOUT != 0
-    });
+    drop(positions);
     let triangle_info: Vec<TriangleInfo> = bvh
         .triangle_order
         .iter()
@@ -195,6 +181,12 @@ pub fn pack_scene(
             material: triangle_materials[i as usize],
         })
         .collect();
+    drop(triangles);
+    drop(triangle_materials);
+    // The leaves' triangles four at a time, marked where their material has an alpha cut-out.
+    let blocks = pack_leaf_blocks(&mut bvh.nodes, &ordered_triangles, |i| {
+        materials[triangle_info[i].material as usize].flags & MATERIAL_ALPHA_CUTOUT != 0
+    });
 
     // Per-vertex arrays only when something reads them.
     let any_texture = materials.iter().any(|m| {
@@ -215,6 +207,7 @@ pub fn pack_scene(
     } else {
         Vec::new()
     };
+    drop(normals);
 
     // Textures: one texel array, one info record each; sRGB colour becomes linear RGBA16.
     let mut texture_infos = Vec::with_capacity(textures.len());
