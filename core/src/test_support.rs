@@ -1,6 +1,11 @@
 //! Small deterministic random-number generators shared by core's unit tests (test builds only), and the
 //! chi-square goodness-of-fit harness for samplers ([`chi2`]).
+extern crate std;
+
 use glam::{Vec2, Vec3};
+use std::vec::Vec;
+
+use crate::scene::{triangle_lane, TriangleBlock, TrianglePositions};
 
 pub(crate) mod chi2;
 
@@ -43,6 +48,26 @@ impl SplitMix64 {
             }
         }
     }
+}
+
+/// Triangles packed one per block, each in lane 0: the blocks and the `SceneView::triangle_lanes` that
+/// name them (the layout of a BVH whose leaves hold one triangle each).
+pub(crate) fn one_triangle_per_block(
+    triangles: &[TrianglePositions],
+) -> (Vec<TriangleBlock>, Vec<u32>) {
+    let blocks = triangles
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let mut block = TriangleBlock::EMPTY;
+            block.set_lane(0, t, i as u32);
+            block
+        })
+        .collect();
+    let lanes = (0..triangles.len() as u32)
+        .map(|i| triangle_lane(i, 0))
+        .collect();
+    (blocks, lanes)
 }
 
 /// xorshift32 (Marsaglia 2003) mapped to [0, 1).

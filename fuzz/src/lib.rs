@@ -9,9 +9,7 @@ use std::path::{Path, PathBuf};
 
 use fovea_core::bvh::traverse::closest_hit;
 use fovea_core::geometry::Ray;
-use fovea_core::scene::{
-    leaf_count, leaf_first, BLOCK_LANE_CUTOUT, INVALID_INDEX, TEXTURE_RGBA16,
-};
+use fovea_core::scene::{leaf_count, leaf_first, BLOCK_LANE_CUTOUT, INVALID_INDEX, TEXTURE_RGBA16};
 use fovea_scene::bvh::{BvhBuildOptions, MAX_NODE_DEPTH};
 use fovea_scene::environment::Environment;
 use fovea_scene::mesh::{load_scene_from, LoadOptions};
@@ -103,14 +101,18 @@ fn finite(v: &[f32]) -> bool {
 
 /// Invariants every packed scene must satisfy (what the CPU and GPU kernels rely on).
 pub fn check_packed(p: &PackedScene, triangles: usize) {
-    assert_eq!(p.triangles.len(), triangles);
+    assert_eq!(p.triangle_lanes.len(), triangles);
     assert_eq!(p.triangle_info.len(), triangles);
     assert!(!p.nodes.is_empty());
     assert!(p.stats.bvh.max_depth <= MAX_NODE_DEPTH, "{:?}", p.stats.bvh);
     assert!(finite(&p.bounds_min.to_array()) && finite(&p.bounds_max.to_array()));
     let vertices = p.normals.len().max(p.uvs.len());
-    for (t, info) in p.triangles.iter().zip(&p.triangle_info) {
-        assert!(finite(&t.v0.to_array()) && finite(&t.v1.to_array()) && finite(&t.v2.to_array()), "{t:?}");
+    for (i, info) in p.triangle_info.iter().enumerate() {
+        let t = p.triangle(i);
+        assert!(
+            finite(&t.v0.to_array()) && finite(&t.v1.to_array()) && finite(&t.v2.to_array()),
+            "{t:?}"
+        );
         assert!((info.material as usize) < p.materials.len());
         if vertices > 0 {
             assert!(info.vertices.iter().all(|&v| (v as usize) < vertices));
@@ -147,10 +149,13 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
         let words = if t.flags & TEXTURE_RGBA16 != 0 { 2 } else { 1 };
         let end = t.offset as u64 + words * u64::from(t.width) * u64::from(t.height);
         assert!(t.width > 0 && t.height > 0 && end <= p.texels.len() as u64);
-        assert!(words == 1 || t.offset % 2 == 0, "RGBA16 textures start at an even word");
+        assert!(
+            words == 1 || t.offset % 2 == 0,
+            "RGBA16 textures start at an even word"
+        );
     }
     // Every leaf names blocks that exist, whose first `count` lanes hold its triangles, each triangle
-    // exactly once over all leaves.
+    // exactly once over all leaves, at the lane `triangle_lanes` names.
     let mut seen = vec![false; triangles];
     for node in &p.nodes {
         for slot in 0..4 {
@@ -163,7 +168,15 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
                 let lane = p.blocks[first + k / 4].index[k % 4];
                 if k < count {
                     let t = (lane & !BLOCK_LANE_CUTOUT) as usize;
-                    assert!(t < triangles && !seen[t], "leaf lane {k} names triangle {t}");
+                    assert!(
+                        t < triangles && !seen[t],
+                        "leaf lane {k} names triangle {t}"
+                    );
+                    assert_eq!(
+                        p.triangle_lanes[t] as usize,
+                        4 * first + k,
+                        "triangle {t}'s lane"
+                    );
                     seen[t] = true;
                 } else {
                     assert_eq!(lane, INVALID_INDEX);
@@ -213,8 +226,12 @@ pub fn cast_rays(p: &PackedScene) {
         }
     }
     // A ray at the centroid of a few triangles.
-    let step = (p.triangles.len() / 8).max(1);
-    for t in p.triangles.iter().step_by(step).take(8) {
+    let step = (p.triangle_count() / 8).max(1);
+    for t in (0..p.triangle_count())
+        .step_by(step)
+        .take(8)
+        .map(|i| p.triangle(i))
+    {
         let c = (t.v0.truncate() + t.v1.truncate() + t.v2.truncate()) / 3.0;
         let origin = c + Vec3::new(0.3, 1.0, 0.7) * extent;
         let d = (c - origin).normalize_or_zero();
@@ -225,7 +242,7 @@ pub fn cast_rays(p: &PackedScene) {
     for ray in &rays {
         let hit = closest_hit(&view, ray, f32::INFINITY);
         if hit.is_hit() {
-            assert!((hit.triangle as usize) < p.triangles.len());
+            assert!((hit.triangle as usize) < p.triangle_count());
             assert!(hit.t >= 0.0 && hit.t.is_finite(), "{hit:?}");
         }
     }

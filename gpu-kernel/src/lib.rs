@@ -29,7 +29,7 @@ use fovea_core::scene::SceneSlices as SceneTexels;
 use fovea_core::scene::SceneTexels;
 use fovea_core::scene::{
     Bvh4Node, FeatureFlags, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleBlock,
-    TriangleInfo, TrianglePositions,
+    TriangleInfo,
 };
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
@@ -39,7 +39,7 @@ const _: () = {
     assert!(WORKGROUP_SIZE == 64);
     assert!(kernel_abi::BINDING_GLOBALS == 0);
     assert!(kernel_abi::BINDING_NODES == 1);
-    assert!(kernel_abi::BINDING_TRIANGLES == 2);
+    assert!(kernel_abi::BINDING_TRIANGLE_LANES == 2);
     assert!(kernel_abi::BINDING_TRIANGLE_INFO == 3);
     assert!(kernel_abi::BINDING_NORMALS == 4);
     assert!(kernel_abi::BINDING_UVS == 5);
@@ -89,7 +89,7 @@ pub fn render_samples(
     #[spirv(push_constant)] pc: &KernelPushConstants,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] globals: &SceneGlobals,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] nodes: &[Bvh4Node],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] triangles: &[TrianglePositions],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] triangle_lanes: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] triangle_info: &[TriangleInfo],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] normals: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] uvs: &[[f32; 2]],
@@ -117,7 +117,7 @@ pub fn render_samples(
         features: FeatureFlags(features),
         globals: *globals,
         nodes,
-        triangles,
+        triangle_lanes,
         blocks: triangle_blocks,
         triangle_info,
         normals,
@@ -282,7 +282,7 @@ pub fn probe_scene(
     #[spirv(push_constant)] pc: &KernelPushConstants,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] globals: &SceneGlobals,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] nodes: &[Bvh4Node],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] triangles: &[TrianglePositions],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] triangle_lanes: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] triangle_info: &[TriangleInfo],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] normals: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] uvs: &[[f32; 2]],
@@ -309,7 +309,7 @@ pub fn probe_scene(
         features: FeatureFlags(FEATURES_ALL),
         globals: *globals,
         nodes,
-        triangles,
+        triangle_lanes,
         blocks: triangle_blocks,
         triangle_info,
         normals,

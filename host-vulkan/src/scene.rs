@@ -5,8 +5,8 @@ use ash::vk;
 use fovea_core::kernel_abi::{
     BINDING_ENVIRONMENT_CONDITIONAL, BINDING_ENVIRONMENT_MARGINAL, BINDING_ENVIRONMENT_TEXELS,
     BINDING_GLOBALS, BINDING_LIGHTS, BINDING_LIGHT_CDF, BINDING_MATERIALS, BINDING_NODES,
-    BINDING_NORMALS, BINDING_TEXELS, BINDING_TEXTURES, BINDING_TRIANGLES, BINDING_TRIANGLE_BLOCKS,
-    BINDING_TRIANGLE_INFO, BINDING_TRIANGLE_LIGHT, BINDING_UVS,
+    BINDING_NORMALS, BINDING_TEXELS, BINDING_TEXTURES, BINDING_TRIANGLE_BLOCKS,
+    BINDING_TRIANGLE_INFO, BINDING_TRIANGLE_LANES, BINDING_TRIANGLE_LIGHT, BINDING_UVS,
 };
 use fovea_core::scene::{FeatureFlags, SceneGlobals, TexelOffsets, INVALID_INDEX};
 use fovea_scene::pack::PackedScene;
@@ -112,8 +112,8 @@ impl GpuScene {
     pub fn upload(ctx: &mut VulkanContext, packed: &PackedScene) -> Result<Self> {
         ctx.check_usable()?;
         let triangle_light: Vec<u32> =
-            if packed.triangle_light.is_empty() && !packed.triangles.is_empty() {
-                vec![INVALID_INDEX; packed.triangles.len()]
+            if packed.triangle_light.is_empty() && packed.triangle_count() > 0 {
+                vec![INVALID_INDEX; packed.triangle_count()]
             } else {
                 packed.triangle_light.clone()
             };
@@ -132,9 +132,9 @@ impl GpuScene {
                 bytemuck::cast_slice(&packed.blocks),
             ),
             (
-                BINDING_TRIANGLES,
-                "triangles",
-                bytemuck::cast_slice(&packed.triangles),
+                BINDING_TRIANGLE_LANES,
+                "triangle lanes",
+                bytemuck::cast_slice(&packed.triangle_lanes),
             ),
             (
                 BINDING_TRIANGLE_INFO,
@@ -196,7 +196,7 @@ impl GpuScene {
         let globals = [SceneGlobals {
             texel_offsets: TexelOffsets {
                 blocks: texel_offset(BINDING_TRIANGLE_BLOCKS),
-                triangles: texel_offset(BINDING_TRIANGLES),
+                triangle_lanes: texel_offset(BINDING_TRIANGLE_LANES),
                 triangle_info: texel_offset(BINDING_TRIANGLE_INFO),
                 normals: texel_offset(BINDING_NORMALS),
                 uvs: texel_offset(BINDING_UVS),

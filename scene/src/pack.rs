@@ -12,7 +12,7 @@ use fovea_core::scene::{
 };
 use glam::{Vec3, Vec4};
 
-use crate::bvh::blocks::pack_leaf_blocks;
+use crate::bvh::blocks::{pack_leaf_blocks, LeafBlocks};
 use crate::bvh::{build_bvh_indexed, BvhBuildOptions, BvhStats};
 use crate::environment::{build_cdf, Environment, EnvironmentTables};
 use crate::mesh::LoadedScene;
@@ -36,7 +36,8 @@ pub struct PackStats {
 pub struct PackedScene {
     pub globals: SceneGlobals,
     pub nodes: Vec<Bvh4Node>,
-    pub triangles: Vec<TrianglePositions>,
+    /// For each triangle, its block lane (`SceneView::triangle_lanes`).
+    pub triangle_lanes: Vec<u32>,
     pub blocks: Vec<TriangleBlock>,
     pub triangle_info: Vec<TriangleInfo>,
     pub normals: Vec<[f32; 4]>,
@@ -76,7 +77,7 @@ impl PackedScene {
             features: fovea_core::scene::FeatureFlags::ALL,
             globals: self.globals,
             nodes: &self.nodes,
-            triangles: &self.triangles,
+            triangle_lanes: &self.triangle_lanes,
             blocks: &self.blocks,
             triangle_info: &self.triangle_info,
             normals: &self.normals,
@@ -93,13 +94,29 @@ impl PackedScene {
         }
     }
 
+    /// Number of triangles.
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.triangle_info.len()
+    }
+
+    /// The positions of triangle `i` (BVH leaf order), read from its block.
+    ///
+    /// # Panics
+    /// If `i` is not below [`Self::triangle_count`].
+    #[must_use]
+    pub fn triangle(&self, i: usize) -> TrianglePositions {
+        let at = self.triangle_lanes[i] as usize;
+        self.blocks[at / 4].lane_positions(at % 4)
+    }
+
     /// Bytes held by the packed arrays.
     pub fn memory_bytes(&self) -> usize {
         fn bytes<T>(v: &[T]) -> usize {
             std::mem::size_of_val(v)
         }
         bytes(&self.nodes)
-            + bytes(&self.triangles)
+            + bytes(&self.triangle_lanes)
             + bytes(&self.blocks)
             + bytes(&self.triangle_info)
             + bytes(&self.normals)
@@ -165,14 +182,8 @@ pub fn pack_scene(
     }
 
     // Peak memory is set here: the build's temporaries next to the loaded scene. The loaded arrays are
-    // dropped as soon as their leaf-ordered copies exist.
+    // dropped as soon as their leaf-ordered forms exist.
     let mut bvh = build_bvh_indexed(&positions, &triangles, bvh_options);
-    let ordered_triangles: Vec<TrianglePositions> = bvh
-        .triangle_order
-        .iter()
-        .map(|&i| triangle_at(&positions, triangles[i as usize]))
-        .collect();
-    drop(positions);
     let triangle_info: Vec<TriangleInfo> = bvh
         .triangle_order
         .iter()
@@ -183,10 +194,18 @@ pub fn pack_scene(
         .collect();
     drop(triangles);
     drop(triangle_materials);
-    // The leaves' triangles four at a time, marked where their material has an alpha cut-out.
-    let blocks = pack_leaf_blocks(&mut bvh.nodes, &ordered_triangles, |i| {
-        materials[triangle_info[i].material as usize].flags & MATERIAL_ALPHA_CUTOUT != 0
-    });
+    // The leaves' triangles four at a time, marked where their material has an alpha cut-out: the
+    // only copy of the positions.
+    let LeafBlocks {
+        blocks,
+        triangle_lanes,
+    } = pack_leaf_blocks(
+        &mut bvh.nodes,
+        triangle_info.len(),
+        |i| triangle_at(&positions, triangle_info[i].vertices),
+        |i| materials[triangle_info[i].material as usize].flags & MATERIAL_ALPHA_CUTOUT != 0,
+    );
+    drop(positions);
 
     // Per-vertex arrays only when something reads them.
     let any_texture = materials.iter().any(|m| {
@@ -250,14 +269,15 @@ pub fn pack_scene(
     let mut triangle_light = Vec::new();
     let mut emissive_triangle_count = 0;
     if materials.iter().any(|m| m.is_emissive()) {
-        triangle_light = vec![INVALID_INDEX; ordered_triangles.len()];
+        triangle_light = vec![INVALID_INDEX; triangle_info.len()];
         // Each emission texture's mean colour, averaged once however many triangles use it.
         let mut texture_means: Vec<Option<Vec3>> = vec![None; textures.len()];
-        for (i, (t, info)) in ordered_triangles.iter().zip(&triangle_info).enumerate() {
+        for (i, (&at, info)) in triangle_lanes.iter().zip(&triangle_info).enumerate() {
             let m = &materials[info.material as usize];
             if !m.is_emissive() {
                 continue;
             }
+            let t = blocks[at as usize / 4].lane_positions(at as usize % 4);
             let (v0, v1, v2) = (t.v0.truncate(), t.v1.truncate(), t.v2.truncate());
             let area = 0.5 * (v1 - v0).cross(v2 - v0).length();
             if !(area > 0.0) || !area.is_finite() {
@@ -361,7 +381,7 @@ pub fn pack_scene(
     let mut packed = PackedScene {
         globals,
         nodes: bvh.nodes,
-        triangles: ordered_triangles,
+        triangle_lanes,
         blocks,
         triangle_info,
         normals: packed_normals,
@@ -380,7 +400,7 @@ pub fn pack_scene(
         stats: PackStats::default(),
     };
     packed.stats = PackStats {
-        triangle_count: packed.triangles.len(),
+        triangle_count: packed.triangle_info.len(),
         emissive_triangle_count,
         light_count: packed.lights.len(),
         texture_count: packed.textures.len(),

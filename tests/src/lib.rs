@@ -35,7 +35,7 @@ pub fn load_packed(path: &Path, environment: &Environment) -> PackedScene {
 
 /// The indices of a packed scene's emissive triangles.
 pub fn emissive_triangles(packed: &PackedScene) -> Vec<u32> {
-    (0..packed.triangles.len() as u32)
+    (0..packed.triangle_count() as u32)
         .filter(|&t| {
             let m = packed.triangle_info[t as usize].material as usize;
             packed.materials[m].is_emissive()

@@ -945,7 +945,7 @@ fn xyz(r: [f32; 4]) -> [f32; 3] {
 
 /// A random point on triangle `t` of `packed`.
 fn point_on(rng: &mut Rng, packed: &PackedScene, t: usize) -> [f32; 3] {
-    let tri = &packed.triangles[t];
+    let tri = &packed.triangle(t);
     let (mut a, mut b) = (rng.f(), rng.f());
     if a + b > 1.0 {
         (a, b) = (1.0 - a, 1.0 - b);
@@ -957,7 +957,7 @@ fn point_on(rng: &mut Rng, packed: &PackedScene, t: usize) -> [f32; 3] {
 /// A point in (or slightly around) the scene's bounds, or on a surface.
 fn scene_point(rng: &mut Rng, packed: &PackedScene) -> [f32; 3] {
     if rng.below(2) == 0 {
-        let t = rng.below(packed.triangles.len() as u32) as usize;
+        let t = rng.below(packed.triangle_count() as u32) as usize;
         point_on(rng, packed, t)
     } else {
         let (lo, hi) = (packed.bounds_min, packed.bounds_max);
@@ -987,12 +987,12 @@ fn traversal_inputs(rng: &mut Rng, packed: &PackedScene, n: usize) -> Vec<[f32; 
         let (d, t_max) = if i % 3 == 0 {
             (rng.dir().to_array(), 1e30)
         } else {
-            let t = &packed.triangles[rng.below(packed.triangles.len() as u32) as usize];
+            let t = &packed.triangle(rng.below(packed.triangle_count() as u32) as usize);
             let target = match i % 4 {
                 0 => xyz(t.v0.to_array()),
                 1 => std::array::from_fn(|k| 0.5 * (t.v0[k] + t.v1[k])),
                 _ => {
-                    let other = rng.below(packed.triangles.len() as u32) as usize;
+                    let other = rng.below(packed.triangle_count() as u32) as usize;
                     point_on(rng, packed, other)
                 }
             };
@@ -1116,8 +1116,8 @@ fn scene_functions_agree_across_backends() {
     // points lie on faces, so some rays run along a face): not compared, as in the triangle test.
     let grazing_hit = |i: usize, out: &[[f32; 4]]| {
         let tri = out[0][3].to_bits() as usize;
-        tri < packed.triangles.len() && {
-            let t = &packed.triangles[tri];
+        tri < packed.triangle_count() && {
+            let t = &packed.triangle(tri);
             let item = [
                 inputs[i * STRIDE],
                 inputs[i * STRIDE + 1],

@@ -11,7 +11,7 @@ const H: u32 = 72;
 #[test]
 fn cornell_box_renders_finite_and_lit() {
     let scene = load_packed(&cornell_box_path(), &Environment::None);
-    assert_eq!(scene.triangles.len(), 36);
+    assert_eq!(scene.triangle_count(), 36);
     assert!(
         scene.stats.emissive_triangle_count >= 2,
         "the ceiling light is an emitter"

@@ -27,8 +27,8 @@ use fovea_core::kernel_abi::*;
 use fovea_core::lights::{environment, power_heuristic, sample_light, triangle};
 use fovea_core::post::tonemap::tonemap_linear;
 use fovea_core::rng::SampleRng;
-use fovea_core::scene::SceneSlices;
 use fovea_core::scene::{Material, SceneView, MATERIAL_DOUBLE_SIDED_EMISSION};
+use fovea_core::scene::{SceneSlices, SceneSource};
 use fovea_scene::environment::Environment;
 use fovea_scene::pack::PackedScene;
 use fovea_tests::stability::{
@@ -729,7 +729,7 @@ fn adversarial_scene(environment: &Environment) -> PackedScene {
 fn shading_point(rng: &mut Rng, scene: &SceneView) -> Vec3 {
     match rng.below(6) {
         0 => {
-            let t = scene.triangles[rng.below(scene.triangles.len() as u32) as usize];
+            let t = SceneSlices.triangle(scene, rng.below(scene.triangle_lanes.len() as u32));
             let (a, b) = (rng.f(), rng.f());
             let (a, b) = if a + b > 1.0 {
                 (1.0 - a, 1.0 - b)
@@ -985,7 +985,7 @@ fn scene_functions_are_finite_on_vulkan() {
                                 Ok(false)
                             } else if t > 0.0
                                 && t.is_finite()
-                                && (tri as usize) < scene.triangles.len()
+                                && (tri as usize) < scene.triangle_lanes.len()
                                 && o[0][1].is_finite()
                                 && o[0][2].is_finite()
                             {

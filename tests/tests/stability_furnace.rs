@@ -168,7 +168,7 @@ fn expected(scene: &PackedScene, albedo: Option<&[f64]>) -> Vec<Option<f64>> {
                     break;
                 }
                 if k == 0 {
-                    let t = view.triangles[hit.triangle as usize];
+                    let t = scene.triangle(hit.triangle as usize);
                     let v = |a: glam::Vec4| a.truncate();
                     let n = (v(t.v1) - v(t.v0)).cross(v(t.v2) - v(t.v0)).normalize();
                     centre_cos = n.dot(-ray.direction.normalize()).abs();

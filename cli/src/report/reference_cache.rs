@@ -64,7 +64,7 @@ pub fn packed_scene_hash(packed: &PackedScene) -> u64 {
     h.write(&(packed.lights.len() as u64).to_le_bytes());
     h.write(bytemuck::cast_slice(&packed.lights));
     h.write(bytemuck::cast_slice(&packed.environment_texels));
-    h.write(&(packed.triangles.len() as u64).to_le_bytes());
+    h.write(&(packed.triangle_count() as u64).to_le_bytes());
     for v in [packed.bounds_min, packed.bounds_max] {
         for c in v.to_array() {
             h.write(&c.to_bits().to_le_bytes());

@@ -49,7 +49,7 @@ const ROUND_UP: f32 = 1.0 + 2.0 * GAMMA3;
 /// Scales the (non-negative) entry distance of a slab test down.
 const ROUND_DOWN: f32 = 1.0 - 2.0 * GAMMA3;
 
-/// The closest hit of a ray: `triangle` indexes [`SceneView::triangles`] (BVH leaf order) and is
+/// The closest hit of a ray: `triangle` indexes [`SceneView::triangle_info`] (BVH leaf order) and is
 /// [`INVALID_INDEX`] on a miss; `b1`, `b2` are the barycentrics of `v1`, `v2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -487,16 +487,16 @@ mod tests {
         }
     }
 
+    /// Traversal reads nodes, blocks and (for cut-outs) triangle info and materials, never
+    /// `triangle_lanes`.
     fn view<'a>(
         nodes: &'a [Bvh4Node],
-        triangles: &'a [TrianglePositions],
         blocks: &'a [TriangleBlock],
         info: &'a [TriangleInfo],
         materials: &'a [Material],
     ) -> SceneView<'a> {
         SceneView {
             nodes,
-            triangles,
             blocks,
             triangle_info: info,
             materials,
@@ -565,7 +565,7 @@ mod tests {
     #[test]
     fn empty_scene_has_no_hits() {
         let materials = [Material::default()];
-        let scene = view(&[], &[], &[], &[], &materials);
+        let scene = view(&[], &[], &[], &materials);
         let ray = Ray::new(Vec3::ZERO, Vec3::Z);
         assert!(!closest_hit(&scene, &ray, f32::INFINITY).is_hit());
         assert!(!any_hit(&scene, &ray, f32::INFINITY));
@@ -577,7 +577,7 @@ mod tests {
         let (nodes, triangles, info) = two_layers();
         let materials = [Material::default(), Material::default()];
         let blocks = blocks_of(&triangles, &[]);
-        let scene = view(&nodes, &triangles, &blocks, &info, &materials);
+        let scene = view(&nodes, &blocks, &info, &materials);
         // Axis-aligned rays (two zero direction components) through the interior, an edge and a vertex.
         for origin in [
             Vec3::new(0.0, 0.0, 0.0),
@@ -625,7 +625,7 @@ mod tests {
             ..Material::default()
         };
         let materials = [Material::default(), hole];
-        let scene = view(&nodes, &triangles, &blocks, &info, &materials);
+        let scene = view(&nodes, &blocks, &info, &materials);
         let ray = Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::Z);
         let h = closest_hit(&scene, &ray, f32::INFINITY);
         assert_eq!(h.triangle, 0);
@@ -639,7 +639,7 @@ mod tests {
             ..hole
         };
         let materials = [Material::default(), solid];
-        let scene = view(&nodes, &triangles, &blocks, &info, &materials);
+        let scene = view(&nodes, &blocks, &info, &materials);
         assert_eq!(closest_hit(&scene, &ray, f32::INFINITY).triangle, 1);
     }
 
@@ -775,7 +775,7 @@ mod tests {
             nodes.push(node);
         }
         let blocks = blocks_of(&triangles, &[]);
-        let scene = view(&nodes, &triangles, &blocks, &info, &materials);
+        let scene = view(&nodes, &blocks, &info, &materials);
         let ray = Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::Z);
         let h = closest_hit(&scene, &ray, f32::INFINITY);
         assert_eq!(h.triangle, 1);

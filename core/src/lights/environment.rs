@@ -214,7 +214,7 @@ mod tests {
                     ..SceneGlobals::default()
                 },
                 nodes: &[],
-                triangles: &[],
+                triangle_lanes: &[],
                 blocks: &[],
                 triangle_info: &[],
                 normals: &[],

@@ -132,19 +132,22 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::math::pack_vec3;
-    use crate::scene::{Material, SceneSlices, TriangleInfo, TrianglePositions};
+    use crate::scene::{Material, SceneSlices, TriangleBlock, TriangleInfo, TrianglePositions};
     use crate::test_support::chi2::{
         chi2_test, family_share, geometric, join, sample_count, uniform_cos, Grid,
     };
+    use crate::test_support::one_triangle_per_block;
+    use std::vec::Vec;
 
     /// A scene of one emissive triangle (front face towards +z for counter-clockwise `v`).
     fn scene<'a>(
-        triangles: &'a [TrianglePositions],
+        (blocks, triangle_lanes): &'a (Vec<TriangleBlock>, Vec<u32>),
         info: &'a [TriangleInfo],
         materials: &'a [Material],
     ) -> SceneView<'a> {
         SceneView {
-            triangles,
+            blocks,
+            triangle_lanes,
             triangle_info: info,
             materials,
             ..SceneView::empty()
@@ -236,7 +239,8 @@ mod tests {
                 flags: crate::scene::MATERIAL_DOUBLE_SIDED_EMISSION,
                 ..Material::default()
             }];
-            let sc = scene(&tris, &info, &mats);
+            let packed = one_triangle_per_block(&tris);
+            let sc = scene(&packed, &info, &mats);
             let centroid = (v[0] + v[1] + v[2]) / 3.0;
             let axis = (centroid - p).normalize();
             // Half-angle of the cone around the axis that holds the triangle.

@@ -152,6 +152,7 @@ mod tests {
             v1: Vec3::new(scale, 0.0, 0.0).extend(0.0),
             v2: Vec3::new(0.0, scale, 0.0).extend(0.0),
         };
+        let (blocks, lanes) = crate::test_support::one_triangle_per_block(&[tri]);
         let info = TriangleInfo {
             vertices: [0, 1, 2],
             material: 0,
@@ -164,7 +165,8 @@ mod tests {
             // det = duv1.x * duv2.y - duv1.y * duv2.x = d * d.
             let uvs = [[0.0, 0.0], [d, 0.0], [0.0, d]];
             let view = SceneView {
-                triangles: core::slice::from_ref(&tri),
+                blocks: &blocks,
+                triangle_lanes: &lanes,
                 triangle_info: core::slice::from_ref(&info),
                 uvs: &uvs,
                 materials: &materials,

@@ -5,7 +5,7 @@
 //! layout equals its std430 layout in SPIR-V. `glam::Vec3` is never used (12 bytes on the CPU, 16 in
 //! rust-gpu). Absent references are [`INVALID_INDEX`]; booleans are bits in a `u32` flags word.
 //!
-//! The two types traversal reads, [`Bvh4Node`] and [`TrianglePositions`], hold `Vec4`/`UVec4` rather
+//! The two types traversal reads, [`Bvh4Node`] and [`TriangleBlock`], hold `Vec4`/`UVec4` rather
 //! than `[f32; 4]`. Every type the GPU reads from its scene texel buffer ([`super::source`]) is a whole
 //! number of 16-byte texels.
 use crate::math::lane_mask::lane_u32;
@@ -176,8 +176,9 @@ impl Default for Bvh4Node {
     }
 }
 
-/// World-space vertex positions of one triangle (48 bytes; `w` is unused and zero), in BVH leaf order:
-/// what shading and light sampling read. Traversal tests [`TriangleBlock`]s instead.
+/// World-space vertex positions of one triangle (48 bytes; `w` is unused and zero): what shading and
+/// light sampling get from [`super::SceneSource::triangle`], and the builder's input. Packed scenes store
+/// positions only in [`TriangleBlock`]s.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TrianglePositions {
@@ -203,7 +204,8 @@ pub struct TriangleBlock {
     pub v2x: Vec4,
     pub v2y: Vec4,
     pub v2z: Vec4,
-    /// Each lane's triangle ([`super::SceneView::triangles`] index), with [`BLOCK_LANE_CUTOUT`] set
+    /// Each lane's triangle (BVH leaf order, the index of [`super::SceneView::triangle_info`]), with
+    /// [`BLOCK_LANE_CUTOUT`] set
     /// when its material has an alpha cut-out (so traversal runs the cut-out test only for such
     /// triangles, without reading their material first).
     pub index: UVec4,
@@ -241,6 +243,35 @@ impl TriangleBlock {
         self.v2z[lane] = t.v2.z;
         self.index[lane] = index;
     }
+
+    /// The positions in lane `lane` (0 to 3).
+    #[inline(always)]
+    #[must_use]
+    pub fn lane_positions(&self, lane: usize) -> TrianglePositions {
+        let at = |v: Vec4| -> f32 {
+            // A lane read by value on the GPU (see `lane_mask::lane`); an indexed load on the CPU.
+            #[cfg(target_arch = "spirv")]
+            {
+                crate::math::lane_mask::lane(v, lane)
+            }
+            #[cfg(not(target_arch = "spirv"))]
+            {
+                v[lane]
+            }
+        };
+        TrianglePositions {
+            v0: Vec4::new(at(self.v0x), at(self.v0y), at(self.v0z), 0.0),
+            v1: Vec4::new(at(self.v1x), at(self.v1y), at(self.v1z), 0.0),
+            v2: Vec4::new(at(self.v2x), at(self.v2y), at(self.v2z), 0.0),
+        }
+    }
+}
+
+/// The [`super::SceneView::triangle_lanes`] word of lane `lane` (0 to 3) of block `block`.
+#[inline]
+#[must_use]
+pub const fn triangle_lane(block: u32, lane: u32) -> u32 {
+    4 * block + lane
 }
 
 /// What shading needs to know about one triangle besides its positions (16 bytes), in BVH leaf order.
@@ -419,7 +450,7 @@ pub struct SceneGlobals {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct TexelOffsets {
-    pub triangles: u32,
+    pub triangle_lanes: u32,
     pub triangle_info: u32,
     pub materials: u32,
     pub normals: u32,

@@ -1,6 +1,6 @@
 //! Where core reads the scene's large arrays: the BVH nodes and triangle blocks traversal tests, and
-//! what shading reads at a hit (triangle positions and info, materials, vertex normals and texture
-//! coordinates, texture infos and texels).
+//! what shading reads at a hit (triangle positions, from the blocks, and info, materials, vertex normals
+//! and texture coordinates, texture infos and texels).
 //!
 //! On the CPU from the [`SceneView`]'s slices ([`SceneSlices`]). On the GPU from one storage texel
 //! buffer that holds all of them (`SceneTexels`, `R32G32B32A32_UINT`): each array starts at the texel
@@ -21,8 +21,6 @@ use crate::scene::{
 
 /// Texels (16 bytes each) per [`Bvh4Node`].
 pub const NODE_TEXELS: u32 = 7;
-/// Texels per [`TrianglePositions`].
-pub const TRIANGLE_TEXELS: u32 = 3;
 /// Texels per [`Material`].
 pub const MATERIAL_TEXELS: u32 = 7;
 /// Texels per [`TriangleBlock`].
@@ -30,7 +28,6 @@ pub const BLOCK_TEXELS: u32 = 10;
 
 const _: () = {
     assert!(core::mem::size_of::<Bvh4Node>() == NODE_TEXELS as usize * 16);
-    assert!(core::mem::size_of::<TrianglePositions>() == TRIANGLE_TEXELS as usize * 16);
     assert!(core::mem::size_of::<Material>() == MATERIAL_TEXELS as usize * 16);
     assert!(core::mem::size_of::<TriangleBlock>() == BLOCK_TEXELS as usize * 16);
     assert!(core::mem::size_of::<TriangleInfo>() == 16);
@@ -42,7 +39,8 @@ const _: () = {
 pub trait SceneSource {
     /// Node `index` of the BVH (root 0).
     fn node<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Bvh4Node;
-    /// The positions of triangle `index` (BVH leaf order).
+    /// The positions of triangle `index` (BVH leaf order), from its block lane
+    /// ([`SceneView::triangle_lanes`]).
     fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions;
     /// The positions of triangle block `index`, which leaves name (its `index` field is not read: see
     /// [`Self::block_lanes`]).
@@ -79,7 +77,8 @@ impl SceneSource for SceneSlices {
 
     #[inline(always)]
     fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions {
-        scene.triangles[index as usize]
+        let at = scene.triangle_lanes[index as usize];
+        scene.blocks[(at / 4) as usize].lane_positions((at % 4) as usize)
     }
 
     #[inline(always)]
@@ -175,12 +174,9 @@ mod texels {
 
         #[inline(always)]
         fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions {
-            let t = scene.globals.texel_offsets.triangles + index * TRIANGLE_TEXELS;
-            TrianglePositions {
-                v0: floats(self.read(t)),
-                v1: floats(self.read(t + 1)),
-                v2: floats(self.read(t + 2)),
-            }
+            let w: UVec4 = self.read(scene.globals.texel_offsets.triangle_lanes + index / 4);
+            let at = lane_u32(w, (index % 4) as usize);
+            self.block(scene, at / 4).lane_positions((at % 4) as usize)
         }
 
         #[inline(always)]

@@ -3,7 +3,6 @@
 use super::features::{FeatureFlags, Features};
 use super::layout::{
     Bvh4Node, Light, Material, SceneGlobals, TextureInfo, TriangleBlock, TriangleInfo,
-    TrianglePositions,
 };
 
 /// The packed scene as borrowed slices. Arrays a scene does not need are empty.
@@ -18,12 +17,13 @@ pub struct SceneView<'a, F: Features = FeatureFlags> {
     pub globals: SceneGlobals,
     /// 4-wide BVH nodes, root first (see [`Bvh4Node`]); empty for an empty scene.
     pub nodes: &'a [Bvh4Node],
-    /// Triangle positions in BVH leaf order.
-    pub triangles: &'a [TrianglePositions],
+    /// Where each triangle's positions are (BVH leaf order): `4 * block + lane` of the [`TriangleBlock`]
+    /// lane that holds them ([`super::triangle_lane`]). The blocks are the only copy of the positions.
+    pub triangle_lanes: &'a [u32],
     /// The leaves' triangles four at a time, which traversal tests ([`TriangleBlock`]); leaf slot words
     /// of `nodes` index it.
     pub blocks: &'a [TriangleBlock],
-    /// Per-triangle vertex indices and material, parallel to `triangles`.
+    /// Per-triangle vertex indices and material, parallel to `triangle_lanes`.
     pub triangle_info: &'a [TriangleInfo],
     /// Per-vertex shading normals (`xyz`, `w` unused). Empty when the scene has no shading normals; a zero
     /// normal means "use the geometric normal".
@@ -50,14 +50,14 @@ pub struct SceneView<'a, F: Features = FeatureFlags> {
 
 impl SceneView<'_> {
     /// A scene without geometry, materials, lights or environment, with every feature on: the base that
-    /// tests fill in with struct update syntax (`SceneView { triangles, ..SceneView::empty() }`).
+    /// tests fill in with struct update syntax (`SceneView { nodes, ..SceneView::empty() }`).
     #[must_use]
     pub fn empty() -> Self {
         SceneView {
             features: FeatureFlags::ALL,
             globals: SceneGlobals::default(),
             nodes: &[],
-            triangles: &[],
+            triangle_lanes: &[],
             blocks: &[],
             triangle_info: &[],
             normals: &[],
@@ -84,7 +84,7 @@ impl<'a, F: Features> SceneView<'a, F> {
             features,
             globals: self.globals,
             nodes: self.nodes,
-            triangles: self.triangles,
+            triangle_lanes: self.triangle_lanes,
             blocks: self.blocks,
             triangle_info: self.triangle_info,
             normals: self.normals,

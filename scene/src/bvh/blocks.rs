@@ -1,7 +1,7 @@
 //! Leaf blocks: every leaf's triangles four at a time, in the structure-of-arrays layout traversal tests
 //! them in ([`TriangleBlock`]).
 use fovea_core::scene::{
-    leaf_count, leaf_first, leaf_slot, Bvh4Node, TriangleBlock, TrianglePositions,
+    leaf_count, leaf_first, leaf_slot, triangle_lane, Bvh4Node, TriangleBlock, TrianglePositions,
     BLOCK_LANE_CUTOUT,
 };
 
@@ -15,18 +15,28 @@ pub fn blocks_for(triangles: usize) -> usize {
     triangles.div_ceil(BLOCK_LANES)
 }
 
-/// Rewrites every leaf slot of `nodes` (a built BVH, whose leaves name triangles of the leaf-ordered
-/// `triangles`) to name the first of the blocks that hold its triangles (the count stays the triangle
-/// count), and returns those blocks, in leaf order.
-/// `cut_out(i)` says whether triangle `i`'s material has an alpha cut-out ([`BLOCK_LANE_CUTOUT`]).
+/// The leaves' triangles in blocks, and where each triangle went.
+#[derive(Clone, Debug, Default)]
+pub struct LeafBlocks {
+    /// Every leaf's triangles, four to a block, in leaf order.
+    pub blocks: Vec<TriangleBlock>,
+    /// For each triangle, its block and lane ([`triangle_lane`]): `SceneView::triangle_lanes`.
+    pub triangle_lanes: Vec<u32>,
+}
+
+/// Rewrites every leaf slot of `nodes` (a built BVH, whose leaves name the leaf-ordered triangles
+/// `0 .. triangle_count`) to name the first of the blocks that hold its triangles (the count stays the
+/// triangle count), and returns those blocks. `triangle(i)` gives triangle `i`'s positions and
+/// `cut_out(i)` says whether its material has an alpha cut-out ([`BLOCK_LANE_CUTOUT`]).
 pub fn pack_leaf_blocks(
     nodes: &mut [Bvh4Node],
-    triangles: &[TrianglePositions],
+    triangle_count: usize,
+    triangle: impl Fn(usize) -> TrianglePositions,
     cut_out: impl Fn(usize) -> bool,
-) -> Vec<TriangleBlock> {
+) -> LeafBlocks {
     // Leaves are contiguous, disjoint ranges covering the triangles: mark each leaf's length at its
     // first triangle, then number the blocks in one pass in leaf order.
-    let mut leaf_length = vec![0u8; triangles.len()];
+    let mut leaf_length = vec![0u8; triangle_count];
     for node in nodes.iter() {
         for slot in 0..4 {
             if node.is_leaf_slot(slot) {
@@ -35,19 +45,23 @@ pub fn pack_leaf_blocks(
             }
         }
     }
-    let mut first_block = vec![0u32; triangles.len()];
+    // A leaf's first block, at its first triangle.
+    let mut first_block = vec![0u32; triangle_count];
     let mut blocks = Vec::new();
+    let mut triangle_lanes = Vec::with_capacity(triangle_count);
     let mut i = 0;
-    while i < triangles.len() {
+    while i < triangle_count {
         let count = usize::from(leaf_length[i]).max(1);
         first_block[i] = blocks.len() as u32;
-        for (k, t) in triangles[i..i + count].iter().enumerate() {
+        for k in 0..count {
             if k % BLOCK_LANES == 0 {
                 blocks.push(TriangleBlock::EMPTY);
             }
             let index = (i + k) as u32 | if cut_out(i + k) { BLOCK_LANE_CUTOUT } else { 0 };
+            let lane = k % BLOCK_LANES;
             let block = blocks.last_mut().expect("a block was just pushed");
-            block.set_lane(k % BLOCK_LANES, t, index);
+            block.set_lane(lane, &triangle(i + k), index);
+            triangle_lanes.push(triangle_lane(blocks.len() as u32 - 1, lane as u32));
         }
         i += count;
     }
@@ -60,5 +74,8 @@ pub fn pack_leaf_blocks(
             }
         }
     }
-    blocks
+    LeafBlocks {
+        blocks,
+        triangle_lanes,
+    }
 }

@@ -329,8 +329,10 @@ mod tests {
     struct Packed {
         bvh: Bvh,
         nodes: Vec<Bvh4Node>,
+        /// Positions in leaf order (what the blocks hold).
         triangles: Vec<TrianglePositions>,
         blocks: Vec<TriangleBlock>,
+        triangle_lanes: Vec<u32>,
         info: Vec<TriangleInfo>,
         materials: Vec<Material>,
     }
@@ -349,12 +351,14 @@ mod tests {
                 .collect();
             let info = vec![TriangleInfo::default(); triangles.len()];
             let mut nodes = bvh.nodes.clone();
-            let blocks = blocks::pack_leaf_blocks(&mut nodes, &triangles, |_| false);
+            let packed =
+                blocks::pack_leaf_blocks(&mut nodes, triangles.len(), |i| triangles[i], |_| false);
             Self {
                 bvh,
                 nodes,
                 triangles,
-                blocks,
+                blocks: packed.blocks,
+                triangle_lanes: packed.triangle_lanes,
                 info,
                 materials: vec![Material::default()],
             }
@@ -364,7 +368,7 @@ mod tests {
             SceneView {
                 features: fovea_core::scene::FeatureFlags::ALL,
                 nodes: &self.nodes,
-                triangles: &self.triangles,
+                triangle_lanes: &self.triangle_lanes,
                 blocks: &self.blocks,
                 triangle_info: &self.info,
                 materials: &self.materials,
@@ -625,6 +629,26 @@ mod tests {
         .stats
         .sah_cost;
         assert!(fine < coarse, "32 bins {fine} vs 2 bins {coarse}");
+    }
+
+    /// Every triangle sits in exactly one block lane, which `triangle_lanes` names and whose `index`
+    /// word names the triangle back; shading reads the same positions the builder was given.
+    #[test]
+    fn triangle_lanes_name_each_triangle_s_block_lane() {
+        use fovea_core::scene::{SceneSlices, SceneSource, BLOCK_LANE_CUTOUT};
+        let mut rng = TestRng(21);
+        let packed = Packed::new(&soup(3000, &mut rng));
+        let view = packed.view();
+        for (i, t) in packed.triangles.iter().enumerate() {
+            assert_eq!(SceneSlices.triangle(&view, i as u32), *t);
+            let at = packed.triangle_lanes[i] as usize;
+            let word = packed.blocks[at / 4].index[at % 4];
+            assert_eq!(word & !BLOCK_LANE_CUTOUT, i as u32);
+        }
+        let mut lanes = packed.triangle_lanes.clone();
+        lanes.sort_unstable();
+        lanes.dedup();
+        assert_eq!(lanes.len(), packed.triangles.len());
     }
 
     /// The indexed build gives the same tree as the build over copied triangle positions, on a mesh
