@@ -47,7 +47,8 @@ pub fn pack_leaf_blocks(
     }
     // A leaf's first block, at its first triangle.
     let mut first_block = vec![0u32; triangle_count];
-    let mut blocks = Vec::new();
+    let block_count = leaf_length.iter().map(|&n| blocks_for(n.into())).sum();
+    let mut blocks = Vec::with_capacity(block_count);
     let mut triangle_lanes = Vec::with_capacity(triangle_count);
     let mut i = 0;
     while i < triangle_count {
