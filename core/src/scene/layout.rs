@@ -18,9 +18,9 @@ pub const INVALID_INDEX: u32 = u32::MAX;
 /// A node of a binary bounding-volume hierarchy (32 bytes): the builder's intermediate form, which
 /// `fovea_scene::bvh` collapses into [`Bvh4Node`]s. Traversal never sees it.
 ///
-/// Interior nodes (`triangle_count == 0`) keep their two children next to each other at `left_or_first`
-/// and `left_or_first + 1`. Leaves hold triangles `left_or_first .. left_or_first + triangle_count` of the
-/// (BVH-ordered) triangle arrays.
+/// An interior node (`triangle_count == 0`) at arena slot `s` has its left child at `s + 1` and its right
+/// child at `s + left_or_first`. Leaves hold triangles `left_or_first .. left_or_first + triangle_count`
+/// of the (BVH-ordered) triangle arrays.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {

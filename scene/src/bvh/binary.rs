@@ -5,7 +5,9 @@
 //!
 //! Every subtree of `n` primitives at offset `s` owns the slots `2s .. 2(s + n) - 1` of a temporary node
 //! arena (a binary tree over `n` leaves has at most `2n - 1` nodes), so parallel subtrees write disjoint
-//! slices without locks or per-node allocation.
+//! slices without locks or per-node allocation. Subtrees small enough to be built sequentially pack
+//! their nodes at the front of their slots ([`build_node`]), so the arena's untouched pages (it is
+//! allocated zeroed) cost no memory.
 //!
 //! Depth is bounded: when a node's depth plus `ceil(log2 n)` reaches [`MAX_DEPTH`], its subtree is split at
 //! object medians, which halves the primitive count per level. Leaf depth thus never exceeds `MAX_DEPTH`.
@@ -21,7 +23,7 @@ use super::MAX_DEPTH;
 /// Most bins per axis; `bin_count` is clamped to `2..=MAX_BINS`.
 pub(super) const MAX_BINS: usize = 32;
 /// Subtrees with more primitives than this build their two children in parallel.
-const PARALLEL_SUBTREE: usize = 4096;
+pub(super) const PARALLEL_SUBTREE: usize = 4096;
 /// Nodes with at least this many primitives bin and partition in parallel.
 const PARALLEL_NODE: usize = 65_536;
 /// Primitives per task of parallel binning and partitioning.
@@ -461,8 +463,14 @@ fn median_split(prims: &mut [PrimRef], centroids: &Aabb) -> (usize, Side, Side) 
 }
 
 /// Builds the subtree over `prims` (at offset `first` of the leaf order) into `arena`, whose slot 0 is the
-/// subtree's root and whose length is `2 * prims.len() - 1`. Interior nodes store their left child's
-/// primitive count in `left_or_first` (the children sit at slots 1 and `2 * left_count`).
+/// subtree's root and whose length is at least `2 * prims.len() - 1` (the most nodes a binary tree over
+/// that many leaves has), and returns how many slots from the start it spans.
+///
+/// An interior node's left child is the next slot, and `left_or_first` holds the offset of its right
+/// child. Subtrees built in parallel put the right child after the left child's whole reservation
+/// (`2 * left_count`), since both are written at once; sequential ones put it right after the left
+/// subtree's last node, so each sequential subtree is contiguous and the untouched rest of its
+/// reservation (more than half of it, with leaves of about three triangles) is never paged in.
 pub(super) fn build_node(
     ctx: &Context,
     prims: &mut [PrimRef],
@@ -471,9 +479,9 @@ pub(super) fn build_node(
     side: Side,
     depth: u32,
     bins: &mut Bins,
-) {
+) -> usize {
     let n = prims.len();
-    debug_assert_eq!(arena.len(), 2 * n - 1);
+    debug_assert!(arena.len() >= 2 * n - 1);
     let leaf = BvhNode {
         bounds_min: side.bounds.min.to_array(),
         left_or_first: first,
@@ -483,7 +491,7 @@ pub(super) fn build_node(
     if n == 1 {
         arena[0] = leaf;
         ctx.leaves.fetch_add(1, Ordering::Relaxed);
-        return;
+        return 1;
     }
 
     let coincident = side.centroids.max.cmple(side.centroids.min).all();
@@ -522,20 +530,15 @@ pub(super) fn build_node(
     let Some((mid, left, right)) = split else {
         arena[0] = leaf;
         ctx.leaves.fetch_add(1, Ordering::Relaxed);
-        return;
+        return 1;
     };
     debug_assert!(mid > 0 && mid < n);
-    arena[0] = BvhNode {
-        bounds_min: side.bounds.min.to_array(),
-        left_or_first: mid as u32,
-        bounds_max: side.bounds.max.to_array(),
-        triangle_count: 0,
-    };
     let (left_prims, right_prims) = prims.split_at_mut(mid);
-    let (left_arena, right_arena) = arena[1..].split_at_mut(2 * mid - 1);
     let right_first = first + mid as u32;
-    if n > PARALLEL_SUBTREE {
-        rayon::join(
+    let (root, below) = arena.split_first_mut().expect("the arena holds the root");
+    let (right_offset, span) = if n > PARALLEL_SUBTREE {
+        let (left_arena, right_arena) = below.split_at_mut(2 * mid - 1);
+        let (_, right_span) = rayon::join(
             || build_node(ctx, left_prims, left_arena, first, left, depth + 1, bins),
             || {
                 let mut right_bins = Bins::empty();
@@ -547,21 +550,30 @@ pub(super) fn build_node(
                     right,
                     depth + 1,
                     &mut right_bins,
-                );
+                )
             },
         );
+        (2 * mid, 2 * mid + right_span)
     } else {
-        build_node(ctx, left_prims, left_arena, first, left, depth + 1, bins);
-        build_node(
+        let left_span = build_node(ctx, left_prims, below, first, left, depth + 1, bins);
+        let right_span = build_node(
             ctx,
             right_prims,
-            right_arena,
+            &mut below[left_span..],
             right_first,
             right,
             depth + 1,
             bins,
         );
-    }
+        (1 + left_span, 1 + left_span + right_span)
+    };
+    *root = BvhNode {
+        bounds_min: side.bounds.min.to_array(),
+        left_or_first: right_offset as u32,
+        bounds_max: side.bounds.max.to_array(),
+        triangle_count: 0,
+    };
+    span
 }
 
 #[cfg(test)]

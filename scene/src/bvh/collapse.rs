@@ -35,8 +35,8 @@ fn half_up(h: u32) -> u32 {
 }
 
 /// The binary arena of [`super::binary::build_node`]: slot 0 the root; an interior node at slot `s`
-/// stores its left child's primitive count `l` in `left_or_first`, its children sit at `s + 1` and
-/// `s + 2 l`.
+/// stores the offset `r` of its right child in `left_or_first`: its children sit at `s + 1` and
+/// `s + r`.
 struct Arena<'a> {
     nodes: &'a [BvhNode],
     /// Height of each used slot's subtree (leaf = 0).
@@ -67,7 +67,7 @@ impl<'a> Arena<'a> {
 
     #[inline]
     fn children(&self, slot: usize) -> (usize, usize) {
-        (slot + 1, slot + 2 * self.nodes[slot].left_or_first as usize)
+        (slot + 1, slot + self.nodes[slot].left_or_first as usize)
     }
 
     #[inline]

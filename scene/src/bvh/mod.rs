@@ -23,7 +23,7 @@ use fovea_core::scene::{
 use glam::Vec3A;
 use rayon::prelude::*;
 
-use binary::{build_node, Aabb, Bins, Context, PrimRef, Side, MAX_BINS};
+use binary::{build_node, Aabb, Bins, Context, PrimRef, Side, MAX_BINS, PARALLEL_SUBTREE};
 
 const _: () = assert!(MAX_TRIANGLES <= PrimRef::MAX_INDEX as u64);
 
@@ -232,9 +232,16 @@ fn build_over_bounds(
         .map(|i| PrimRef::new(bounds(i), i as u32))
         .collect();
     let root = Side::of(&prims);
-    let mut arena = vec![BvhNode::default(); 2 * n - 1];
+    // Zeroed by the allocator, not written: the pages `build_node` never touches cost no memory.
+    let mut arena: Vec<BvhNode> = bytemuck::zeroed_vec(2 * n - 1);
     let mut bins = Bins::empty();
-    build_node(&ctx, &mut prims, &mut arena, 0, root, 0, &mut bins);
+    let span = build_node(&ctx, &mut prims, &mut arena, 0, root, 0, &mut bins);
+    // A tree built sequentially throughout is packed: its 2L - 1 nodes fill the arena's first slots.
+    let leaves = ctx.leaves.load(Ordering::Relaxed);
+    debug_assert!(
+        n > PARALLEL_SUBTREE || span == 2 * leaves - 1,
+        "{span} slots, {leaves} leaves"
+    );
 
     let mut stats = BvhStats::default();
     let nodes = collapse::collapse(&arena, ctx.leaves.load(Ordering::Relaxed), &mut stats);
