@@ -181,8 +181,8 @@ pub fn pack_scene(
         bounds_max = Vec3::ZERO;
     }
 
-    // Peak memory is set here: the build's temporaries next to the loaded scene. The loaded arrays are
-    // dropped as soon as their leaf-ordered forms exist.
+    // Packing's peak memory is here: the build's temporaries next to the loaded scene. The loaded arrays
+    // are dropped as soon as their leaf-ordered forms exist.
     let mut bvh = build_bvh_indexed(&positions, &triangles, bvh_options);
     let triangle_info: Vec<TriangleInfo> = bvh
         .triangle_order
