@@ -5,11 +5,12 @@ use std::time::Instant;
 
 use fovea_core::lights::power;
 use fovea_core::scene::{
-    Bvh4Node, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleBlock, TriangleInfo,
-    TrianglePositions, ENVIRONMENT_CONSTANT, ENVIRONMENT_MAP, ENVIRONMENT_NONE, INVALID_INDEX,
-    LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
+    block_and_lane, Bvh4Node, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleBlock,
+    TriangleInfo, TrianglePositions, ENVIRONMENT_CONSTANT, ENVIRONMENT_MAP, ENVIRONMENT_NONE,
+    INVALID_INDEX, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
     MATERIAL_ALPHA_CUTOUT, MATERIAL_DOUBLE_SIDED_EMISSION, TEXTURE_RGBA16,
 };
+use fovea_core::scene::{SceneSlices, SceneSource};
 use glam::{Vec3, Vec4};
 
 use crate::bvh::blocks::{pack_leaf_blocks, LeafBlocks};
@@ -106,8 +107,7 @@ impl PackedScene {
     /// If `i` is not below [`Self::triangle_count`].
     #[must_use]
     pub fn triangle(&self, i: usize) -> TrianglePositions {
-        let at = self.triangle_lanes[i] as usize;
-        self.blocks[at / 4].lane_positions(at % 4)
+        SceneSlices.triangle(&self.view(), i as u32)
     }
 
     /// Bytes held by the packed arrays.
@@ -277,7 +277,8 @@ pub fn pack_scene(
             if !m.is_emissive() {
                 continue;
             }
-            let t = blocks[at as usize / 4].lane_positions(at as usize % 4);
+            let (block, lane) = block_and_lane(at);
+            let t = blocks[block as usize].lane_positions(lane);
             let (v0, v1, v2) = (t.v0.truncate(), t.v1.truncate(), t.v2.truncate());
             let area = 0.5 * (v1 - v0).cross(v2 - v0).length();
             if !(area > 0.0) || !area.is_finite() {

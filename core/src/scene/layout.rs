@@ -274,6 +274,13 @@ pub const fn triangle_lane(block: u32, lane: u32) -> u32 {
     4 * block + lane
 }
 
+/// The block and the lane a [`super::SceneView::triangle_lanes`] word names (undoes [`triangle_lane`]).
+#[inline]
+#[must_use]
+pub const fn block_and_lane(word: u32) -> (u32, usize) {
+    (word / 4, (word % 4) as usize)
+}
+
 /// What shading needs to know about one triangle besides its positions (16 bytes), in BVH leaf order.
 ///
 /// `vertices` index the per-vertex arrays [`super::SceneView::normals`] and [`super::SceneView::uvs`];

@@ -15,8 +15,8 @@
 //! cannot keep an image inside a struct, so the source is an argument of its own next to the
 //! [`SceneView`] rather than one of its fields.
 use crate::scene::{
-    Bvh4Node, Features, Material, SceneView, TextureInfo, TriangleBlock, TriangleInfo,
-    TrianglePositions,
+    block_and_lane, Bvh4Node, Features, Material, SceneView, TextureInfo, TriangleBlock,
+    TriangleInfo, TrianglePositions,
 };
 
 /// Texels (16 bytes each) per [`Bvh4Node`].
@@ -77,8 +77,8 @@ impl SceneSource for SceneSlices {
 
     #[inline(always)]
     fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions {
-        let at = scene.triangle_lanes[index as usize];
-        scene.blocks[(at / 4) as usize].lane_positions((at % 4) as usize)
+        let (block, lane) = block_and_lane(scene.triangle_lanes[index as usize]);
+        scene.blocks[block as usize].lane_positions(lane)
     }
 
     #[inline(always)]
@@ -175,8 +175,8 @@ mod texels {
         #[inline(always)]
         fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions {
             let w: UVec4 = self.read(scene.globals.texel_offsets.triangle_lanes + index / 4);
-            let at = lane_u32(w, (index % 4) as usize);
-            self.block(scene, at / 4).lane_positions((at % 4) as usize)
+            let (block, lane) = block_and_lane(lane_u32(w, (index % 4) as usize));
+            self.block(scene, block).lane_positions(lane)
         }
 
         #[inline(always)]
