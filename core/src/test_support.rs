@@ -5,7 +5,7 @@ extern crate std;
 use glam::{Vec2, Vec3};
 use std::vec::Vec;
 
-use crate::scene::{triangle_lane, TriangleBlock, TrianglePositions};
+use crate::scene::{triangle_lane, TriangleBlock, TrianglePositions, BLOCK_LANE_CUTOUT};
 
 pub(crate) mod chi2;
 
@@ -51,16 +51,23 @@ impl SplitMix64 {
 }
 
 /// Triangles packed one per block, each in lane 0: the blocks and the `SceneView::triangle_lanes` that
-/// name them (the layout of a BVH whose leaves hold one triangle each).
+/// name them (the layout of a BVH whose leaves hold one triangle each, so a leaf word `leaf_slot(i, 1)`
+/// names triangle `i`). `cut_out` lists the triangles whose material has an alpha cut-out.
 pub(crate) fn one_triangle_per_block(
     triangles: &[TrianglePositions],
+    cut_out: &[u32],
 ) -> (Vec<TriangleBlock>, Vec<u32>) {
     let blocks = triangles
         .iter()
         .enumerate()
         .map(|(i, t)| {
+            let flag = if cut_out.contains(&(i as u32)) {
+                BLOCK_LANE_CUTOUT
+            } else {
+                0
+            };
             let mut block = TriangleBlock::EMPTY;
-            block.set_lane(0, t, i as u32);
+            block.set_lane(0, t, i as u32 | flag);
             block
         })
         .collect();

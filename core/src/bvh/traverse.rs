@@ -477,6 +477,7 @@ mod tests {
     use crate::scene::{
         leaf_slot, Material, TriangleBlock, TriangleInfo, TrianglePositions, MATERIAL_ALPHA_CUTOUT,
     };
+    use crate::test_support::one_triangle_per_block;
     use glam::Vec3;
 
     fn tri(a: Vec3, b: Vec3, c: Vec3) -> TrianglePositions {
@@ -502,25 +503,6 @@ mod tests {
             materials,
             ..SceneView::empty()
         }
-    }
-
-    /// One block per triangle, the triangle in lane 0 (so a leaf word `leaf_slot(i, 1)` names triangle
-    /// `i`, as in a built BVH); `cut_out` lists the triangles whose material has an alpha cut-out.
-    fn blocks_of(triangles: &[TrianglePositions], cut_out: &[u32]) -> std::vec::Vec<TriangleBlock> {
-        triangles
-            .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let mut block = TriangleBlock::EMPTY;
-                let flag = if cut_out.contains(&(i as u32)) {
-                    BLOCK_LANE_CUTOUT
-                } else {
-                    0
-                };
-                block.set_lane(0, t, i as u32 | flag);
-                block
-            })
-            .collect()
     }
 
     /// Slot `slot` of `node` becomes a box around z-layer `z` (as the builder writes it, slightly larger
@@ -576,7 +558,7 @@ mod tests {
     fn closest_and_any_hit_on_two_layers() {
         let (nodes, triangles, info) = two_layers();
         let materials = [Material::default(), Material::default()];
-        let blocks = blocks_of(&triangles, &[]);
+        let blocks = one_triangle_per_block(&triangles, &[]).0;
         let scene = view(&nodes, &blocks, &info, &materials);
         // Axis-aligned rays (two zero direction components) through the interior, an edge and a vertex.
         for origin in [
@@ -618,7 +600,7 @@ mod tests {
     fn alpha_cut_out_triangles_are_skipped() {
         let (nodes, triangles, info) = two_layers();
         // Triangle 1 (the near layer) has material 1, which the packer marks in its block lane.
-        let blocks = blocks_of(&triangles, &[1]);
+        let blocks = one_triangle_per_block(&triangles, &[1]).0;
         let hole = Material {
             flags: MATERIAL_ALPHA_CUTOUT,
             base_color: [0.8, 0.8, 0.8, 0.0],
@@ -774,7 +756,7 @@ mod tests {
             }
             nodes.push(node);
         }
-        let blocks = blocks_of(&triangles, &[]);
+        let blocks = one_triangle_per_block(&triangles, &[]).0;
         let scene = view(&nodes, &blocks, &info, &materials);
         let ray = Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::Z);
         let h = closest_hit(&scene, &ray, f32::INFINITY);

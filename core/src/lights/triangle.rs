@@ -239,7 +239,7 @@ mod tests {
                 flags: crate::scene::MATERIAL_DOUBLE_SIDED_EMISSION,
                 ..Material::default()
             }];
-            let packed = one_triangle_per_block(&tris);
+            let packed = one_triangle_per_block(&tris, &[]);
             let sc = scene(&packed, &info, &mats);
             let centroid = (v[0] + v[1] + v[2]) / 3.0;
             let axis = (centroid - p).normalize();

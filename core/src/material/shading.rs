@@ -152,7 +152,7 @@ mod tests {
             v1: Vec3::new(scale, 0.0, 0.0).extend(0.0),
             v2: Vec3::new(0.0, scale, 0.0).extend(0.0),
         };
-        let (blocks, lanes) = crate::test_support::one_triangle_per_block(&[tri]);
+        let (blocks, lanes) = crate::test_support::one_triangle_per_block(&[tri], &[]);
         let info = TriangleInfo {
             vertices: [0, 1, 2],
             material: 0,
