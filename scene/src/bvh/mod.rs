@@ -244,7 +244,7 @@ fn build_over_bounds(
     );
 
     let mut stats = BvhStats::default();
-    let nodes = collapse::collapse(&arena, ctx.leaves.load(Ordering::Relaxed), &mut stats);
+    let nodes = collapse::collapse(&arena, leaves, &mut stats);
     drop(arena);
     assert!(
         nodes.len() < MAX_NODE_COUNT,
