@@ -11,7 +11,7 @@
 //!    the block (the "replicated" image). No ray is traced for a pixel that a block covers.
 //! 2. **Cell means** for each block size above 1 ([`fovea_core::foveation::fill::cell_mean`]).
 //! 3. **Fill**: every pixel of a coarse block interpolates bilinearly between neighbouring cell centres
-//!    ([`fovea_core::foveation::fill::fill_pixel`]), or keeps the block value in replicate mode.
+//!    ([`fovea_core::foveation::fill::fill_value`], in place), or keeps the block value in replicate mode.
 //!
 //! Random numbers are keyed by block, frame and sample, and each block's samples are summed in a fixed
 //! order, so the image does not depend on the number of threads.

@@ -3,13 +3,13 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use fovea_core::foveation::blocks::{owning_block, samples_in_block};
-use fovea_core::foveation::fill::{cell_buffer_len, cell_mean_at, fill_pixel};
+use fovea_core::foveation::fill::{cell_buffer_len, cell_mean_at, fill_value};
 use fovea_core::foveation::regions::REGION_COUNT;
 use fovea_core::integrator::{render_block_sample, FrameParams};
 use fovea_core::scene::{Features, SceneView};
 
 use crate::specialize::{dispatch, path_mask, WithScene};
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 /// A rendered frame in linear HDR (`[r, g, b, 1]` per pixel, row-major, top row first).
@@ -70,24 +70,17 @@ pub fn render_frame(
         .map(|i| cell_mean_at(&replicated, width, height, foveation, i).to_array())
         .collect();
 
-    // Pass 3: fill.
-    let mut pixels = vec![[0.0f32; 4]; replicated.len()];
+    // Pass 3: fill, in place: a pixel's fill reads only its own replicated value and the cell means.
+    let mut pixels = replicated;
     pixels
         .par_chunks_mut(width as usize)
         .enumerate()
         .for_each(|(y, row)| {
-            for (x, out) in row.iter_mut().enumerate() {
-                let v = fill_pixel(
-                    &replicated,
-                    &cell_means,
-                    width,
-                    height,
-                    foveation,
-                    x as u32,
-                    y as u32,
-                    fill_mode,
-                );
-                *out = [v.x, v.y, v.z, 1.0];
+            for (x, pixel) in row.iter_mut().enumerate() {
+                let own = Vec4::from(*pixel);
+                let (x, y) = (x as u32, y as u32);
+                let v = fill_value(own, &cell_means, width, height, foveation, x, y, fill_mode);
+                *pixel = [v.x, v.y, v.z, 1.0];
             }
         });
 

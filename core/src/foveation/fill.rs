@@ -198,6 +198,23 @@ pub fn fill_pixel(
     mode: u32,
 ) -> Vec4 {
     let own = Vec4::from(replicated[(y * width + x) as usize]);
+    fill_value(own, cell_means, width, height, params, x, y, mode)
+}
+
+/// [`fill_pixel`] given the pixel's own replicated value `own`: pass 2 reads no other pixel of the
+/// replicated image, only the cell buffer, so a host may overwrite the replicated image with the filled
+/// one in place (the CPU host does, which saves a second full-resolution buffer).
+#[must_use]
+pub fn fill_value(
+    own: Vec4,
+    cell_means: &[[f32; 4]],
+    width: u32,
+    height: u32,
+    params: &FoveationParams,
+    x: u32,
+    y: u32,
+    mode: u32,
+) -> Vec4 {
     if mode == FILL_REPLICATE {
         return own;
     }

@@ -17,7 +17,7 @@ pub use display::{
 };
 pub use fill::{
     cell_buffer_len, cell_grid_offset, cell_grid_size, cell_mean, cell_mean_at, fill_pixel,
-    FILL_BILINEAR, FILL_REPLICATE,
+    fill_value, FILL_BILINEAR, FILL_REPLICATE,
 };
 pub use regions::{
     region_of_pixel, region_of_point, FoveationParams, FOVEATION_ERROR_BAD_GAZE,
