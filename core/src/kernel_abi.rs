@@ -39,11 +39,13 @@ pub const BINDING_ENVIRONMENT_CONDITIONAL: u32 = 14;
 pub const BINDING_BLOCKS: u32 = 15;
 /// One radiance estimate per sample of the chunk (`[f32; 4]`, rgb + unused).
 pub const BINDING_SAMPLES: u32 = 16;
-/// The replicated image: every pixel holds its block's mean (`[f32; 4]`, width × height).
+/// The replicated image: every pixel holds its block's mean (`[f32; 4]`, width × height). The fill kernel
+/// overwrites it with the filled image in place ([`crate::foveation::fill_value`]).
 pub const BINDING_REPLICATED: u32 = 17;
 /// Cell means of every block size above one (see `foveation::fill`).
 pub const BINDING_CELL_MEANS: u32 = 18;
-/// The filled linear HDR image (`[f32; 4]`, width × height).
+/// The filled linear HDR image (`[f32; 4]`, width × height) that tone mapping reads: the buffer of
+/// [`BINDING_REPLICATED`], after the fill. No kernel binds both.
 pub const BINDING_HDR: u32 = 19;
 /// The tone-mapped image (RGBA8 packed in `u32`, width × height).
 pub const BINDING_LDR: u32 = 20;

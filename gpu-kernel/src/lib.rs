@@ -16,8 +16,8 @@
 // Entry points take one argument per binding.
 #![allow(clippy::too_many_arguments)]
 
-use fovea_core::foveation::{block_extent, cell_mean_at, fill_pixel};
-use fovea_core::glam::Vec3;
+use fovea_core::foveation::{block_extent, cell_mean_at, fill_value};
+use fovea_core::glam::{Vec3, Vec4};
 use fovea_core::integrator::{render_sample_stream, FrameParams};
 use fovea_core::kernel_abi::{self, GpuBlock, KernelPushConstants, WORKGROUP_SIZE};
 use fovea_core::post::tonemap::tonemap_to_rgba8;
@@ -200,15 +200,16 @@ pub fn cell_means(
 }
 
 /// Pass 3: invocation `p < item_count` (= width · height) fills pixel `p` (row-major) of the HDR image,
-/// alpha 1 like the CPU host.
+/// alpha 1 like the CPU host. In place: a pixel's fill reads only its own replicated value (and the cell
+/// means), so the replicated image becomes the HDR image ([`fovea_core::kernel_abi::BINDING_HDR`] is
+/// bound to the same buffer).
 #[spirv(compute(threads(64)))]
 pub fn fill(
     #[spirv(global_invocation_id)] id: UVec3,
     #[spirv(num_workgroups)] num_workgroups: UVec3,
     #[spirv(push_constant)] pc: &KernelPushConstants,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 17)] replicated: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 17)] replicated: &mut [[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 18)] cell_means: &[[f32; 4]],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &mut [[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
 ) {
     let p = invocation_index(id, num_workgroups);
@@ -216,8 +217,9 @@ pub fn fill(
         return;
     }
     let (x, y) = (p % frame.width, p / frame.width);
-    let v = fill_pixel(
-        replicated,
+    let own = Vec4::from(replicated[p as usize]);
+    let v = fill_value(
+        own,
         cell_means,
         frame.width,
         frame.height,
@@ -226,7 +228,7 @@ pub fn fill(
         y,
         pc.fill_mode,
     );
-    hdr[p as usize] = [v.x, v.y, v.z, 1.0];
+    replicated[p as usize] = [v.x, v.y, v.z, 1.0];
 }
 
 /// Tone mapping: invocation `p < item_count` writes pixel `p` of the RGBA8 image (exposure

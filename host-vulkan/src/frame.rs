@@ -90,9 +90,9 @@ pub(crate) struct FrameResources {
     frame: GpuBuffer,
     blocks: GpuBuffer,
     samples: GpuBuffer,
+    /// The replicated image, which the fill overwrites with the HDR image (bindings 17 and 19).
     replicated: GpuBuffer,
     cell_means: GpuBuffer,
-    hdr: GpuBuffer,
     ldr: GpuBuffer,
     ldr_readback: GpuBuffer,
     hdr_readback: GpuBuffer,
@@ -139,9 +139,9 @@ impl FrameResources {
             )?,
             replicated: GpuBuffer::new(
                 sh,
-                "replicated image",
+                "replicated and HDR image",
                 s.pixels * PIXEL,
-                storage,
+                storage | src,
                 MemoryLocation::GpuOnly,
             )?,
             cell_means: GpuBuffer::new(
@@ -149,13 +149,6 @@ impl FrameResources {
                 "cell means",
                 s.cells.max(1) * PIXEL,
                 storage,
-                MemoryLocation::GpuOnly,
-            )?,
-            hdr: GpuBuffer::new(
-                sh,
-                "HDR image",
-                s.pixels * PIXEL,
-                storage | src,
                 MemoryLocation::GpuOnly,
             )?,
             ldr: GpuBuffer::new(
@@ -419,7 +412,8 @@ impl VulkanContext {
                 &res.cell_means,
                 sizes.cells.max(1) * PIXEL,
             ),
-            (BINDING_HDR, &res.hdr, sizes.pixels * PIXEL),
+            // The fill writes the HDR image over the replicated one, in place.
+            (BINDING_HDR, &res.replicated, sizes.pixels * PIXEL),
             (BINDING_LDR, &res.ldr, sizes.pixels * 4),
             (
                 BINDING_FRAME,
@@ -565,7 +559,7 @@ impl VulkanContext {
         let (ldr, ldr_rb, hdr, hdr_rb) = (
             res.ldr.buffer,
             res.ldr_readback.buffer,
-            res.hdr.buffer,
+            res.replicated.buffer,
             res.hdr_readback.buffer,
         );
         let (pixels, cells) = (sizes.pixels, sizes.cells);
