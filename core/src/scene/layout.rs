@@ -15,6 +15,19 @@ use glam::{UVec4, Vec4};
 /// Marks an absent index (no texture, no light, no triangle hit).
 pub const INVALID_INDEX: u32 = u32::MAX;
 
+/// The four words of a 16-byte texel as the floats they hold (the GPU reads the scene's arrays as `u32`
+/// texels: see [`super::source`]).
+#[inline(always)]
+#[must_use]
+pub(crate) fn texel_floats(u: UVec4) -> Vec4 {
+    Vec4::new(
+        f32::from_bits(u.x),
+        f32::from_bits(u.y),
+        f32::from_bits(u.z),
+        f32::from_bits(u.w),
+    )
+}
+
 /// A node of a binary bounding-volume hierarchy (32 bytes): the builder's intermediate form, which
 /// `fovea_scene::bvh` collapses into [`Bvh4Node`]s. Traversal never sees it.
 ///
@@ -106,6 +119,22 @@ pub struct Bvh4Node {
 }
 
 impl Bvh4Node {
+    /// The node whose bytes are the texels `t` (the GPU's scene texel buffer holds nodes as seven
+    /// texels: the six bound vectors, then the slot words).
+    #[inline(always)]
+    #[must_use]
+    pub fn from_texels(t: [UVec4; 7]) -> Self {
+        Self {
+            min_x: texel_floats(t[0]),
+            max_x: texel_floats(t[1]),
+            min_y: texel_floats(t[2]),
+            max_y: texel_floats(t[3]),
+            min_z: texel_floats(t[4]),
+            max_z: texel_floats(t[5]),
+            slots: t[6],
+        }
+    }
+
     /// A node with four empty slots.
     pub const EMPTY: Self = Self {
         min_x: Vec4::splat(f32::MAX),
@@ -229,6 +258,25 @@ impl TriangleBlock {
         index: UVec4::splat(INVALID_INDEX),
     };
 
+    /// The block whose position bytes are the texels `t` (the first nine of its ten), with `index`
+    /// zero: traversal reads the index words apart, as the tenth texel (`SceneSource::block_lanes`).
+    #[inline(always)]
+    #[must_use]
+    pub fn from_position_texels(t: [UVec4; 9]) -> Self {
+        Self {
+            v0x: texel_floats(t[0]),
+            v0y: texel_floats(t[1]),
+            v0z: texel_floats(t[2]),
+            v1x: texel_floats(t[3]),
+            v1y: texel_floats(t[4]),
+            v1z: texel_floats(t[5]),
+            v2x: texel_floats(t[6]),
+            v2y: texel_floats(t[7]),
+            v2z: texel_floats(t[8]),
+            index: UVec4::ZERO,
+        }
+    }
+
     /// Puts triangle `index` (positions `t`, cut-out flag included in `index`) in lane `lane`.
     #[inline]
     pub fn set_lane(&mut self, lane: usize, t: &TrianglePositions, index: u32) {
@@ -290,6 +338,18 @@ pub const fn block_and_lane(word: u32) -> (u32, usize) {
 pub struct TriangleInfo {
     pub vertices: [u32; 3],
     pub material: u32,
+}
+
+impl TriangleInfo {
+    /// The record whose bytes are the texel `t`.
+    #[inline(always)]
+    #[must_use]
+    pub fn from_texel(t: UVec4) -> Self {
+        Self {
+            vertices: [t.x, t.y, t.z],
+            material: t.w,
+        }
+    }
 }
 
 /// [`Material::flags`]: the material has an alpha cut-out (glTF MASK or BLEND, OBJ `map_d` / `d < 1`).
@@ -362,6 +422,35 @@ impl Default for Material {
 }
 
 impl Material {
+    /// The material whose bytes are the texels `t`.
+    #[inline(always)]
+    #[must_use]
+    pub fn from_texels(t: [UVec4; 7]) -> Self {
+        let (factors, more, last, textures, alpha) = (t[2], t[3], t[4], t[5], t[6]);
+        Self {
+            base_color: texel_floats(t[0]).to_array(),
+            emission: texel_floats(t[1]).to_array(),
+            metallic: f32::from_bits(factors.x),
+            roughness: f32::from_bits(factors.y),
+            anisotropic: f32::from_bits(factors.z),
+            specular: f32::from_bits(factors.w),
+            specular_tint: f32::from_bits(more.x),
+            sheen: f32::from_bits(more.y),
+            sheen_tint: f32::from_bits(more.z),
+            clearcoat: f32::from_bits(more.w),
+            clearcoat_gloss: f32::from_bits(last.x),
+            alpha_cutoff: f32::from_bits(last.y),
+            normal_scale: f32::from_bits(last.z),
+            flags: last.w,
+            base_color_texture: textures.x,
+            metallic_roughness_texture: textures.y,
+            normal_texture: textures.z,
+            emission_texture: textures.w,
+            alpha_texture: alpha.x,
+            _pad: [0; 3],
+        }
+    }
+
     /// Whether the material emits light.
     #[inline]
     #[must_use]
@@ -387,6 +476,20 @@ pub struct TextureInfo {
     pub width: u32,
     pub height: u32,
     pub flags: u32,
+}
+
+impl TextureInfo {
+    /// The record whose bytes are the texel `t`.
+    #[inline(always)]
+    #[must_use]
+    pub fn from_texel(t: UVec4) -> Self {
+        Self {
+            offset: t.x,
+            width: t.y,
+            height: t.z,
+            flags: t.w,
+        }
+    }
 }
 
 /// [`Light::kind`]: an emissive triangle ([`Light::index`] is the triangle).
@@ -465,4 +568,50 @@ pub struct TexelOffsets {
     pub textures: u32,
     pub texels: u32,
     pub blocks: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The texels the GPU reads for `value`: its bytes, sixteen at a time, as the packer uploads them.
+    fn texels<T: Pod, const N: usize>(value: &T) -> [UVec4; N] {
+        let words: &[u32] = bytemuck::cast_slice(bytemuck::bytes_of(value));
+        assert_eq!(words.len(), 4 * N);
+        core::array::from_fn(|i| UVec4::from_slice(&words[4 * i..4 * i + 4]))
+    }
+
+    /// A value of `T` whose words are all different finite floats (1.0, 1.0 + ulp, ...), the last
+    /// `zeroed` words zero, so that a decoder that swaps or drops any field reads a different value.
+    fn distinct<T: Pod>(zeroed: usize) -> T {
+        let mut value = T::zeroed();
+        let words: &mut [u32] = bytemuck::cast_slice_mut(bytemuck::bytes_of_mut(&mut value));
+        let n = words.len();
+        for (i, w) in words[..n - zeroed].iter_mut().enumerate() {
+            *w = 1.0f32.to_bits() + i as u32;
+        }
+        value
+    }
+
+    /// What the GPU's `SceneTexels` decodes from its texel buffer is what the CPU's slices hold.
+    #[test]
+    fn texel_decoders_read_every_field_where_the_packer_wrote_it() {
+        let node: Bvh4Node = distinct(0);
+        assert_eq!(Bvh4Node::from_texels(texels(&node)), node);
+        // The index words are read apart (`block_lanes`), so the position decoder leaves them zero.
+        let block: TriangleBlock = distinct(4);
+        let positions: [UVec4; 10] = texels(&block);
+        let first_nine: [UVec4; 9] = core::array::from_fn(|i| positions[i]);
+        assert_eq!(TriangleBlock::from_position_texels(first_nine), block);
+        let info: TriangleInfo = distinct(0);
+        assert_eq!(TriangleInfo::from_texel(texels::<_, 1>(&info)[0]), info);
+        let texture: TextureInfo = distinct(0);
+        assert_eq!(
+            TextureInfo::from_texel(texels::<_, 1>(&texture)[0]),
+            texture
+        );
+        // `_pad` (the last three words) decodes as zero.
+        let material: Material = distinct(3);
+        assert_eq!(Material::from_texels(texels(&material)), material);
+    }
 }

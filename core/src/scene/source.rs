@@ -138,38 +138,22 @@ pub type SceneTexels = spirv_std::Image!(buffer, format = rgba32ui, sampled = fa
 mod texels {
     use super::*;
     use crate::math::lane_mask::lane_u32;
-    use glam::{UVec4, Vec4};
-
-    /// The four words of a texel as the floats they hold.
-    #[inline(always)]
-    fn floats(u: UVec4) -> Vec4 {
-        Vec4::new(
-            f32::from_bits(u.x),
-            f32::from_bits(u.y),
-            f32::from_bits(u.z),
-            f32::from_bits(u.w),
-        )
-    }
-
-    /// The four words of a texel as an array of floats.
-    #[inline(always)]
-    fn float_array(u: UVec4) -> [f32; 4] {
-        floats(u).to_array()
-    }
+    use crate::scene::layout::texel_floats;
+    use glam::UVec4;
 
     impl SceneSource for SceneTexels {
         #[inline(always)]
         fn node<F: Features>(&self, _scene: &SceneView<F>, index: u32) -> Bvh4Node {
             let t = index * NODE_TEXELS;
-            Bvh4Node {
-                min_x: floats(self.read(t)),
-                max_x: floats(self.read(t + 1)),
-                min_y: floats(self.read(t + 2)),
-                max_y: floats(self.read(t + 3)),
-                min_z: floats(self.read(t + 4)),
-                max_z: floats(self.read(t + 5)),
-                slots: self.read(t + 6),
-            }
+            Bvh4Node::from_texels([
+                self.read(t),
+                self.read(t + 1),
+                self.read(t + 2),
+                self.read(t + 3),
+                self.read(t + 4),
+                self.read(t + 5),
+                self.read(t + 6),
+            ])
         }
 
         #[inline(always)]
@@ -182,18 +166,17 @@ mod texels {
         #[inline(always)]
         fn block<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TriangleBlock {
             let t = scene.globals.texel_offsets.blocks + index * BLOCK_TEXELS;
-            TriangleBlock {
-                v0x: floats(self.read(t)),
-                v0y: floats(self.read(t + 1)),
-                v0z: floats(self.read(t + 2)),
-                v1x: floats(self.read(t + 3)),
-                v1y: floats(self.read(t + 4)),
-                v1z: floats(self.read(t + 5)),
-                v2x: floats(self.read(t + 6)),
-                v2y: floats(self.read(t + 7)),
-                v2z: floats(self.read(t + 8)),
-                index: UVec4::ZERO,
-            }
+            TriangleBlock::from_position_texels([
+                self.read(t),
+                self.read(t + 1),
+                self.read(t + 2),
+                self.read(t + 3),
+                self.read(t + 4),
+                self.read(t + 5),
+                self.read(t + 6),
+                self.read(t + 7),
+                self.read(t + 8),
+            ])
         }
 
         #[inline(always)]
@@ -203,48 +186,26 @@ mod texels {
 
         #[inline(always)]
         fn triangle_info<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TriangleInfo {
-            let w: UVec4 = self.read(scene.globals.texel_offsets.triangle_info + index);
-            TriangleInfo {
-                vertices: [w.x, w.y, w.z],
-                material: w.w,
-            }
+            TriangleInfo::from_texel(self.read(scene.globals.texel_offsets.triangle_info + index))
         }
 
         #[inline(always)]
         fn material<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Material {
             let t = scene.globals.texel_offsets.materials + index * MATERIAL_TEXELS;
-            let factors: UVec4 = self.read(t + 2);
-            let more: UVec4 = self.read(t + 3);
-            let last: UVec4 = self.read(t + 4);
-            let textures: UVec4 = self.read(t + 5);
-            let alpha: UVec4 = self.read(t + 6);
-            Material {
-                base_color: float_array(self.read(t)),
-                emission: float_array(self.read(t + 1)),
-                metallic: f32::from_bits(factors.x),
-                roughness: f32::from_bits(factors.y),
-                anisotropic: f32::from_bits(factors.z),
-                specular: f32::from_bits(factors.w),
-                specular_tint: f32::from_bits(more.x),
-                sheen: f32::from_bits(more.y),
-                sheen_tint: f32::from_bits(more.z),
-                clearcoat: f32::from_bits(more.w),
-                clearcoat_gloss: f32::from_bits(last.x),
-                alpha_cutoff: f32::from_bits(last.y),
-                normal_scale: f32::from_bits(last.z),
-                flags: last.w,
-                base_color_texture: textures.x,
-                metallic_roughness_texture: textures.y,
-                normal_texture: textures.z,
-                emission_texture: textures.w,
-                alpha_texture: alpha.x,
-                _pad: [0; 3],
-            }
+            Material::from_texels([
+                self.read(t),
+                self.read(t + 1),
+                self.read(t + 2),
+                self.read(t + 3),
+                self.read(t + 4),
+                self.read(t + 5),
+                self.read(t + 6),
+            ])
         }
 
         #[inline(always)]
         fn normal<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 4] {
-            float_array(self.read(scene.globals.texel_offsets.normals + index))
+            texel_floats(self.read(scene.globals.texel_offsets.normals + index)).to_array()
         }
 
         #[inline(always)]
@@ -260,13 +221,7 @@ mod texels {
 
         #[inline(always)]
         fn texture<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TextureInfo {
-            let w: UVec4 = self.read(scene.globals.texel_offsets.textures + index);
-            TextureInfo {
-                offset: w.x,
-                width: w.y,
-                height: w.z,
-                flags: w.w,
-            }
+            TextureInfo::from_texel(self.read(scene.globals.texel_offsets.textures + index))
         }
 
         #[inline(always)]
