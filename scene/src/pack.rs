@@ -5,12 +5,11 @@ use std::time::Instant;
 
 use fovea_core::lights::power;
 use fovea_core::scene::{
-    block_and_lane, Bvh4Node, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleBlock,
+    positions_at, Bvh4Node, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleBlock,
     TriangleInfo, TrianglePositions, ENVIRONMENT_CONSTANT, ENVIRONMENT_MAP, ENVIRONMENT_NONE,
     INVALID_INDEX, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
     MATERIAL_ALPHA_CUTOUT, MATERIAL_DOUBLE_SIDED_EMISSION, TEXTURE_RGBA16,
 };
-use fovea_core::scene::{SceneSlices, SceneSource};
 use glam::{Vec3, Vec4};
 
 use crate::bvh::blocks::{pack_leaf_blocks, LeafBlocks};
@@ -107,7 +106,7 @@ impl PackedScene {
     /// If `i` is not below [`Self::triangle_count`].
     #[must_use]
     pub fn triangle(&self, i: usize) -> TrianglePositions {
-        SceneSlices.triangle(&self.view(), i as u32)
+        positions_at(&self.blocks, self.triangle_lanes[i])
     }
 
     /// Bytes held by the packed arrays.
@@ -277,8 +276,7 @@ pub fn pack_scene(
             if !m.is_emissive() {
                 continue;
             }
-            let (block, lane) = block_and_lane(at);
-            let t = blocks[block as usize].lane_positions(lane);
+            let t = positions_at(&blocks, at);
             let (v0, v1, v2) = (t.v0.truncate(), t.v1.truncate(), t.v2.truncate());
             let area = 0.5 * (v1 - v0).cross(v2 - v0).length();
             if !(area > 0.0) || !area.is_finite() {

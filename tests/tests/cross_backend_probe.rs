@@ -945,7 +945,7 @@ fn xyz(r: [f32; 4]) -> [f32; 3] {
 
 /// A random point on triangle `t` of `packed`.
 fn point_on(rng: &mut Rng, packed: &PackedScene, t: usize) -> [f32; 3] {
-    let tri = &packed.triangle(t);
+    let tri = packed.triangle(t);
     let (mut a, mut b) = (rng.f(), rng.f());
     if a + b > 1.0 {
         (a, b) = (1.0 - a, 1.0 - b);
@@ -987,7 +987,7 @@ fn traversal_inputs(rng: &mut Rng, packed: &PackedScene, n: usize) -> Vec<[f32; 
         let (d, t_max) = if i % 3 == 0 {
             (rng.dir().to_array(), 1e30)
         } else {
-            let t = &packed.triangle(rng.below(packed.triangle_count() as u32) as usize);
+            let t = packed.triangle(rng.below(packed.triangle_count() as u32) as usize);
             let target = match i % 4 {
                 0 => xyz(t.v0.to_array()),
                 1 => std::array::from_fn(|k| 0.5 * (t.v0[k] + t.v1[k])),
@@ -1117,7 +1117,7 @@ fn scene_functions_agree_across_backends() {
     let grazing_hit = |i: usize, out: &[[f32; 4]]| {
         let tri = out[0][3].to_bits() as usize;
         tri < packed.triangle_count() && {
-            let t = &packed.triangle(tri);
+            let t = packed.triangle(tri);
             let item = [
                 inputs[i * STRIDE],
                 inputs[i * STRIDE + 1],

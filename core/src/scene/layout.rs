@@ -329,6 +329,15 @@ pub const fn block_and_lane(word: u32) -> (u32, usize) {
     (word / 4, (word % 4) as usize)
 }
 
+/// The positions in the lane of `blocks` that the [`super::SceneView::triangle_lanes`] word `word`
+/// names (the CPU's read; the GPU reads the block from its texel buffer).
+#[inline(always)]
+#[must_use]
+pub fn positions_at(blocks: &[TriangleBlock], word: u32) -> TrianglePositions {
+    let (block, lane) = block_and_lane(word);
+    blocks[block as usize].lane_positions(lane)
+}
+
 /// What shading needs to know about one triangle besides its positions (16 bytes), in BVH leaf order.
 ///
 /// `vertices` index the per-vertex arrays [`super::SceneView::normals`] and [`super::SceneView::uvs`];

@@ -15,7 +15,7 @@
 //! cannot keep an image inside a struct, so the source is an argument of its own next to the
 //! [`SceneView`] rather than one of its fields.
 use crate::scene::{
-    block_and_lane, Bvh4Node, Features, Material, SceneView, TextureInfo, TriangleBlock,
+    positions_at, Bvh4Node, Features, Material, SceneView, TextureInfo, TriangleBlock,
     TriangleInfo, TrianglePositions,
 };
 
@@ -77,8 +77,7 @@ impl SceneSource for SceneSlices {
 
     #[inline(always)]
     fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions {
-        let (block, lane) = block_and_lane(scene.triangle_lanes[index as usize]);
-        scene.blocks[block as usize].lane_positions(lane)
+        positions_at(scene.blocks, scene.triangle_lanes[index as usize])
     }
 
     #[inline(always)]
@@ -138,22 +137,28 @@ pub type SceneTexels = spirv_std::Image!(buffer, format = rgba32ui, sampled = fa
 mod texels {
     use super::*;
     use crate::math::lane_mask::lane_u32;
-    use crate::scene::layout::texel_floats;
+    use crate::scene::layout::{block_and_lane, texel_floats};
     use glam::UVec4;
+
+    /// The seven texels from `first` on (a node or a material: [`NODE_TEXELS`], [`MATERIAL_TEXELS`]).
+    /// Written out rather than a loop filling a local array, which lavapipe would index dynamically.
+    #[inline(always)]
+    fn seven_texels(texels: &SceneTexels, first: u32) -> [UVec4; 7] {
+        [
+            texels.read(first),
+            texels.read(first + 1),
+            texels.read(first + 2),
+            texels.read(first + 3),
+            texels.read(first + 4),
+            texels.read(first + 5),
+            texels.read(first + 6),
+        ]
+    }
 
     impl SceneSource for SceneTexels {
         #[inline(always)]
         fn node<F: Features>(&self, _scene: &SceneView<F>, index: u32) -> Bvh4Node {
-            let t = index * NODE_TEXELS;
-            Bvh4Node::from_texels([
-                self.read(t),
-                self.read(t + 1),
-                self.read(t + 2),
-                self.read(t + 3),
-                self.read(t + 4),
-                self.read(t + 5),
-                self.read(t + 6),
-            ])
+            Bvh4Node::from_texels(seven_texels(self, index * NODE_TEXELS))
         }
 
         #[inline(always)]
@@ -191,16 +196,8 @@ mod texels {
 
         #[inline(always)]
         fn material<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Material {
-            let t = scene.globals.texel_offsets.materials + index * MATERIAL_TEXELS;
-            Material::from_texels([
-                self.read(t),
-                self.read(t + 1),
-                self.read(t + 2),
-                self.read(t + 3),
-                self.read(t + 4),
-                self.read(t + 5),
-                self.read(t + 6),
-            ])
+            let first = scene.globals.texel_offsets.materials + index * MATERIAL_TEXELS;
+            Material::from_texels(seven_texels(self, first))
         }
 
         #[inline(always)]
