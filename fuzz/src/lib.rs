@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 
 use fovea_core::bvh::traverse::closest_hit;
 use fovea_core::geometry::Ray;
-use fovea_core::scene::{leaf_count, leaf_first, BLOCK_LANE_CUTOUT, INVALID_INDEX, TEXTURE_RGBA16};
+use fovea_core::scene::{BLOCK_LANE_CUTOUT, INVALID_INDEX, TEXTURE_RGBA16};
+use fovea_scene::bvh::blocks::leaf_slots;
 use fovea_scene::bvh::{BvhBuildOptions, MAX_NODE_DEPTH};
 use fovea_scene::environment::Environment;
 use fovea_scene::mesh::{load_scene_from, LoadOptions};
@@ -158,12 +159,7 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
     // exactly once over all leaves, at the lane `triangle_lanes` names.
     let mut seen = vec![false; triangles];
     for node in &p.nodes {
-        for slot in 0..4 {
-            if !node.is_leaf_slot(slot) {
-                continue;
-            }
-            let word = node.slot(slot);
-            let (first, count) = (leaf_first(word) as usize, leaf_count(word) as usize);
+        for (_, first, count) in leaf_slots(node) {
             for k in 0..count.div_ceil(4) * 4 {
                 let lane = p.blocks[first + k / 4].index[k % 4];
                 if k < count {

@@ -15,6 +15,19 @@ pub fn blocks_for(triangles: usize) -> usize {
     triangles.div_ceil(BLOCK_LANES)
 }
 
+/// The leaf slots of `node` in slot order, each as `(slot, first, count)`: its slot index and
+/// [`leaf_first`] and [`leaf_count`] of its word (triangles in a built BVH, blocks once packed). The
+/// iterator holds a copy of the node, so the caller may rewrite the slots it names.
+pub fn leaf_slots(node: &Bvh4Node) -> impl Iterator<Item = (usize, usize, usize)> {
+    let node = *node;
+    (0..4)
+        .filter(move |&slot| node.is_leaf_slot(slot))
+        .map(move |slot| {
+            let word = node.slot(slot);
+            (slot, leaf_first(word) as usize, leaf_count(word) as usize)
+        })
+}
+
 /// The leaves' triangles in blocks, and where each triangle went.
 #[derive(Clone, Debug, Default)]
 pub struct LeafBlocks {
@@ -38,11 +51,8 @@ pub fn pack_leaf_blocks(
     // first triangle, then number the blocks in one pass in leaf order.
     let mut leaf_length = vec![0u8; triangle_count];
     for node in nodes.iter() {
-        for slot in 0..4 {
-            if node.is_leaf_slot(slot) {
-                let word = node.slot(slot);
-                leaf_length[leaf_first(word) as usize] = leaf_count(word) as u8;
-            }
+        for (_, first, count) in leaf_slots(node) {
+            leaf_length[first] = count as u8;
         }
     }
     // A leaf's first block, at its first triangle.
@@ -67,12 +77,8 @@ pub fn pack_leaf_blocks(
         i += count;
     }
     for node in nodes.iter_mut() {
-        for slot in 0..4 {
-            if node.is_leaf_slot(slot) {
-                let word = node.slot(slot);
-                let first = first_block[leaf_first(word) as usize];
-                node.slots[slot] = leaf_slot(first, leaf_count(word));
-            }
+        for (slot, first, count) in leaf_slots(node) {
+            node.slots[slot] = leaf_slot(first_block[first], count as u32);
         }
     }
     LeafBlocks {
