@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use fovea_core::bvh::traverse::closest_hit;
 use fovea_core::geometry::Ray;
-use fovea_core::scene::{BLOCK_LANE_CUTOUT, INVALID_INDEX, TEXTURE_RGBA16};
+use fovea_core::scene::{triangle_lane, BLOCK_LANE_CUTOUT, INVALID_INDEX, TEXTURE_RGBA16};
 use fovea_scene::bvh::blocks::leaf_slots;
 use fovea_scene::bvh::{BvhBuildOptions, MAX_NODE_DEPTH};
 use fovea_scene::environment::Environment;
@@ -169,8 +169,8 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
                         "leaf lane {k} names triangle {t}"
                     );
                     assert_eq!(
-                        p.triangle_lanes[t] as usize,
-                        4 * first + k,
+                        p.triangle_lanes[t],
+                        triangle_lane((first + k / 4) as u32, (k % 4) as u32),
                         "triangle {t}'s lane"
                     );
                     seen[t] = true;

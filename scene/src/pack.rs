@@ -399,7 +399,7 @@ pub fn pack_scene(
         stats: PackStats::default(),
     };
     packed.stats = PackStats {
-        triangle_count: packed.triangle_info.len(),
+        triangle_count: packed.triangle_count(),
         emissive_triangle_count,
         light_count: packed.lights.len(),
         texture_count: packed.textures.len(),

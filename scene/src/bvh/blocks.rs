@@ -1,8 +1,8 @@
 //! Leaf blocks: every leaf's triangles four at a time, in the structure-of-arrays layout traversal tests
 //! them in ([`TriangleBlock`]).
 use fovea_core::scene::{
-    leaf_count, leaf_first, leaf_slot, triangle_lane, Bvh4Node, TriangleBlock, TrianglePositions,
-    BLOCK_LANE_CUTOUT,
+    block_and_lane, leaf_count, leaf_first, leaf_slot, triangle_lane, Bvh4Node, TriangleBlock,
+    TrianglePositions, BLOCK_LANE_CUTOUT,
 };
 
 /// Triangles per block.
@@ -55,15 +55,12 @@ pub fn pack_leaf_blocks(
             leaf_length[first] = count as u8;
         }
     }
-    // A leaf's first block, at its first triangle.
-    let mut first_block = vec![0u32; triangle_count];
     let block_count = leaf_length.iter().map(|&n| blocks_for(n.into())).sum();
     let mut blocks = Vec::with_capacity(block_count);
     let mut triangle_lanes = Vec::with_capacity(triangle_count);
     let mut i = 0;
     while i < triangle_count {
         let count = usize::from(leaf_length[i]).max(1);
-        first_block[i] = blocks.len() as u32;
         for k in 0..count {
             if k % BLOCK_LANES == 0 {
                 blocks.push(TriangleBlock::EMPTY);
@@ -76,9 +73,11 @@ pub fn pack_leaf_blocks(
         }
         i += count;
     }
+    // A leaf's first triangle sits in lane 0 of its first block.
     for node in nodes.iter_mut() {
         for (slot, first, count) in leaf_slots(node) {
-            node.slots[slot] = leaf_slot(first_block[first], count as u32);
+            let (first_block, _) = block_and_lane(triangle_lanes[first]);
+            node.slots[slot] = leaf_slot(first_block, count as u32);
         }
     }
     LeafBlocks {

@@ -642,14 +642,14 @@ mod tests {
     /// word names the triangle back; shading reads the same positions the builder was given.
     #[test]
     fn triangle_lanes_name_each_triangle_s_block_lane() {
-        use fovea_core::scene::{SceneSlices, SceneSource, BLOCK_LANE_CUTOUT};
+        use fovea_core::scene::{block_and_lane, SceneSlices, SceneSource, BLOCK_LANE_CUTOUT};
         let mut rng = TestRng(21);
         let packed = Packed::new(&soup(3000, &mut rng));
         let view = packed.view();
         for (i, t) in packed.triangles.iter().enumerate() {
             assert_eq!(SceneSlices.triangle(&view, i as u32), *t);
-            let at = packed.triangle_lanes[i] as usize;
-            let word = packed.blocks[at / 4].index[at % 4];
+            let (block, lane) = block_and_lane(packed.triangle_lanes[i]);
+            let word = packed.blocks[block as usize].index[lane];
             assert_eq!(word & !BLOCK_LANE_CUTOUT, i as u32);
         }
         let mut lanes = packed.triangle_lanes.clone();
