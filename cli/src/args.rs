@@ -19,8 +19,8 @@ pub enum Command {
     /// reference (FLIP and relMSE per region, render time, speed-up), written as Markdown, JSON, CSV,
     /// images and an SVG plot.
     Report(Box<ReportArgs>),
-    /// Benchmarks: BVH build throughput, and a generated 10 M-triangle scene (load, build, render,
-    /// peak memory).
+    /// Benchmarks: BVH build throughput, ray traversal throughput, and a generated 10 M-triangle scene
+    /// (load, build, render, peak memory).
     Bench(crate::bench::BenchArgs),
     /// List the devices fovea can render on.
     Devices,

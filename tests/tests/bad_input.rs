@@ -776,3 +776,72 @@ fn cli_refuses_to_overwrite_an_input() {
     expect_cli_failure(&bin, &args, "never overwrites its input", &map);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `fovea bench rays` traces a ray file (closest-hit and occlusion records) and reports what it found;
+/// a malformed ray file or an absurd `--count` is an error that names it, with no JSON written.
+#[test]
+fn cli_bench_rays_reads_ray_files_and_rejects_bad_ones() {
+    let Some(bin) = fovea_binary() else { return };
+    let dir = temp_dir("bench-rays");
+    let record = |v: [f32; 8]| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
+    // From the middle of the Cornell box: towards the back wall (a hit), straight up for half a unit
+    // (free) and straight down to beyond the floor (blocked).
+    let mut rays = record([0.0, 1.0, 0.0, 0.0, 0.0, -1.0, f32::INFINITY, 0.0]);
+    rays.extend(record([0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.5, 1.0]));
+    rays.extend(record([0.0, 1.0, 0.0, 0.0, -1.0, 0.0, 5.0, 1.0]));
+    let ray_file = dir.join("rays.bin");
+    std::fs::write(&ray_file, rays).unwrap();
+    let json = dir.join("rays.json");
+    let cornell = cornell_box_path();
+    let bench = |extra: &[&str]| -> Output {
+        let mut args = vec![
+            "bench",
+            "--threads",
+            "1",
+            "--json",
+            json.to_str().unwrap(),
+            "rays",
+            cornell.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let out = Command::new(&bin).args(&args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        eprintln!("fovea {args:?}\n  -> {}: {}", out.status, stderr.trim());
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        out
+    };
+    let out = bench(&["--rays", ray_file.to_str().unwrap(), "--runs", "1"]);
+    assert!(out.status.success());
+    let figures: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(figures["closest_rays"], 1);
+    assert_eq!(figures["closest_hits"], 1);
+    assert_eq!(figures["occlusion_rays"], 2);
+    assert_eq!(figures["occluded"], 1);
+    std::fs::remove_file(&json).unwrap();
+
+    let out = bench(&["--count", "1000", "--runs", "1"]);
+    assert!(out.status.success());
+    let figures: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(figures["closest_rays"], 500);
+    // Every closest-hit ray starts inside the closed box (its bounds), so nearly all of them hit.
+    assert!(figures["closest_hits"].as_u64().unwrap() > 400, "{figures}");
+    std::fs::remove_file(&json).unwrap();
+
+    let short = dir.join("short.bin");
+    std::fs::write(&short, [0u8; 31]).unwrap();
+    for (extra, needle) in [
+        (vec!["--rays", short.to_str().unwrap()], "short.bin"),
+        (vec!["--rays", "no_such_rays.bin"], "no_such_rays.bin"),
+        (vec!["--count", "0"], "--count"),
+        (vec!["--runs", "0"], "--runs"),
+    ] {
+        let out = bench(&extra);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{extra:?} succeeded");
+        assert!(stderr.contains(needle), "{extra:?}: {stderr}");
+        assert!(!json.exists(), "{extra:?} wrote {}", json.display());
+    }
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -2,12 +2,16 @@
 //!
 //! - `fovea bench build [SCENE]`: BVH build throughput (triangles per second, median of several builds)
 //!   on a scene, by default the bundled Lost Empire.
+//! - `fovea bench rays [SCENE]`: ray-traversal throughput alone, closest-hit and occlusion queries
+//!   without shading, on generated rays or on a ray file ([`rays`]).
 //! - `fovea bench scale`: a procedurally generated scene of N triangles (default 10 M, San Miguel's
 //!   scale) is generated, validated, built, packed and rendered foveated at 3840×2160 on the CPU; prints
 //!   the time of each step and the process's peak resident memory per triangle.
 //!
 //! The Mitsuba 3 comparison runs both renderers side by side and lives in `scripts/bench-peer.sh`; the
 //! CPU-vs-Vulkan comparison in `scripts/bench-vulkan.sh`. No test asserts any of these timings.
+mod rays;
+
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -48,6 +52,24 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 5)]
         runs: u32,
     },
+    /// Ray-traversal throughput alone: closest-hit and occlusion queries, no shading.
+    Rays {
+        /// Scene file (.gltf, .glb or .obj); default: the bundled Lost Empire.
+        scene: Option<PathBuf>,
+        /// Ray file: little-endian f32 records of origin xyz, direction xyz, t_max (inf: none) and
+        /// kind (0 closest hit, 1 occlusion). Default: `--count` rays generated in the scene's bounds.
+        #[arg(long, value_name = "FILE")]
+        rays: Option<PathBuf>,
+        /// Rays to generate (half closest-hit, half occlusion) when no ray file is given.
+        #[arg(long, default_value_t = 1 << 21)]
+        count: usize,
+        /// Seed of the generated rays.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Timed passes over all rays; the median is reported (after one untimed warm-up pass).
+        #[arg(long, default_value_t = 5)]
+        runs: u32,
+    },
     /// Generate, build and render a procedural scene of N triangles; report times and peak memory.
     Scale {
         /// Triangles to generate.
@@ -64,6 +86,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let pool = crate::backend::cpu_pool(args.threads)?;
     let figures = pool.install(|| match &args.what {
         BenchCommand::Build { scene, runs } => bench_build(scene.as_deref(), *runs),
+        BenchCommand::Rays {
+            scene,
+            rays,
+            count,
+            seed,
+            runs,
+        } => bench_rays(scene.as_deref(), rays.as_deref(), *count, *seed, *runs),
         BenchCommand::Scale {
             triangles,
             resolution,
@@ -122,6 +151,72 @@ fn bench_build(scene: Option<&Path>, runs: u32) -> Result<serde_json::Value> {
         "build_ms": times,
         "median_build_ms": ms,
         "triangles_per_second": n as f64 / (ms / 1e3),
+    }))
+}
+
+/// Closest-hit and occlusion throughput on a ray file or on generated rays (see [`rays`]).
+fn bench_rays(
+    scene: Option<&Path>,
+    ray_file: Option<&Path>,
+    count: usize,
+    seed: u64,
+    runs: u32,
+) -> Result<serde_json::Value> {
+    if runs == 0 || runs > 1000 {
+        return Err(FoveaError::option("--runs", "must be 1 to 1000"));
+    }
+    if ray_file.is_none() && !(1..=rays::MAX_RAYS).contains(&count) {
+        return Err(FoveaError::option(
+            "--count",
+            format!("must be 1 to {}", rays::MAX_RAYS),
+        ));
+    }
+    let from_file = ray_file.map(rays::read_ray_file).transpose()?;
+    let path = scene
+        .map(Path::to_path_buf)
+        .unwrap_or_else(default_scene_path);
+    let loaded = load_scene(&path, &LoadOptions::default())?;
+    let (lo, hi) = loaded.positions.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(Vec3::from(*p)), hi.max(Vec3::from(*p))),
+    );
+    let n = loaded.triangle_count();
+    let set = from_file.unwrap_or_else(|| rays::generate_rays(lo, hi, count, seed));
+    let packed = pack_scene(loaded, &Environment::None, &BvhBuildOptions::default());
+    let view = packed.view().with_features(packed.features());
+    let mut counts = rays::trace(&view, &set).2;
+    let (mut closest_s, mut occlusion_s) = (Vec::new(), Vec::new());
+    for _ in 0..runs {
+        let (c, o, pass_counts) = rays::trace(&view, &set);
+        closest_s.push(c);
+        occlusion_s.push(o);
+        counts = pass_counts;
+    }
+    let rate = |rays: usize, s: f64| if s > 0.0 { rays as f64 / s } else { 0.0 };
+    let closest_rate = rate(set.closest.len(), median(closest_s.clone()));
+    let occlusion_rate = rate(set.occlusion.len(), median(occlusion_s.clone()));
+    eprintln!(
+        "rays: {n} triangles; {} closest-hit rays, {} hit: {:.2} M rays/s; {} occlusion rays, {} \
+         occluded: {:.2} M rays/s (medians of {runs})",
+        set.closest.len(),
+        counts.closest_hits,
+        closest_rate / 1e6,
+        set.occlusion.len(),
+        counts.occluded,
+        occlusion_rate / 1e6,
+    );
+    Ok(json!({
+        "scene": path.display().to_string(),
+        "triangles": n,
+        "ray_file": ray_file.map(|f| f.display().to_string()),
+        "closest_rays": set.closest.len(),
+        "closest_hits": counts.closest_hits,
+        "closest_s": closest_s,
+        "closest_rays_per_second": closest_rate,
+        "occlusion_rays": set.occlusion.len(),
+        "occluded": counts.occluded,
+        "occlusion_s": occlusion_s,
+        "occlusion_rays_per_second": occlusion_rate,
     }))
 }
 
