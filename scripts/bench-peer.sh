@@ -7,10 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ROUNDS="${1:-2}"
 VARIANTS="${2:-scalar_rgb llvm_ad_rgb}"
-KIT="$(cd ../shared/peer && pwd)"
-export PEER_WORK="${PEER_WORK:-$PWD/peer-work}"
-[ -x "$PEER_WORK/venv/bin/python" ] || bash "$KIT/run.sh" setup
-[ -f "$PEER_WORK/scenes/big/big.obj" ] || bash "$KIT/run.sh" scenes
+source scripts/peer-env.sh
 cargo build --release -q -p fovea-cli
 mkdir -p out/bench
 for round in $(seq 1 "$ROUNDS"); do

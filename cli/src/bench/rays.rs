@@ -12,6 +12,8 @@ use std::time::Instant;
 
 use fovea_core::bvh::{any_hit, closest_hit};
 use fovea_core::geometry::Ray;
+use fovea_core::rng::SampleRng;
+use fovea_core::sampling::warp::square_to_uniform_sphere;
 use fovea_core::scene::{Features, SceneView};
 use fovea_cpu::specialize::{dispatch, WithScene};
 use glam::Vec3;
@@ -95,45 +97,23 @@ pub fn parse_ray_records(bytes: &[u8]) -> std::result::Result<RaySet, String> {
     Ok(set)
 }
 
-/// SplitMix64 (Steele, Lea, Flood 2014): the generator of `--count` rays.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// A uniform float in `[0, 1)` with 24 random bits.
-    fn next_f32(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-    }
-
-    fn point_in(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        let u = Vec3::new(self.next_f32(), self.next_f32(), self.next_f32());
-        lo + (hi - lo) * u
-    }
-}
-
 /// `count` rays inside the box `lo..hi`, alternately closest-hit and occlusion queries (see the module
-/// documentation); the same rays for the same seed.
+/// documentation); the same rays for the same seed. Ray `i` draws from core's sample generator keyed by
+/// `i` and the seed, and its direction from core's uniform-sphere warp.
 #[must_use]
-pub fn generate_rays(lo: Vec3, hi: Vec3, count: usize, seed: u64) -> RaySet {
-    let mut rng = SplitMix64(seed);
+pub fn generate_rays(lo: Vec3, hi: Vec3, count: usize, seed: u32) -> RaySet {
     let mut set = RaySet::default();
     for i in 0..count {
-        let origin = rng.point_in(lo, hi);
+        let mut rng = SampleRng::new([i as u32, (i as u64 >> 32) as u32], 0, 0, 0, seed);
+        let origin = lo + (hi - lo) * rng.next_3d();
         if i % 2 == 0 {
-            let z = 1.0 - 2.0 * rng.next_f32();
-            let phi = core::f32::consts::TAU * rng.next_f32();
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let direction = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+            let direction = square_to_uniform_sphere(rng.next_2d());
             set.closest.push(RayQuery {
                 ray: Ray::new(origin, direction),
                 t_max: f32::INFINITY,
             });
         } else {
-            let d = rng.point_in(lo, hi) - origin;
+            let d = lo + (hi - lo) * rng.next_3d() - origin;
             let length = d.length();
             if length > 0.0 {
                 set.occlusion.push(RayQuery {
@@ -170,38 +150,28 @@ impl WithScene for Trace<'_> {
     type Output = (f64, f64, Counts);
 
     fn run<F: Features + Sync>(self, scene: &SceneView<'_, F>) -> Self::Output {
-        let start = Instant::now();
-        let closest_hits: u64 = self
-            .rays
-            .closest
-            .par_chunks(CHUNK)
-            .map(|chunk| {
-                chunk
-                    .iter()
-                    .filter(|q| closest_hit(scene, &q.ray, q.t_max).is_hit())
-                    .count() as u64
-            })
-            .sum();
-        let closest_s = start.elapsed().as_secs_f64();
-        let start = Instant::now();
-        let occluded: u64 = self
-            .rays
-            .occlusion
-            .par_chunks(CHUNK)
-            .map(|chunk| {
-                chunk
-                    .iter()
-                    .filter(|q| any_hit(scene, &q.ray, q.t_max))
-                    .count() as u64
-            })
-            .sum();
-        let occlusion_s = start.elapsed().as_secs_f64();
+        let (closest_s, closest_hits) = count_in_parallel(&self.rays.closest, |q| {
+            closest_hit(scene, &q.ray, q.t_max).is_hit()
+        });
+        let (occlusion_s, occluded) =
+            count_in_parallel(&self.rays.occlusion, |q| any_hit(scene, &q.ray, q.t_max));
         let counts = Counts {
             closest_hits,
             occluded,
         };
         (closest_s, occlusion_s, counts)
     }
+}
+
+/// How long `test` takes over all `queries` on the current rayon pool, in seconds, and for how many it
+/// holds.
+fn count_in_parallel(queries: &[RayQuery], test: impl Fn(&RayQuery) -> bool + Sync) -> (f64, u64) {
+    let start = Instant::now();
+    let count = queries
+        .par_chunks(CHUNK)
+        .map(|chunk| chunk.iter().filter(|q| test(q)).count() as u64)
+        .sum();
+    (start.elapsed().as_secs_f64(), count)
 }
 
 #[cfg(test)]

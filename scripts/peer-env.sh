@@ -1,0 +1,14 @@
+# Sourced by the scripts that run Mitsuba 3 beside fovea (bench-peer.sh, bench-rays.sh), from the
+# repository root: sets KIT (the peer kit, ../shared/peer) and PEER_WORK (default ./peer-work), installs the
+# kit's venv and generates its scenes on first use, and points Dr.Jit at the kit's kernel cache and at
+# libLLVM 19 as the kit's run.sh does.
+KIT="$(cd ../shared/peer && pwd)"
+export PEER_WORK="${PEER_WORK:-$PWD/peer-work}"
+[ -x "$PEER_WORK/venv/bin/python" ] || bash "$KIT/run.sh" setup
+[ -f "$PEER_WORK/scenes/big/big.obj" ] || bash "$KIT/run.sh" scenes
+export DRJIT_CACHE_DIR="$PEER_WORK/drjit_cache"
+if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
+  for f in /usr/lib/*/libLLVM.so.19* /usr/lib/*/libLLVM-19.so* /usr/lib/llvm-19/lib/libLLVM*.so*; do
+    if [ -f "$f" ]; then export DRJIT_LIBLLVM_PATH="$f"; break; fi
+  done
+fi
