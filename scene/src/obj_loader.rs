@@ -3,7 +3,10 @@
 //! Geometry comes from tobj with `triangulate` (polygons become fans) and `single_index` (one index per
 //! vertex for position, normal and UV). OBJ has no node hierarchy, cameras or punctual lights; positions
 //! are taken as world space. Texture coordinates are converted to the glTF convention (v' = 1 - v, so that
-//! (0, 0) is the top-left of the image).
+//! (0, 0) is the top-left of the image). A face index that names no element (0, a relative index before
+//! the first element, or one past the file's last) is an error naming its line, found in a pass of our
+//! own before tobj parses the file (tobj 4.0.5 overflows on such indices; the pass adds about 20 ms to
+//! Conference's 27 MB, 110 -> 132 ms of loading).
 //!
 //! Materials come from the MTL file(s) the OBJ names with `mtllib`, or only from
 //! [`LoadOptions::mtl_override`] when that is set (e.g. Lost Empire's torch-emissive variant). Mapping
@@ -191,6 +194,14 @@ pub fn load_obj_from(
         std::borrow::Cow::Borrowed(_) => String::from_utf8(bytes).unwrap_or_default(),
         std::borrow::Cow::Owned(s) => s,
     };
+    // tobj resolves an out-of-range index to a huge one and then overflows computing its offset (a
+    // panic in checked builds); such faces are refused here, before tobj sees them.
+    if let Some((line, content, problem)) = find_bad_face_reference(&text) {
+        return Err(SceneError::FaceIndexOutOfRange {
+            path: path.to_owned(),
+            message: format!("{problem} at line {line}: {content:?}"),
+        });
+    }
     let mut obj_reader = Cursor::new(text.as_bytes());
     let result = match &options.mtl_override {
         Some(mtl) => {
@@ -362,6 +373,153 @@ pub fn load_obj_from(
     }
     scene.validate(path)?;
     Ok(scene)
+}
+
+/// The first face of an OBJ (its 1-based line, text, and what is wrong) whose vertex, texture coordinate or
+/// normal index cannot name an element of the file: 0, a relative (negative) index reaching before the
+/// first element defined so far, or an index beyond the last one in the file. (tobj itself takes forward
+/// references within a group, so positive indices are checked against the whole file.) Indices that do
+/// not parse are left to tobj, which reports a malformed face.
+///
+/// One pass over the lines (a second only to locate a too-large index).
+fn find_bad_face_reference(text: &str) -> Option<(usize, String, String)> {
+    let mut largest = [0i64; 3];
+    let (first_bad, total) = scan_face_references(text, |k, x, defined_before| {
+        largest[k] = largest[k].max(x);
+        x == 0 || -x > defined_before
+    });
+    let found = match first_bad {
+        Some(found) => found,
+        // Only when some index is beyond the file: find its line.
+        None if (0..3).any(|k| largest[k] > total[k]) => {
+            scan_face_references(text, |k, x, _| x > total[k]).0?
+        }
+        None => return None,
+    };
+    let (line_number, line, k, x, defined_before) = found;
+    const KINDS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
+    let problem = if x == 0 {
+        format!("{} index 0 (OBJ counts from 1)", KINDS[k])
+    } else if x < 0 {
+        format!(
+            "relative {} index {x} with {defined_before} defined before it",
+            KINDS[k]
+        )
+    } else {
+        format!("{} index {x} with {} in the file", KINDS[k], total[k])
+    };
+    let mut content: String = line.trim().chars().take(80).collect();
+    if line.trim().chars().count() > 80 {
+        content.push_str("...");
+    }
+    Some((line_number, content, problem))
+}
+
+/// Which statement an OBJ line is: 0 `v`, 1 `vt`, 2 `vn`, 3 `f`, `None` for any other; with the rest
+/// of the line after the keyword.
+#[inline]
+fn statement_kind(line: &[u8]) -> Option<(usize, &[u8])> {
+    let start = line.iter().position(|b| !b.is_ascii_whitespace())?;
+    let line = &line[start..];
+    let end = line
+        .iter()
+        .position(u8::is_ascii_whitespace)
+        .unwrap_or(line.len());
+    let kind = match &line[..end] {
+        b"v" => 0,
+        b"vt" => 1,
+        b"vn" => 2,
+        b"f" => 3,
+        _ => return None,
+    };
+    Some((kind, &line[end..]))
+}
+
+/// A face index [`scan_face_references`] stopped at: the 1-based line number, the line, the kind (0
+/// vertex, 1 texture coordinate, 2 normal), the index and the count of that kind defined before the line.
+type FaceReference<'a> = (usize, &'a str, usize, i64, i64);
+
+/// Calls `bad(kind, index, defined_before)` for every integer index of every face and stops at the
+/// first for which it is true; returns it (if any) with the counts of `v`, `vt` and `vn` statements
+/// before it (the whole file's if none). Parts that are not integers are skipped (tobj reports them);
+/// out-of-range integers saturate.
+fn scan_face_references(
+    text: &str,
+    mut bad: impl FnMut(usize, i64, i64) -> bool,
+) -> (Option<FaceReference<'_>>, [i64; 3]) {
+    let mut so_far = [0i64; 3];
+    for (i, line) in text.lines().enumerate() {
+        match statement_kind(line.as_bytes()) {
+            Some((k @ 0..=2, _)) => so_far[k] += 1,
+            Some((_, vertices)) => {
+                let mut indices = FaceIndices::default();
+                // A trailing space ends the last part like the others.
+                for &b in vertices.iter().chain(b" ") {
+                    if let Some((k, x)) = indices.push(b) {
+                        if bad(k, x, so_far[k]) {
+                            return (Some((i + 1, line, k, x, so_far[k])), so_far);
+                        }
+                    }
+                }
+            }
+            None => {}
+        }
+    }
+    (None, so_far)
+}
+
+/// Reads the indices of a face's vertices (`v`, `v/vt`, `v//vn`, `v/vt/vn`) a byte at a time.
+#[derive(Default)]
+struct FaceIndices {
+    /// Which index of the vertex the current part is (0 `v`, 1 `vt`, 2 `vn`; more is malformed).
+    kind: usize,
+    value: i64,
+    negative: bool,
+    digits: bool,
+    /// The part has a byte that is neither a sign nor a digit (tobj reports it).
+    malformed: bool,
+}
+
+impl FaceIndices {
+    /// Takes the next byte; at the end of a part that is an integer (saturated to `i64`), returns its
+    /// kind and value.
+    #[inline]
+    fn push(&mut self, b: u8) -> Option<(usize, i64)> {
+        match b {
+            b'0'..=b'9' => {
+                self.value = self
+                    .value
+                    .saturating_mul(10)
+                    .saturating_add(i64::from(b - b'0'));
+                self.digits = true;
+                None
+            }
+            b'-' if !self.digits && !self.negative => {
+                self.negative = true;
+                None
+            }
+            b'/' | b' ' | b'\t' | b'\r' => {
+                let part = (self.digits && !self.malformed && self.kind < 3).then(|| {
+                    let x = if self.negative {
+                        -self.value
+                    } else {
+                        self.value
+                    };
+                    (self.kind, x)
+                });
+                let kind = if b == b'/' { self.kind + 1 } else { 0 };
+                *self = Self {
+                    kind,
+                    ..Self::default()
+                };
+                part
+            }
+            _ => {
+                self.malformed = true;
+                None
+            }
+        }
+    }
 }
 
 /// The first line (1-based, with its text) of an OBJ that tobj rejects with `error`, if it can be found
@@ -879,6 +1037,51 @@ mod tests {
         );
         let s = load_scene_from(&files, Path::new("d/l.obj"), &LoadOptions::default()).unwrap();
         assert_eq!(s.triangle_count(), 1);
+    }
+
+    #[test]
+    fn faces_naming_no_element_are_refused_before_tobj() {
+        use crate::mesh::load_scene_from;
+        use crate::source::MemoryFiles;
+        let load = |obj: &str| {
+            let files = MemoryFiles::new().with("d/f.obj", obj.to_owned());
+            load_scene_from(&files, Path::new("d/f.obj"), &LoadOptions::default())
+        };
+        let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
+        // Fuzz regression (obj crash-4d95050c): a relative texture-coordinate index before the first
+        // one made tobj overflow computing its offset (a panic in checked builds).
+        for (face, problem) in [
+            (
+                "f 1/-5 2/1 3/1",
+                "relative texture coordinate index -5 with 1 defined before it",
+            ),
+            (
+                "f 1 2 -4",
+                "relative vertex index -4 with 3 defined before it",
+            ),
+            ("f 1//1 2//0 3//1", "normal index 0 (OBJ counts from 1)"),
+            (
+                "f 1 2 9223372036854775807",
+                "vertex index 9223372036854775807 with 3 in the file",
+            ),
+            (
+                "f 1/2 2/1 3/1",
+                "texture coordinate index 2 with 1 in the file",
+            ),
+        ] {
+            let e = load(&format!("{head}{face}\n")).unwrap_err();
+            assert!(matches!(e, SceneError::FaceIndexOutOfRange { .. }), "{e}");
+            assert_eq!(
+                e.to_string(),
+                format!("d/f.obj: face index out of range: {problem} at line 6: {face:?}")
+            );
+        }
+        // Relative indices within range, and a forward reference within the file, still load.
+        let s = load(&format!(
+            "{head}f -3/-1/-1 -2/1/1 -1/1/1\nf 1 2 4\nv 1 1 0\n"
+        ))
+        .unwrap();
+        assert_eq!(s.triangle_count(), 2);
     }
 
     #[test]

@@ -80,12 +80,12 @@ fn missing_file_and_unknown_extension() {
 fn truncated_and_malformed_obj_and_mtl() {
     let e = expect_error(
         "truncated_face.obj",
-        "face index out of range: face vertex index out of bounds at line 6: \"f 1 3 4\"",
+        "face index out of range: vertex index 4 with 3 in the file at line 6: \"f 1 3 4\"",
     );
     assert!(matches!(e, SceneError::FaceIndexOutOfRange { .. }), "{e}");
     let e = expect_error(
         "index_out_of_range.obj",
-        "out of bounds at line 4: \"f 1 2 9\"",
+        "vertex index 9 with 3 in the file at line 4: \"f 1 2 9\"",
     );
     assert!(matches!(e, SceneError::FaceIndexOutOfRange { .. }), "{e}");
     let e = expect_error(
