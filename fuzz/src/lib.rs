@@ -9,7 +9,10 @@ use std::path::{Path, PathBuf};
 
 use fovea_core::bvh::traverse::closest_hit;
 use fovea_core::geometry::Ray;
-use fovea_core::scene::{triangle_lane, BLOCK_LANE_CUTOUT, INVALID_INDEX, TEXTURE_RGBA16};
+use fovea_core::scene::{
+    triangle_lane, SceneView, BLOCK_LANE_CUTOUT, INVALID_INDEX, SLOT_EMPTY, SLOT_LEAF,
+    TEXTURE_RGBA16,
+};
 use fovea_scene::bvh::blocks::leaf_slots;
 use fovea_scene::bvh::{BvhBuildOptions, MAX_NODE_DEPTH};
 use fovea_scene::environment::Environment;
@@ -181,6 +184,18 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
         }
     }
     assert!(seen.iter().all(|&s| s), "every triangle is in a leaf");
+    // The CPU's 8-wide tree has the very same leaves, and no more nodes.
+    let leaf_words = |words: &mut dyn Iterator<Item = u32>| {
+        let mut w: Vec<u32> = words
+            .filter(|&w| w != SLOT_EMPTY && w & SLOT_LEAF != 0)
+            .collect();
+        w.sort_unstable();
+        w
+    };
+    let four = leaf_words(&mut p.nodes.iter().flat_map(|n| n.slots.to_array()));
+    let eight = leaf_words(&mut p.wide_nodes.iter().flat_map(|n| n.slots));
+    assert_eq!(four, eight, "8-wide leaves");
+    assert!(!p.wide_nodes.is_empty() && p.wide_nodes.len() <= p.nodes.len());
     if !p.lights.is_empty() {
         assert_eq!(p.light_cdf.len(), p.lights.len() + 1);
         assert!(p.light_cdf.windows(2).all(|w| w[0] <= w[1]));
@@ -235,11 +250,19 @@ pub fn cast_rays(p: &PackedScene) {
             rays.push(Ray::new(origin, d));
         }
     }
+    // The same rays through the 4-wide tree alone (what the GPU traverses) find the same distances.
+    let four_wide = SceneView {
+        wide_nodes: &[],
+        ..view
+    };
     for ray in &rays {
         let hit = closest_hit(&view, ray, f32::INFINITY);
         if hit.is_hit() {
             assert!((hit.triangle as usize) < p.triangle_count());
             assert!(hit.t >= 0.0 && hit.t.is_finite(), "{hit:?}");
         }
+        let four = closest_hit(&four_wide, ray, f32::INFINITY);
+        assert_eq!(hit.is_hit(), four.is_hit(), "{ray:?}");
+        assert_eq!(hit.t.to_bits(), four.t.to_bits(), "{ray:?}");
     }
 }

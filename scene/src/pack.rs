@@ -13,9 +13,11 @@ use fovea_core::scene::{
 use glam::{Vec3, Vec4};
 
 use crate::bvh::blocks::{pack_leaf_blocks, LeafBlocks};
+use crate::bvh::wide::collapse_to_wide;
 use crate::bvh::{build_bvh_indexed, BvhBuildOptions, BvhStats};
 use crate::environment::{build_cdf, Environment, EnvironmentTables};
 use crate::mesh::LoadedScene;
+use fovea_core::bvh::wide::Bvh8Node;
 
 /// Figures about a packed scene, for `--stats` and `--verbose`.
 #[derive(Clone, Debug, Default)]
@@ -36,6 +38,8 @@ pub struct PackStats {
 pub struct PackedScene {
     pub globals: SceneGlobals,
     pub nodes: Vec<Bvh4Node>,
+    /// The CPU's 8-wide tree over the same leaves ([`crate::bvh::wide`]); the GPU traverses `nodes`.
+    pub wide_nodes: Vec<Bvh8Node>,
     /// For each triangle, its block lane (`SceneView::triangle_lanes`).
     pub triangle_lanes: Vec<u32>,
     pub blocks: Vec<TriangleBlock>,
@@ -77,6 +81,7 @@ impl PackedScene {
             features: fovea_core::scene::FeatureFlags::ALL,
             globals: self.globals,
             nodes: &self.nodes,
+            wide_nodes: &self.wide_nodes,
             triangle_lanes: &self.triangle_lanes,
             blocks: &self.blocks,
             triangle_info: &self.triangle_info,
@@ -115,6 +120,7 @@ impl PackedScene {
             std::mem::size_of_val(v)
         }
         bytes(&self.nodes)
+            + bytes(&self.wide_nodes)
             + bytes(&self.triangle_lanes)
             + bytes(&self.blocks)
             + bytes(&self.triangle_info)
@@ -205,6 +211,11 @@ pub fn pack_scene(
         |i| materials[triangle_info[i].material as usize].flags & MATERIAL_ALPHA_CUTOUT != 0,
     );
     drop(positions);
+    // The CPU's 8-wide tree over the same leaves, counted as part of the build.
+    let wide_start = Instant::now();
+    let wide_nodes = collapse_to_wide(&bvh.nodes);
+    bvh.stats.build_ms += wide_start.elapsed().as_secs_f64() * 1e3;
+    bvh.stats.wide_node_count = wide_nodes.len();
 
     // Per-vertex arrays only when something reads them.
     let any_texture = materials.iter().any(|m| {
@@ -380,6 +391,7 @@ pub fn pack_scene(
     let mut packed = PackedScene {
         globals,
         nodes: bvh.nodes,
+        wide_nodes,
         triangle_lanes,
         blocks,
         triangle_info,

@@ -1,5 +1,8 @@
-//! 4-wide BVH traversal over the flat node array of [`crate::scene::SceneView`].
+//! BVH traversal over the flat node arrays of [`crate::scene::SceneView`]: the 4-wide tree both
+//! backends share ([`traverse`]) and, on the CPU, an 8-wide tree collapsed from it ([`wide`]).
 pub mod traverse;
+#[cfg(not(target_arch = "spirv"))]
+pub mod wide;
 
 pub use traverse::{
     any_hit, any_hit_with, closest_hit, closest_hit_with, Hit, MAX_NODE_COUNT, TRAVERSAL_STACK_SIZE,

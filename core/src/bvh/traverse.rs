@@ -93,6 +93,37 @@ fn safe_inverse(d: f32) -> f32 {
     }
 }
 
+/// The per-ray inverses of the slab test, with the rounding-error widening of Ize (2013) folded in
+/// (see [`RayBox4`]); shared by the 4-wide test and the CPU's 8-wide one ([`super::wide`]).
+#[derive(Clone, Copy)]
+pub(crate) struct SlabInverses {
+    /// `1 / d` scaled by `1 - 2γ₃`, for entry distances.
+    pub inv_near: Vec3,
+    /// `1 / d` scaled by `1 + 2γ₃` and clamped to finite values, for exit distances.
+    pub inv_far: Vec3,
+    /// Whether the inverse direction is negative along x, y, z (the near plane is then `max`).
+    pub negative: [bool; 3],
+}
+
+impl SlabInverses {
+    #[inline]
+    pub fn new(ray: &Ray) -> Self {
+        let inv = Vec3::new(
+            safe_inverse(ray.direction.x),
+            safe_inverse(ray.direction.y),
+            safe_inverse(ray.direction.z),
+        );
+        // Clamped so that an inverse of ±f32::MAX stays finite (and never turns `0 * ∞` into NaN).
+        let inv_far = (inv * ROUND_UP).clamp(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
+        let inv_near = inv * ROUND_DOWN;
+        Self {
+            inv_near,
+            inv_far,
+            negative: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
+        }
+    }
+}
+
 /// The per-ray part of the 4-wide slab test: origin and inverse direction splatted per axis, and which
 /// bound of each axis is the near plane.
 ///
@@ -119,14 +150,11 @@ struct RayBox4 {
 impl RayBox4 {
     #[inline]
     fn new(ray: &Ray) -> Self {
-        let inv = Vec3::new(
-            safe_inverse(ray.direction.x),
-            safe_inverse(ray.direction.y),
-            safe_inverse(ray.direction.z),
-        );
-        // Clamped so that an inverse of ±f32::MAX stays finite (and never turns `0 * ∞` into NaN).
-        let inv_far = (inv * ROUND_UP).clamp(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
-        let inv_near = inv * ROUND_DOWN;
+        let SlabInverses {
+            inv_near,
+            inv_far,
+            negative,
+        } = SlabInverses::new(ray);
         Self {
             origin_x: Vec4::splat(ray.origin.x),
             origin_y: Vec4::splat(ray.origin.y),
@@ -137,7 +165,7 @@ impl RayBox4 {
             inv_far_x: Vec4::splat(inv_far.x),
             inv_far_y: Vec4::splat(inv_far.y),
             inv_far_z: Vec4::splat(inv_far.z),
-            negative: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
+            negative,
         }
     }
 
@@ -293,6 +321,54 @@ fn push_child(
     }
 }
 
+/// Tests the triangles of the leaf whose slot word is `item` ([`leaf_first`], [`leaf_count`]) for hits
+/// in `(0, closest)`, updating `closest` and `best`; returns `true` if `any` is set and a hit was
+/// found (the query is then answered). Shared by the 4-wide traversal and the CPU's 8-wide one
+/// ([`super::wide`]).
+///
+/// The leaf's blocks are tested four triangles per SIMD test; the lanes of a block are then finished
+/// in order, so the first of equally near hits wins, as one by one.
+#[inline(always)]
+pub(crate) fn test_leaf<F: Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    watertight: &WatertightRay,
+    item: u32,
+    any: bool,
+    closest: &mut f32,
+    best: &mut Hit,
+) -> bool {
+    let mut b = leaf_first(item);
+    // Triangles not yet tested; a block's lanes beyond them are unused.
+    let mut left = leaf_count(item);
+    while left > 0 {
+        let block = source.block(scene, b);
+        let mut test = watertight.test_block(&block);
+        if left < 4 {
+            test.candidates &= (1 << left) - 1;
+        }
+        if test.candidates != 0 {
+            let lanes = source.block_lanes(scene, b);
+            // One lane at a time, lowest first. A loop rather than four unrolled calls: a GPU
+            // that runs both sides of every branch (lavapipe before Mesa 24.3) then runs the
+            // lane's finishing code and cut-out test once per candidate, not four times.
+            let mut pending = test.candidates;
+            while pending != 0 {
+                let k = lowest_slot(pending);
+                pending &= pending - 1;
+                let word = lane_u32(lanes, k);
+                if test_block_lane(scene, source, watertight, &test, k, word, closest, best) && any
+                {
+                    return true;
+                }
+            }
+        }
+        b += 1;
+        left -= left.min(4);
+    }
+    false
+}
+
 /// Shared traversal loop (inlined into both callers, so each gets a copy specialised for `any`): the
 /// closest hit in `(0, t_max)`, or (with `any`) the first one found.
 ///
@@ -384,37 +460,16 @@ fn traverse<F: Features, S: SceneSource>(
                     stack_len += hits as usize - 1;
                 }
             }
-        } else {
-            // A leaf: its blocks, four triangles per SIMD test; the lanes of a block are then
-            // finished in order, so the first of equally near hits wins, as one by one.
-            let mut b = leaf_first(item);
-            // Triangles not yet tested; a block's lanes beyond them are unused.
-            let mut left = leaf_count(item);
-            while left > 0 {
-                let block = source.block(scene, b);
-                let mut test = watertight.test_block(&block);
-                if left < 4 {
-                    test.candidates &= (1 << left) - 1;
-                }
-                if test.candidates != 0 {
-                    let lanes = source.block_lanes(scene, b);
-                    // One lane at a time, lowest first. A loop rather than four unrolled calls: a GPU
-                    // that runs both sides of every branch (lavapipe before Mesa 24.3) then runs the
-                    // lane's finishing code and cut-out test once per candidate, not four times.
-                    let mut pending = test.candidates;
-                    while pending != 0 {
-                        let k = lowest_slot(pending);
-                        pending &= pending - 1;
-                        let word = lane_u32(lanes, k);
-                        let (w, c, h) = (&watertight, &mut closest, &mut best);
-                        if test_block_lane(scene, source, w, &test, k, word, c, h) && any {
-                            return best;
-                        }
-                    }
-                }
-                b += 1;
-                left -= left.min(4);
-            }
+        } else if test_leaf(
+            scene,
+            source,
+            &watertight,
+            item,
+            any,
+            &mut closest,
+            &mut best,
+        ) {
+            return best;
         }
         if !next {
             // Pop the next item that may still hold a closer hit.
@@ -434,7 +489,8 @@ fn traverse<F: Features, S: SceneSource>(
 }
 
 /// The closest hit of `ray` with `0 < t < t_max` over the scene's BVH, skipping alpha cut-out holes;
-/// [`Hit::miss`] if there is none or the scene has no nodes.
+/// [`Hit::miss`] if there is none or the scene has no nodes. On the CPU, the scene's 8-wide tree is
+/// traversed where it has one ([`super::wide`]).
 #[must_use]
 pub fn closest_hit<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32) -> Hit {
     closest_hit_with(scene, &SceneSlices, ray, t_max)
@@ -448,6 +504,10 @@ pub fn closest_hit_with<F: Features, S: SceneSource>(
     ray: &Ray,
     t_max: f32,
 ) -> Hit {
+    #[cfg(not(target_arch = "spirv"))]
+    if !scene.wide_nodes.is_empty() {
+        return super::wide::closest_hit_wide(scene, source, ray, t_max);
+    }
     traverse(scene, source, ray, t_max, false)
 }
 
@@ -466,6 +526,10 @@ pub fn any_hit_with<F: Features, S: SceneSource>(
     ray: &Ray,
     t_max: f32,
 ) -> bool {
+    #[cfg(not(target_arch = "spirv"))]
+    if !scene.wide_nodes.is_empty() {
+        return super::wide::any_hit_wide(scene, source, ray, t_max);
+    }
     traverse(scene, source, ray, t_max, true).is_hit()
 }
 

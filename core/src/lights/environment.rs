@@ -213,21 +213,10 @@ mod tests {
                     environment_light: 0,
                     ..SceneGlobals::default()
                 },
-                nodes: &[],
-                triangle_lanes: &[],
-                blocks: &[],
-                triangle_info: &[],
-                normals: &[],
-                uvs: &[],
-                materials: &[],
-                textures: &[],
-                texels: &[],
-                lights: &[],
-                light_cdf: &[],
-                triangle_light: &[],
                 environment_texels: &texels,
                 environment_marginal_cdf: &marginal,
                 environment_conditional_cdf: &conditional,
+                ..SceneView::empty()
             };
             // Rows: θ edges at half texels. Columns: the grid's φ' around +y is -φ of the map, and
             // both are cut at multiples of 2π / (2 w), so the columns split texels in half.

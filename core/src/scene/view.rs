@@ -4,6 +4,8 @@ use super::features::{FeatureFlags, Features};
 use super::layout::{
     Bvh4Node, Light, Material, SceneGlobals, TextureInfo, TriangleBlock, TriangleInfo,
 };
+#[cfg(not(target_arch = "spirv"))]
+use crate::bvh::wide::Bvh8Node;
 
 /// The packed scene as borrowed slices. Arrays a scene does not need are empty.
 ///
@@ -17,6 +19,10 @@ pub struct SceneView<'a, F: Features = FeatureFlags> {
     pub globals: SceneGlobals,
     /// 4-wide BVH nodes, root first (see [`Bvh4Node`]); empty for an empty scene.
     pub nodes: &'a [Bvh4Node],
+    /// The CPU's 8-wide tree collapsed from `nodes` ([`crate::bvh::wide`]), with the same leaves;
+    /// when it is not empty, traversal uses it instead of `nodes`. The GPU has only `nodes`.
+    #[cfg(not(target_arch = "spirv"))]
+    pub wide_nodes: &'a [Bvh8Node],
     /// Where each triangle's positions are (BVH leaf order): `4 * block + lane` of the [`TriangleBlock`]
     /// lane that holds them ([`super::triangle_lane`]). The blocks are the only copy of the positions.
     pub triangle_lanes: &'a [u32],
@@ -57,6 +63,8 @@ impl SceneView<'_> {
             features: FeatureFlags::ALL,
             globals: SceneGlobals::default(),
             nodes: &[],
+            #[cfg(not(target_arch = "spirv"))]
+            wide_nodes: &[],
             triangle_lanes: &[],
             blocks: &[],
             triangle_info: &[],
@@ -84,6 +92,8 @@ impl<'a, F: Features> SceneView<'a, F> {
             features,
             globals: self.globals,
             nodes: self.nodes,
+            #[cfg(not(target_arch = "spirv"))]
+            wide_nodes: self.wide_nodes,
             triangle_lanes: self.triangle_lanes,
             blocks: self.blocks,
             triangle_info: self.triangle_info,

@@ -12,6 +12,7 @@
 mod binary;
 pub mod blocks;
 mod collapse;
+pub mod wide;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -77,8 +78,10 @@ pub struct BvhStats {
     pub max_depth: u32,
     /// Depth of the deepest leaf of the intermediate binary tree (root = 0).
     pub binary_max_depth: u32,
-    /// Bytes of the node array.
+    /// Bytes of the 4-wide node array.
     pub memory_bytes: usize,
+    /// Nodes of the CPU's 8-wide tree ([`wide`]), once packed (0 before).
+    pub wide_node_count: usize,
     /// SAH cost of the 4-wide tree (see [`sah_cost`]) with the build's traversal and intersection costs:
     /// the expected cost of a random ray through the root, for comparing builder settings.
     pub sah_cost: f64,
@@ -270,6 +273,7 @@ fn build_over_bounds(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use fovea_core::bvh::wide::Bvh8Node;
     use fovea_core::bvh::{any_hit, closest_hit, Hit};
     use fovea_core::geometry::triangle::WatertightRay;
     use fovea_core::geometry::Ray;
@@ -336,6 +340,8 @@ mod tests {
     struct Packed {
         bvh: Bvh,
         nodes: Vec<Bvh4Node>,
+        /// The CPU's 8-wide tree collapsed from `nodes`.
+        wide_nodes: Vec<Bvh8Node>,
         /// Positions in leaf order (what the blocks hold).
         triangles: Vec<TrianglePositions>,
         blocks: Vec<TriangleBlock>,
@@ -360,9 +366,12 @@ mod tests {
             let mut nodes = bvh.nodes.clone();
             let packed =
                 blocks::pack_leaf_blocks(&mut nodes, triangles.len(), |i| triangles[i], |_| false);
+            let wide_nodes = wide::collapse_to_wide(&nodes);
+            validate_wide(&nodes, &wide_nodes);
             Self {
                 bvh,
                 nodes,
+                wide_nodes,
                 triangles,
                 blocks: packed.blocks,
                 triangle_lanes: packed.triangle_lanes,
@@ -382,6 +391,67 @@ mod tests {
                 ..SceneView::empty()
             }
         }
+
+        /// [`Self::view`] with the 8-wide tree, which traversal then takes instead.
+        fn wide_view(&self) -> SceneView<'_> {
+            SceneView {
+                wide_nodes: &self.wide_nodes,
+                ..self.view()
+            }
+        }
+    }
+
+    /// Checks an 8-wide tree against the 4-wide tree it was collapsed from: the same leaf words, each
+    /// once; every interior slot's box is the union of its node's boxes (the 4-wide boxes are copied,
+    /// and a 4-wide interior box is exactly that union); no node deeper than traversal's stack allows;
+    /// and fewer nodes.
+    fn validate_wide(nodes: &[Bvh4Node], wide_nodes: &[Bvh8Node]) {
+        use fovea_core::bvh::wide::MAX_WIDE_DEPTH;
+        use fovea_core::scene::SLOT_LEAF;
+        let mut leaves4: Vec<u32> = nodes
+            .iter()
+            .flat_map(|n| (0..4).filter(|&s| n.is_leaf_slot(s)).map(|s| n.slot(s)))
+            .collect();
+        assert_eq!(nodes.is_empty(), wide_nodes.is_empty());
+        if nodes.is_empty() {
+            return;
+        }
+        assert!(wide_nodes.len() <= nodes.len());
+        let mut leaves8 = Vec::new();
+        let mut reached = vec![false; wide_nodes.len()];
+        let mut stack = vec![(0usize, 0usize)];
+        while let Some((i, depth)) = stack.pop() {
+            assert!(!reached[i], "node {i} reached twice");
+            reached[i] = true;
+            assert!(depth <= MAX_WIDE_DEPTH, "depth {depth}");
+            let node = &wide_nodes[i];
+            for slot in 0..8 {
+                let word = node.slots[slot];
+                if word == SLOT_EMPTY {
+                    let (lo, hi) = node.slot_bounds(slot);
+                    assert!((0..3).all(|k| lo[k] > hi[k]), "empty slot with a box");
+                } else if word & SLOT_LEAF != 0 {
+                    leaves8.push(word);
+                } else {
+                    let child = &wide_nodes[word as usize];
+                    let (lo, hi) = node.slot_bounds(slot);
+                    for k in 0..3 {
+                        let (mut clo, mut chi) = (f32::MAX, -f32::MAX);
+                        for s in (0..8).filter(|&s| child.slots[s] != SLOT_EMPTY) {
+                            let (a, b) = child.slot_bounds(s);
+                            clo = clo.min(a[k]);
+                            chi = chi.max(b[k]);
+                        }
+                        assert!(lo[k] <= clo && chi <= hi[k], "child box outside its slot");
+                    }
+                    stack.push((word as usize, depth + 1));
+                }
+            }
+        }
+        assert!(reached.iter().all(|&r| r), "unreachable 8-wide nodes");
+        leaves4.sort_unstable();
+        leaves8.sort_unstable();
+        assert_eq!(leaves4, leaves8);
     }
 
     fn brute_force(triangles: &[TrianglePositions], ray: &Ray, t_max: f32) -> Hit {
@@ -577,6 +647,16 @@ mod tests {
                 }
             }
             assert_eq!(any_hit(&scene, &ray, t_max), expected.is_hit());
+            // The 8-wide tree finds the same.
+            let wide = closest_hit(&packed.wide_view(), &ray, t_max);
+            assert_eq!(wide.is_hit(), expected.is_hit(), "{ray:?} {t_max}");
+            assert_eq!(wide.t, expected.t, "{ray:?}");
+            if wide.triangle != expected.triangle {
+                let other = WatertightRay::new(&ray)
+                    .intersect(&packed.triangles[wide.triangle as usize], f32::INFINITY);
+                assert!(other.hit && other.t == expected.t);
+            }
+            assert_eq!(any_hit(&packed.wide_view(), &ray, t_max), expected.is_hit());
         }
         hits
     }
@@ -812,6 +892,8 @@ mod tests {
                 let got = closest_hit(&scene, &ray, f32::INFINITY);
                 assert_eq!(got.is_hit(), expected.is_hit());
                 assert_eq!(got.t, expected.t);
+                let wide = closest_hit(&packed.wide_view(), &ray, f32::INFINITY);
+                assert_eq!(wide.t, expected.t);
             }
         }
         // The guards were needed (and used): some tree reached the deepest levels they allow.
@@ -860,6 +942,7 @@ mod tests {
         let packed = Packed::new(&mesh);
         validate(&packed.bvh, &mesh, 4);
         let scene = packed.view();
+        let wide = packed.wide_view();
         let mut rays = 0;
         for t in &mesh {
             let v = [t.v0.truncate(), t.v1.truncate(), t.v2.truncate()];
@@ -873,6 +956,8 @@ mod tests {
                         let ray = Ray::new(origin, target - origin);
                         assert!(closest_hit(&scene, &ray, f32::INFINITY).is_hit(), "{ray:?}");
                         assert!(any_hit(&scene, &ray, f32::INFINITY));
+                        assert!(closest_hit(&wide, &ray, f32::INFINITY).is_hit(), "{ray:?}");
+                        assert!(any_hit(&wide, &ray, f32::INFINITY));
                         rays += 1;
                     }
                 }
