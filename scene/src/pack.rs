@@ -12,8 +12,7 @@ use fovea_core::scene::{
 };
 use glam::{Vec3, Vec4};
 
-use crate::bvh::blocks::{pack_leaf_blocks, LeafBlocks};
-use crate::bvh::wide::collapse_to_wide;
+use crate::bvh::blocks::{name_wide_leaf_blocks, pack_leaf_blocks, LeafBlocks};
 use crate::bvh::{build_bvh_indexed, BvhBuildOptions, BvhStats};
 use crate::environment::{build_cdf, Environment, EnvironmentTables};
 use crate::mesh::LoadedScene;
@@ -38,7 +37,7 @@ pub struct PackStats {
 pub struct PackedScene {
     pub globals: SceneGlobals,
     pub nodes: Vec<Bvh4Node>,
-    /// The CPU's 8-wide tree over the same leaves ([`crate::bvh::wide`]); the GPU traverses `nodes`.
+    /// The CPU's 8-wide tree over the same leaves (`fovea_core::bvh::wide`); the GPU traverses `nodes`.
     pub wide_nodes: Vec<Bvh8Node>,
     /// For each triangle, its block lane (`SceneView::triangle_lanes`).
     pub triangle_lanes: Vec<u32>,
@@ -211,11 +210,8 @@ pub fn pack_scene(
         |i| materials[triangle_info[i].material as usize].flags & MATERIAL_ALPHA_CUTOUT != 0,
     );
     drop(positions);
-    // The CPU's 8-wide tree over the same leaves, counted as part of the build.
-    let wide_start = Instant::now();
-    let wide_nodes = collapse_to_wide(&bvh.nodes);
-    bvh.stats.build_ms += wide_start.elapsed().as_secs_f64() * 1e3;
-    bvh.stats.wide_node_count = wide_nodes.len();
+    let mut wide_nodes = std::mem::take(&mut bvh.wide_nodes);
+    name_wide_leaf_blocks(&mut wide_nodes, &triangle_lanes);
 
     // Per-vertex arrays only when something reads them.
     let any_texture = materials.iter().any(|m| {

@@ -1,8 +1,8 @@
 //! The CPU's 8-wide BVH ([`Bvh8Node`]) and its closest-hit and any-hit traversal.
 //!
 //! The GPU traverses the 4-wide tree ([`crate::scene::Bvh4Node`], [`super::traverse`]); the CPU host
-//! traverses this one, which `fovea_scene::bvh::wide` collapses from that same tree: its leaves are the
-//! 4-wide tree's leaf slot words, so both name the same [`crate::scene::TriangleBlock`]s and the same
+//! traverses this one, which the builder (`fovea_scene::bvh`) collapses from the same binary tree: its
+//! leaves are the 4-wide tree's leaves, so both name the same [`crate::scene::TriangleBlock`]s and
 //! triangles, and a leaf is tested by the same code ([`super::traverse`]'s `test_leaf`). Each node
 //! slab-tests its eight child boxes with one 8-lane SIMD test (AVX on x86-64; two SSE halves
 //! elsewhere), with the same conservative, NaN-free arithmetic as the 4-wide test (Ize 2013; see
@@ -28,8 +28,8 @@ use crate::scene::{Features, SceneSource, SceneView, SLOT_EMPTY, SLOT_LEAF};
 /// Children per [`Bvh8Node`].
 pub const WIDE_ARITY: usize = 8;
 
-/// Depth bound of the 8-wide tree: it is collapsed from the 4-wide tree, each of whose levels it
-/// consumes at least one of, and that tree's depth is at most `(TRAVERSAL_STACK_SIZE - 4) / 3`.
+/// Depth bound of the 8-wide tree: the builder's depth guard keeps it, like the 4-wide tree, at most
+/// `(TRAVERSAL_STACK_SIZE - 4) / 3`.
 pub const MAX_WIDE_DEPTH: usize = (super::TRAVERSAL_STACK_SIZE - 4) / 3;
 
 /// Entries of the 8-wide traversal stack: a visit at depth `j` finds at most `7 j` entries below it

@@ -19,7 +19,7 @@ pub struct SceneView<'a, F: Features = FeatureFlags> {
     pub globals: SceneGlobals,
     /// 4-wide BVH nodes, root first (see [`Bvh4Node`]); empty for an empty scene.
     pub nodes: &'a [Bvh4Node],
-    /// The CPU's 8-wide tree collapsed from `nodes` ([`crate::bvh::wide`]), with the same leaves;
+    /// The CPU's 8-wide tree over the same leaves as `nodes` ([`crate::bvh::wide`]);
     /// when it is not empty, traversal uses it instead of `nodes`. The GPU has only `nodes`.
     #[cfg(not(target_arch = "spirv"))]
     pub wide_nodes: &'a [Bvh8Node],

@@ -1,8 +1,9 @@
 //! Leaf blocks: every leaf's triangles four at a time, in the structure-of-arrays layout traversal tests
 //! them in ([`TriangleBlock`]).
+use fovea_core::bvh::wide::Bvh8Node;
 use fovea_core::scene::{
     block_and_lane, leaf_count, leaf_first, leaf_slot, triangle_lane, Bvh4Node, TriangleBlock,
-    TrianglePositions, BLOCK_LANE_CUTOUT,
+    TrianglePositions, BLOCK_LANE_CUTOUT, SLOT_EMPTY, SLOT_LEAF,
 };
 
 /// Triangles per block.
@@ -83,5 +84,19 @@ pub fn pack_leaf_blocks(
     LeafBlocks {
         blocks,
         triangle_lanes,
+    }
+}
+
+/// Rewrites the leaf slots of the 8-wide tree `wide_nodes` (built over the same leaves as the 4-wide tree
+/// that [`pack_leaf_blocks`] packed) to name their first blocks, as `pack_leaf_blocks` did for the
+/// 4-wide tree: a leaf's first triangle sits in lane 0 of its first block.
+pub fn name_wide_leaf_blocks(wide_nodes: &mut [Bvh8Node], triangle_lanes: &[u32]) {
+    for node in wide_nodes.iter_mut() {
+        for word in node.slots.iter_mut() {
+            if *word != SLOT_EMPTY && *word & SLOT_LEAF != 0 {
+                let (first_block, _) = block_and_lane(triangle_lanes[leaf_first(*word) as usize]);
+                *word = leaf_slot(first_block, leaf_count(*word));
+            }
+        }
     }
 }

@@ -1,9 +1,11 @@
-//! Collapsing the binary BVH into the 4-wide [`Bvh4Node`] layout.
+//! Collapsing the binary BVH into the 4-wide [`Bvh4Node`] layout both backends traverse, and into the
+//! CPU's 8-wide [`Bvh8Node`] layout.
 //!
-//! Each 4-wide node starts from the two children of a binary node and greedily opens the interior
-//! candidate with the largest surface area (replacing it by its two children) until it has four children
-//! or only leaves are left (Wald, Benthin, Boulos 2008; Pharr, "collapsing" a binary BVH). Leaves stay the
-//! binary leaves, so the triangles keep their leaf order.
+//! Each wide node starts from the two children of a binary node and greedily opens the interior
+//! candidate with the largest surface area (replacing it by its two children) until it has four (eight)
+//! children or only leaves are left (Wald, Benthin, Boulos 2008; Pharr, "collapsing" a binary BVH;
+//! Embree builds its BVH8 the same way). Leaves stay the binary leaves, so the triangles keep their leaf
+//! order and both trees have the very same leaves.
 //!
 //! **Depth guard.** Traversal's stack bounds the depth of the 4-wide tree (see
 //! [`fovea_core::bvh::TRAVERSAL_STACK_SIZE`]). Let `h` be a binary node's height (leaf = 0) and `d` the
@@ -11,7 +13,10 @@
 //! a greedy choice is taken only if every interior child satisfies it; otherwise the node first opens
 //! every interior child of its binary node (so every interior child is at least two binary levels down,
 //! `h' <= h - 2`, and the bound carries over), then continues greedily. Interior nodes have `h >= 1`, so
-//! 4-wide node depths stay below `ceil(MAX_DEPTH / 2) = MAX_NODE_DEPTH + 1`.
+//! 4-wide node depths stay below `ceil(MAX_DEPTH / 2) = MAX_NODE_DEPTH + 1`. The same guard holds for the
+//! 8-wide tree (opening more candidates only lowers their heights), whose depth is then within
+//! [`fovea_core::bvh::wide::MAX_WIDE_DEPTH`] too.
+use fovea_core::bvh::wide::Bvh8Node;
 use fovea_core::scene::{leaf_slot, Bvh4Node, BvhNode};
 
 use super::{BvhStats, MAX_DEPTH};
@@ -87,14 +92,39 @@ impl<'a> Arena<'a> {
     }
 }
 
-/// Up to four binary slots that become one 4-wide node's children, in leaf order.
+/// A wide node layout the collapse writes: `ARITY` slots, each a box and a slot word.
+pub(super) trait WideNode: Copy {
+    const ARITY: usize;
+    const EMPTY: Self;
+    fn set_slot(&mut self, i: usize, min: [f32; 3], max: [f32; 3], word: u32);
+}
+
+impl WideNode for Bvh4Node {
+    const ARITY: usize = 4;
+    const EMPTY: Self = Bvh4Node::EMPTY;
+    fn set_slot(&mut self, i: usize, min: [f32; 3], max: [f32; 3], word: u32) {
+        self.set_slot_bounds(i, min, max);
+        self.slots[i] = word;
+    }
+}
+
+impl WideNode for Bvh8Node {
+    const ARITY: usize = 8;
+    const EMPTY: Self = Bvh8Node::EMPTY;
+    fn set_slot(&mut self, i: usize, min: [f32; 3], max: [f32; 3], word: u32) {
+        self.set_slot_bounds(i, min, max);
+        self.slots[i] = word;
+    }
+}
+
+/// Up to `N` binary slots that become one `N`-wide node's children, in leaf order.
 #[derive(Clone, Copy)]
-struct Candidates {
-    slots: [usize; 4],
+struct Candidates<const N: usize> {
+    slots: [usize; N],
     len: usize,
 }
 
-impl Candidates {
+impl<const N: usize> Candidates<N> {
     /// Replaces candidate `i` by its two binary children (in place, keeping the leaf order).
     fn open(&mut self, arena: &Arena, i: usize) {
         let (l, r) = arena.children(self.slots[i]);
@@ -106,9 +136,9 @@ impl Candidates {
         self.len += 1;
     }
 
-    /// Opens the interior candidate of largest surface area until there are four or none is left.
+    /// Opens the interior candidate of largest surface area until there are `N` or none is left.
     fn open_greedily(&mut self, arena: &Arena) {
-        while self.len < 4 {
+        while self.len < N {
             let mut best = usize::MAX;
             let mut best_area = f32::NEG_INFINITY;
             for i in 0..self.len {
@@ -125,13 +155,12 @@ impl Candidates {
         }
     }
 
-    /// The children of the 4-wide node made from binary `slot` at 4-wide depth `depth` (see the module
+    /// The children of the `N`-wide node made from binary `slot` at depth `depth` (see the module
     /// documentation for the depth guard).
     fn of(arena: &Arena, slot: usize, depth: u32) -> Self {
-        let mut c = Self {
-            slots: [slot, 0, 0, 0],
-            len: 1,
-        };
+        let mut slots = [0; N];
+        slots[0] = slot;
+        let mut c = Self { slots, len: 1 };
         if arena.nodes[slot].is_leaf() {
             // Only a root can be a leaf: a one-leaf tree.
             return c;
@@ -163,39 +192,64 @@ impl Candidates {
     }
 }
 
-/// Collapses the binary tree in `arena` (see [`super::binary::build_node`]) into 4-wide nodes: node 0 is
-/// the root, the interior children of a node are stored next to each other and after it (depth first).
-/// Fills the node, leaf and depth fields of `stats`.
+/// Collapses the binary tree in `arena` (see [`super::binary::build_node`]) into 4-wide nodes and, with
+/// `wide`, 8-wide nodes as well (else an empty array): node 0 is the root, the interior children of a
+/// node are stored next to each other and after it (depth first). Leaf slot words name the binary
+/// leaves' triangle ranges. Fills the node, leaf and depth fields of `stats` (of the 4-wide tree).
 pub(super) fn collapse(
     arena: &[BvhNode],
     leaf_count: usize,
+    wide: bool,
     stats: &mut BvhStats,
-) -> Vec<Bvh4Node> {
+) -> (Vec<Bvh4Node>, Vec<Bvh8Node>) {
     let arena = Arena::new(arena);
     stats.binary_max_depth = arena.height(0);
-    // A 4-wide tree over `n` leaves has at most `n - 1` nodes, typically about `n / 2.5`.
-    let mut nodes = Vec::with_capacity(leaf_count / 2 + 1);
-    nodes.push(Bvh4Node::EMPTY);
+    // The two collapses read the same arena; on two threads the 8-wide one costs no extra time.
+    let ((nodes, leaves, depth), wide_nodes) = rayon::join(
+        || collapse_to::<Bvh4Node, 4>(&arena, leaf_count),
+        || {
+            if wide {
+                collapse_to::<Bvh8Node, 8>(&arena, leaf_count).0
+            } else {
+                Vec::new()
+            }
+        },
+    );
+    stats.leaf_count = leaves;
+    stats.max_depth = depth;
+    (nodes, wide_nodes)
+}
+
+/// The `N`-wide tree (`T::ARITY == N`) over `arena`, its leaf count and its deepest node's depth.
+fn collapse_to<T: WideNode, const N: usize>(
+    arena: &Arena,
+    leaf_count: usize,
+) -> (Vec<T>, usize, u32) {
+    debug_assert_eq!(T::ARITY, N);
+    // An N-wide tree over `n` leaves has at most `n - 1` nodes, typically about `n / (N - 1.5)`.
+    let mut nodes = Vec::with_capacity(leaf_count / (N / 2) + 1);
+    nodes.push(T::EMPTY);
+    let (mut leaves, mut max_depth) = (0, 0);
     let mut stack = vec![(0usize, 0usize, 0u32)];
     while let Some((slot, position, depth)) = stack.pop() {
-        let c = Candidates::of(&arena, slot, depth);
-        stats.max_depth = stats.max_depth.max(depth);
-        let mut node = Bvh4Node::EMPTY;
+        let c = Candidates::<N>::of(arena, slot, depth);
+        max_depth = max_depth.max(depth);
+        let mut node = T::EMPTY;
         let first_child = nodes.len();
         let mut interior = 0;
         for i in 0..c.len {
             let b = &arena.nodes[c.slots[i]];
-            node.set_slot_bounds(i, b.bounds_min.map(widen_down), b.bounds_max.map(widen_up));
+            let (min, max) = (b.bounds_min.map(widen_down), b.bounds_max.map(widen_up));
             if b.is_leaf() {
-                node.slots[i] = leaf_slot(b.left_or_first, b.triangle_count);
-                stats.leaf_count += 1;
+                node.set_slot(i, min, max, leaf_slot(b.left_or_first, b.triangle_count));
+                leaves += 1;
             } else {
-                node.slots[i] = (first_child + interior) as u32;
+                node.set_slot(i, min, max, (first_child + interior) as u32);
                 interior += 1;
             }
         }
         nodes[position] = node;
-        nodes.resize(first_child + interior, Bvh4Node::EMPTY);
+        nodes.resize(first_child + interior, T::EMPTY);
         // Push in reverse so the first child's subtree is written first (depth-first order).
         let mut k = interior;
         for i in (0..c.len).rev() {
@@ -205,5 +259,5 @@ pub(super) fn collapse(
             }
         }
     }
-    nodes
+    (nodes, leaves, max_depth)
 }

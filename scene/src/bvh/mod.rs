@@ -12,11 +12,11 @@
 mod binary;
 pub mod blocks;
 mod collapse;
-pub mod wide;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
+use fovea_core::bvh::wide::Bvh8Node;
 use fovea_core::bvh::{MAX_NODE_COUNT, TRAVERSAL_STACK_SIZE};
 use fovea_core::scene::{
     leaf_count, Bvh4Node, BvhNode, TrianglePositions, MAX_LEAF_TRIANGLES, MAX_LEAF_TRIANGLE_INDEX,
@@ -54,6 +54,8 @@ pub struct BvhBuildOptions {
     pub traversal_cost: f32,
     /// SAH cost of one ray-triangle test.
     pub intersection_cost: f32,
+    /// Also collapse the CPU's 8-wide tree ([`Bvh::wide_nodes`]).
+    pub wide: bool,
 }
 
 impl Default for BvhBuildOptions {
@@ -63,6 +65,7 @@ impl Default for BvhBuildOptions {
             bin_count: 32,
             traversal_cost: 1.0,
             intersection_cost: 1.0,
+            wide: true,
         }
     }
 }
@@ -78,7 +81,7 @@ pub struct BvhStats {
     pub max_depth: u32,
     /// Depth of the deepest leaf of the intermediate binary tree (root = 0).
     pub binary_max_depth: u32,
-    /// Bytes of the 4-wide node array.
+    /// Bytes of the node arrays (4-wide and 8-wide).
     pub memory_bytes: usize,
     /// Nodes of the CPU's 8-wide tree ([`wide`]), once packed (0 before).
     pub wide_node_count: usize,
@@ -142,6 +145,8 @@ pub fn sah_cost(nodes: &[Bvh4Node], traversal_cost: f64, intersection_cost: f64)
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
     pub nodes: Vec<Bvh4Node>,
+    /// The CPU's 8-wide tree over the same leaves (empty unless [`BvhBuildOptions::wide`]).
+    pub wide_nodes: Vec<Bvh8Node>,
     /// `triangle_order[i]` is the input index of the triangle stored at position `i` of the leaf-ordered
     /// triangle arrays.
     pub triangle_order: Vec<u32>,
@@ -247,7 +252,7 @@ fn build_over_bounds(
     );
 
     let mut stats = BvhStats::default();
-    let nodes = collapse::collapse(&arena, leaves, &mut stats);
+    let (nodes, wide_nodes) = collapse::collapse(&arena, leaves, options.wide, &mut stats);
     drop(arena);
     assert!(
         nodes.len() < MAX_NODE_COUNT,
@@ -256,7 +261,8 @@ fn build_over_bounds(
     let triangle_order: Vec<u32> = prims.par_iter().map(PrimRef::index).collect();
 
     stats.node_count = nodes.len();
-    stats.memory_bytes = nodes.len() * std::mem::size_of::<Bvh4Node>();
+    stats.wide_node_count = wide_nodes.len();
+    stats.memory_bytes = std::mem::size_of_val(&nodes[..]) + std::mem::size_of_val(&wide_nodes[..]);
     stats.sah_cost = sah_cost(
         &nodes,
         f64::from(ctx.traversal_cost),
@@ -265,6 +271,7 @@ fn build_over_bounds(
     stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
     Bvh {
         nodes,
+        wide_nodes,
         triangle_order,
         stats,
     }
@@ -366,7 +373,8 @@ mod tests {
             let mut nodes = bvh.nodes.clone();
             let packed =
                 blocks::pack_leaf_blocks(&mut nodes, triangles.len(), |i| triangles[i], |_| false);
-            let wide_nodes = wide::collapse_to_wide(&nodes);
+            let mut wide_nodes = bvh.wide_nodes.clone();
+            blocks::name_wide_leaf_blocks(&mut wide_nodes, &packed.triangle_lanes);
             validate_wide(&nodes, &wide_nodes);
             Self {
                 bvh,
@@ -401,10 +409,9 @@ mod tests {
         }
     }
 
-    /// Checks an 8-wide tree against the 4-wide tree it was collapsed from: the same leaf words, each
-    /// once; every interior slot's box is the union of its node's boxes (the 4-wide boxes are copied,
-    /// and a 4-wide interior box is exactly that union); no node deeper than traversal's stack allows;
-    /// and fewer nodes.
+    /// Checks a packed 8-wide tree against the packed 4-wide tree of the same build: the same leaf
+    /// words, each once; every interior slot's box contains its node's boxes; no node deeper than
+    /// traversal's stack allows; every node reached once; and fewer nodes.
     fn validate_wide(nodes: &[Bvh4Node], wide_nodes: &[Bvh8Node]) {
         use fovea_core::bvh::wide::MAX_WIDE_DEPTH;
         use fovea_core::scene::SLOT_LEAF;
@@ -581,6 +588,7 @@ mod tests {
         assert_eq!(
             bvh.stats.memory_bytes,
             bvh.nodes.len() * std::mem::size_of::<Bvh4Node>()
+                + bvh.wide_nodes.len() * std::mem::size_of::<Bvh8Node>()
         );
         let mut walk = Walk {
             bvh,
