@@ -170,6 +170,12 @@ impl Renderer {
         ))
     }
 
+    /// Whether this backend traverses the CPU's 8-wide tree (the Vulkan device traverses the 4-wide
+    /// one only, so the packer need not build the other).
+    pub fn wants_wide_bvh(&self) -> bool {
+        matches!(self, Self::Cpu(_))
+    }
+
     /// "cpu" or "vulkan".
     pub fn name(&self) -> &'static str {
         match self {

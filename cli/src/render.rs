@@ -223,6 +223,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         args.mtl.as_deref(),
         &plan.lighting.environment(args.scene.is_none()),
         &plan.lighting.point_lights,
+        renderer.wants_wide_bvh(),
     )?;
     if args.verbose {
         for w in &scene.warnings {
@@ -230,7 +231,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         let s = &scene.packed.stats;
         eprintln!(
-            "scene: {} triangles, {} materials, {} textures, {} lights ({} emissive triangles); BVH {} nodes, depth {}; {:.1} MiB packed",
+            "scene: {} triangles, {} materials, {} textures, {} lights ({} emissive triangles); BVH {} 4-wide nodes (depth {}), {} 8-wide nodes; {:.1} MiB packed",
             s.triangle_count,
             scene.packed.materials.len(),
             s.texture_count,
@@ -238,6 +239,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             s.emissive_triangle_count,
             s.bvh.node_count,
             s.bvh.max_depth,
+            s.bvh.wide_node_count,
             s.memory_bytes as f64 / (1024.0 * 1024.0)
         );
         eprintln!(

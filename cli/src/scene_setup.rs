@@ -42,12 +42,14 @@ pub struct PreparedScene {
 }
 
 /// Loads `path` (or the default scene), adds `environment` and the `extra_lights` (point lights from the
-/// command line) and packs it.
+/// command line) and packs it, with the CPU's 8-wide tree if `wide_bvh` (see
+/// [`crate::backend::Renderer::wants_wide_bvh`]).
 pub fn prepare_scene(
     path: Option<&Path>,
     mtl_override: Option<&Path>,
     environment: &Environment,
     extra_lights: &[Light],
+    wide_bvh: bool,
 ) -> Result<PreparedScene> {
     let is_default = path.is_none();
     let path = path
@@ -64,7 +66,11 @@ pub fn prepare_scene(
     let camera_desc = loaded.camera;
     let warnings = loaded.warnings.clone();
     let triangle_count = loaded.triangles.len();
-    let packed = pack_scene(loaded, environment, &BvhBuildOptions::default());
+    let options = BvhBuildOptions {
+        wide: wide_bvh,
+        ..BvhBuildOptions::default()
+    };
+    let packed = pack_scene(loaded, environment, &options);
     Ok(PreparedScene {
         bvh_ms: packed.stats.bvh.build_ms,
         pack_ms: packed.stats.pack_ms,

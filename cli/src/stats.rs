@@ -84,6 +84,7 @@ pub fn build_report(
         "bvh_ms": scene.bvh_ms,
         "pack_ms": scene.pack_ms,
         "bvh_nodes": scene.packed.stats.bvh.node_count,
+        "bvh_wide_nodes": scene.packed.stats.bvh.wide_node_count,
         "bvh_max_depth": scene.packed.stats.bvh.max_depth,
         "scene_bytes": scene.packed.stats.memory_bytes,
         "render_ms": render_ms,

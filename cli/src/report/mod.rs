@@ -365,7 +365,13 @@ fn run_scene(
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
     bar.set_message(format!("{scene_name}: loading"));
-    let scene = prepare_scene(scene_path, None, environment, point_lights)?;
+    let scene = prepare_scene(
+        scene_path,
+        None,
+        environment,
+        point_lights,
+        renderer.wants_wide_bvh(),
+    )?;
     if scene.packed.lights.is_empty() {
         note(
             bar,
