@@ -22,12 +22,12 @@ for scene in small big lost_empire; do
     for side in A B; do
       bin=$BIN_A; [ "$side" = B ] && bin=$BIN_B
       if [ "$scene" = lost_empire ]; then
-        args=(--resolution 640x360)
+        args=(--resolution 640x360 --depth 3)
       else
-        args=("$PEER_WORK/scenes/$scene/$scene.obj" --uniform --spp "$SPP,1,1" --resolution 256x256
-          --eye 0,0,2.8 --target 0,0,-1 --fov 45)
+        args=("$PEER_WORK/scenes/$scene/$scene.obj" "${PEER_FOVEA_VIEW[@]}" --spp "$SPP,1,1"
+          --resolution 256x256)
       fi
-      "$bin" render "${args[@]}" --depth 3 --threads 1 -o "$out/img.exr" --stats "$out/stats.json" -q
+      "$bin" render "${args[@]}" --threads 1 -o "$out/img.exr" --stats "$out/stats.json" -q
       ms=$(python3 -c "import json,sys; print(round(json.load(open(sys.argv[1]))['render_ms']))" "$out/stats.json")
       if [ "$side" = A ]; then a+=("$ms"); else b+=("$ms"); fi
     done

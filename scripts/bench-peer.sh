@@ -13,8 +13,8 @@ mkdir -p out/bench
 for round in $(seq 1 "$ROUNDS"); do
   for scene in small big; do
     for run in 1 2; do
-      ./target/release/fovea render "$PEER_WORK/scenes/$scene/$scene.obj" --uniform --spp 32,1,1 \
-        --resolution 512x512 --eye 0,0,2.8 --target 0,0,-1 --fov 45 --depth 3 --threads 2 --seed "$run" \
+      ./target/release/fovea render "$PEER_WORK/scenes/$scene/$scene.obj" "${PEER_FOVEA_VIEW[@]}" \
+        --spp 32,1,1 --resolution 512x512 --threads 2 --seed "$run" \
         -o "out/bench/fovea_$scene.exr" --stats "out/bench/fovea_${scene}_r${round}_${run}.json" -q
       python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(f'round $round fovea $scene: {d[\"paths_per_second\"]/1e6:.3f} M paths/s ({d[\"render_ms\"]:.0f} ms)')" \
         "out/bench/fovea_${scene}_r${round}_${run}.json"

@@ -12,3 +12,5 @@ if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
     if [ -f "$f" ]; then export DRJIT_LIBLLVM_PATH="$f"; break; fi
   done
 fi
+# The kit's camera (camera.json) and integrator (max_depth 4 = 3 bounces) as fovea options, uniform sampling.
+PEER_FOVEA_VIEW=(--uniform --eye 0,0,2.8 --target 0,0,-1 --fov 45 --depth 3)

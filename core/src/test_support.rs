@@ -9,6 +9,42 @@ use crate::scene::{triangle_lane, TriangleBlock, TrianglePositions, BLOCK_LANE_C
 
 pub(crate) mod chi2;
 
+/// Calls `f` with rays that stress a slab test: origins at extreme coordinates and every direction
+/// whose components are drawn from zeros of both signs, denormals, ±1 and huge values (used by the 4-wide
+/// and the 8-wide node tests).
+pub(crate) fn for_each_slab_stress_ray(mut f: impl FnMut(crate::geometry::Ray)) {
+    let components = [
+        0.0,
+        -0.0,
+        1.0,
+        -1.0,
+        1e-30,
+        -1e-30,
+        1e-40,
+        -1e-40,
+        1e30,
+        -1e30,
+        f32::MAX,
+        -f32::MAX,
+    ];
+    let origins = [
+        Vec3::ZERO,
+        Vec3::splat(f32::MAX),
+        Vec3::splat(-f32::MAX),
+        Vec3::new(f32::MAX, -f32::MAX, 0.0),
+        Vec3::new(1e30, -3.0, 7.0),
+    ];
+    for origin in origins {
+        for &x in &components {
+            for &y in &components {
+                for &z in &components {
+                    f(crate::geometry::Ray::new(origin, Vec3::new(x, y, z)));
+                }
+            }
+        }
+    }
+}
+
 /// SplitMix64 (Steele, Lea, Flood 2014).
 pub(crate) struct SplitMix64(pub u64);
 

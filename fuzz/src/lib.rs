@@ -10,8 +10,7 @@ use std::path::{Path, PathBuf};
 use fovea_core::bvh::traverse::closest_hit;
 use fovea_core::geometry::Ray;
 use fovea_core::scene::{
-    triangle_lane, SceneView, BLOCK_LANE_CUTOUT, INVALID_INDEX, SLOT_EMPTY, SLOT_LEAF,
-    TEXTURE_RGBA16,
+    is_leaf_word, triangle_lane, SceneView, BLOCK_LANE_CUTOUT, INVALID_INDEX, TEXTURE_RGBA16,
 };
 use fovea_scene::bvh::blocks::leaf_slots;
 use fovea_scene::bvh::{BvhBuildOptions, MAX_NODE_DEPTH};
@@ -185,15 +184,13 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
     }
     assert!(seen.iter().all(|&s| s), "every triangle is in a leaf");
     // The CPU's 8-wide tree has the very same leaves.
-    let leaf_words = |words: &mut dyn Iterator<Item = u32>| {
-        let mut w: Vec<u32> = words
-            .filter(|&w| w != SLOT_EMPTY && w & SLOT_LEAF != 0)
-            .collect();
+    let leaf_words = |words: Vec<u32>| {
+        let mut w: Vec<u32> = words.into_iter().filter(|&w| is_leaf_word(w)).collect();
         w.sort_unstable();
         w
     };
-    let four = leaf_words(&mut p.nodes.iter().flat_map(|n| n.slots.to_array()));
-    let eight = leaf_words(&mut p.wide_nodes.iter().flat_map(|n| n.slots));
+    let four = leaf_words(p.nodes.iter().flat_map(|n| n.slots.to_array()).collect());
+    let eight = leaf_words(p.wide_nodes.iter().flat_map(|n| n.slots).collect());
     assert_eq!(four, eight, "8-wide leaves");
     assert!(!p.wide_nodes.is_empty());
     if !p.lights.is_empty() {

@@ -1,5 +1,5 @@
 //! BVH traversal over the flat node arrays of [`crate::scene::SceneView`]: the 4-wide tree both
-//! backends share ([`traverse`]) and, on the CPU, an 8-wide tree collapsed from it ([`wide`]).
+//! backends share ([`traverse`]) and, on the CPU, an 8-wide tree over the same leaves ([`wide`]).
 pub mod traverse;
 #[cfg(not(target_arch = "spirv"))]
 pub mod wide;

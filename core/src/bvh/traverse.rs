@@ -747,40 +747,13 @@ mod tests {
     #[test]
     fn empty_slots_are_never_entered() {
         let node = Bvh4Node::EMPTY;
-        let components = [
-            0.0,
-            -0.0,
-            1.0,
-            -1.0,
-            1e-30,
-            -1e-30,
-            1e-40,
-            -1e-40,
-            1e30,
-            -1e30,
-            f32::MAX,
-            -f32::MAX,
-        ];
-        let origins = [
-            Vec3::ZERO,
-            Vec3::splat(f32::MAX),
-            Vec3::splat(-f32::MAX),
-            Vec3::new(f32::MAX, -f32::MAX, 0.0),
-            Vec3::new(1e30, -3.0, 7.0),
-        ];
-        for origin in origins {
-            for &x in &components {
-                for &y in &components {
-                    for &z in &components {
-                        let rb = RayBox4::new(&Ray::new(origin, Vec3::new(x, y, z)));
-                        for t_max in [f32::INFINITY, f32::MAX, 1.0, 0.0] {
-                            let (_, mask) = rb.intersect(&node, t_max);
-                            assert_eq!(mask, 0, "{origin:?} {x} {y} {z} {t_max}");
-                        }
-                    }
-                }
+        crate::test_support::for_each_slab_stress_ray(|ray| {
+            let rb = RayBox4::new(&ray);
+            for t_max in [f32::INFINITY, f32::MAX, 1.0, 0.0] {
+                let (_, mask) = rb.intersect(&node, t_max);
+                assert_eq!(mask, 0, "{ray:?} {t_max}");
             }
-        }
+        });
     }
 
     /// A deep chain of nodes, each with four hit children (three leaves pushed per level), exercises the

@@ -63,26 +63,7 @@ impl Bvh8Node {
         slots: [SLOT_EMPTY; 8],
     };
 
-    /// Sets slot `i`'s box.
-    #[inline]
-    pub fn set_slot_bounds(&mut self, i: usize, min: [f32; 3], max: [f32; 3]) {
-        self.min_x[i] = min[0];
-        self.min_y[i] = min[1];
-        self.min_z[i] = min[2];
-        self.max_x[i] = max[0];
-        self.max_y[i] = max[1];
-        self.max_z[i] = max[2];
-    }
-
-    /// The box of slot `i` as `(min, max)`.
-    #[inline]
-    #[must_use]
-    pub fn slot_bounds(&self, i: usize) -> ([f32; 3], [f32; 3]) {
-        (
-            [self.min_x[i], self.min_y[i], self.min_z[i]],
-            [self.max_x[i], self.max_y[i], self.max_z[i]],
-        )
-    }
+    crate::scene::layout::slot_box_methods!();
 }
 
 impl Default for Bvh8Node {
@@ -295,44 +276,18 @@ mod tests {
     use super::*;
     use glam::Vec3;
 
-    /// Direction components that stress the slab test: zeros of both signs, denormals, huge values.
-    const COMPONENTS: [f32; 12] = [
-        0.0,
-        -0.0,
-        1.0,
-        -1.0,
-        1e-30,
-        -1e-30,
-        1e-40,
-        -1e-40,
-        1e30,
-        -1e30,
-        f32::MAX,
-        -f32::MAX,
-    ];
-
     /// Empty slots (inverted boxes) are never entered, whatever the ray, and no distance is NaN.
     #[test]
     fn empty_slots_are_never_entered() {
         let node = Bvh8Node::EMPTY;
-        for origin in [
-            Vec3::ZERO,
-            Vec3::splat(f32::MAX),
-            Vec3::new(1e30, -3.0, 7.0),
-        ] {
-            for &x in &COMPONENTS {
-                for &y in &COMPONENTS {
-                    for &z in &COMPONENTS {
-                        let rb = RayBox8::new(&Ray::new(origin, Vec3::new(x, y, z)));
-                        for t_max in [f32::INFINITY, f32::MAX, 1.0, 0.0] {
-                            let (t, mask) = rb.intersect(&node, t_max);
-                            assert_eq!(mask, 0, "{origin:?} {x} {y} {z} {t_max}");
-                            assert!(t.iter().all(|t| !t.is_nan()));
-                        }
-                    }
-                }
+        crate::test_support::for_each_slab_stress_ray(|ray| {
+            let rb = RayBox8::new(&ray);
+            for t_max in [f32::INFINITY, f32::MAX, 1.0, 0.0] {
+                let (t, mask) = rb.intersect(&node, t_max);
+                assert_eq!(mask, 0, "{ray:?} {t_max}");
+                assert!(t.iter().all(|t| !t.is_nan()));
             }
-        }
+        });
     }
 
     /// Each of the eight slots is tested on its own lane: a unit cube moved to `x = 2 i` in slot `i`

@@ -83,12 +83,47 @@ pub const fn leaf_first(slot: u32) -> u32 {
     slot & LEAF_FIRST_MASK
 }
 
+/// Whether the slot word `word` names a leaf (not an interior node, not an empty slot); for either tree.
+#[inline(always)]
+#[must_use]
+pub const fn is_leaf_word(word: u32) -> bool {
+    word & SLOT_LEAF != 0 && word != SLOT_EMPTY
+}
+
 /// The triangle count of a leaf slot word.
 #[inline(always)]
 #[must_use]
 pub const fn leaf_count(slot: u32) -> u32 {
     ((slot >> LEAF_COUNT_SHIFT) & (MAX_LEAF_TRIANGLES - 1)) + 1
 }
+
+/// `slot_bounds` and `set_slot_bounds` for a node type whose bounds are the per-lane indexable fields
+/// `min_x` ... `max_z` ([`Bvh4Node`]'s `Vec4`s, the CPU's `Bvh8Node`'s `[f32; 8]`s).
+macro_rules! slot_box_methods {
+    () => {
+        /// The box of slot `i` as `(min, max)`.
+        #[inline]
+        #[must_use]
+        pub fn slot_bounds(&self, i: usize) -> ([f32; 3], [f32; 3]) {
+            (
+                [self.min_x[i], self.min_y[i], self.min_z[i]],
+                [self.max_x[i], self.max_y[i], self.max_z[i]],
+            )
+        }
+
+        /// Sets slot `i`'s box.
+        #[inline]
+        pub fn set_slot_bounds(&mut self, i: usize, min: [f32; 3], max: [f32; 3]) {
+            self.min_x[i] = min[0];
+            self.min_y[i] = min[1];
+            self.min_z[i] = min[2];
+            self.max_x[i] = max[0];
+            self.max_y[i] = max[1];
+            self.max_z[i] = max[2];
+        }
+    };
+}
+pub(crate) use slot_box_methods;
 
 /// A node of the 4-wide BVH that both backends traverse (112 bytes), node 0 the root.
 ///
@@ -167,7 +202,7 @@ impl Bvh4Node {
     #[inline]
     #[must_use]
     pub fn is_leaf_slot(&self, i: usize) -> bool {
-        self.slot(i) & SLOT_LEAF != 0 && !self.is_empty_slot(i)
+        is_leaf_word(self.slot(i))
     }
 
     /// Whether slot `i` is an interior node.
@@ -177,26 +212,7 @@ impl Bvh4Node {
         self.slot(i) & SLOT_LEAF == 0
     }
 
-    /// The box of slot `i` as `(min, max)`.
-    #[inline]
-    #[must_use]
-    pub fn slot_bounds(&self, i: usize) -> ([f32; 3], [f32; 3]) {
-        (
-            [self.min_x[i], self.min_y[i], self.min_z[i]],
-            [self.max_x[i], self.max_y[i], self.max_z[i]],
-        )
-    }
-
-    /// Sets slot `i`'s box.
-    #[inline]
-    pub fn set_slot_bounds(&mut self, i: usize, min: [f32; 3], max: [f32; 3]) {
-        self.min_x[i] = min[0];
-        self.min_y[i] = min[1];
-        self.min_z[i] = min[2];
-        self.max_x[i] = max[0];
-        self.max_y[i] = max[1];
-        self.max_z[i] = max[2];
-    }
+    slot_box_methods!();
 }
 
 impl Default for Bvh4Node {

@@ -2,8 +2,8 @@
 //! them in ([`TriangleBlock`]).
 use fovea_core::bvh::wide::Bvh8Node;
 use fovea_core::scene::{
-    block_and_lane, leaf_count, leaf_first, leaf_slot, triangle_lane, Bvh4Node, TriangleBlock,
-    TrianglePositions, BLOCK_LANE_CUTOUT, SLOT_EMPTY, SLOT_LEAF,
+    block_and_lane, is_leaf_word, leaf_count, leaf_first, leaf_slot, triangle_lane, Bvh4Node,
+    TriangleBlock, TrianglePositions, BLOCK_LANE_CUTOUT,
 };
 
 /// Triangles per block.
@@ -74,11 +74,9 @@ pub fn pack_leaf_blocks(
         }
         i += count;
     }
-    // A leaf's first triangle sits in lane 0 of its first block.
     for node in nodes.iter_mut() {
-        for (slot, first, count) in leaf_slots(node) {
-            let (first_block, _) = block_and_lane(triangle_lanes[first]);
-            node.slots[slot] = leaf_slot(first_block, count as u32);
+        for (slot, _, _) in leaf_slots(node) {
+            node.slots[slot] = leaf_word_naming_blocks(node.slot(slot), &triangle_lanes);
         }
     }
     LeafBlocks {
@@ -92,11 +90,16 @@ pub fn pack_leaf_blocks(
 /// 4-wide tree: a leaf's first triangle sits in lane 0 of its first block.
 pub fn name_wide_leaf_blocks(wide_nodes: &mut [Bvh8Node], triangle_lanes: &[u32]) {
     for node in wide_nodes.iter_mut() {
-        for word in node.slots.iter_mut() {
-            if *word != SLOT_EMPTY && *word & SLOT_LEAF != 0 {
-                let (first_block, _) = block_and_lane(triangle_lanes[leaf_first(*word) as usize]);
-                *word = leaf_slot(first_block, leaf_count(*word));
-            }
+        for word in node.slots.iter_mut().filter(|w| is_leaf_word(**w)) {
+            *word = leaf_word_naming_blocks(*word, triangle_lanes);
         }
     }
+}
+
+/// The packed form of the leaf slot word `word` of a built tree (which names the leaf's first triangle):
+/// the same count, from the leaf's first block. A leaf's first triangle sits in lane 0 of its first
+/// block.
+fn leaf_word_naming_blocks(word: u32, triangle_lanes: &[u32]) -> u32 {
+    let (first_block, _) = block_and_lane(triangle_lanes[leaf_first(word) as usize]);
+    leaf_slot(first_block, leaf_count(word))
 }

@@ -92,30 +92,24 @@ impl<'a> Arena<'a> {
     }
 }
 
-/// A wide node layout the collapse writes: `ARITY` slots, each a box and a slot word.
+/// A wide node layout the collapse writes: slots each holding a box and a slot word.
 pub(super) trait WideNode: Copy {
-    const ARITY: usize;
     const EMPTY: Self;
     fn set_slot(&mut self, i: usize, min: [f32; 3], max: [f32; 3], word: u32);
 }
 
-impl WideNode for Bvh4Node {
-    const ARITY: usize = 4;
-    const EMPTY: Self = Bvh4Node::EMPTY;
-    fn set_slot(&mut self, i: usize, min: [f32; 3], max: [f32; 3], word: u32) {
-        self.set_slot_bounds(i, min, max);
-        self.slots[i] = word;
-    }
+macro_rules! impl_wide_node {
+    ($($node:ty),*) => {$(
+        impl WideNode for $node {
+            const EMPTY: Self = <$node>::EMPTY;
+            fn set_slot(&mut self, i: usize, min: [f32; 3], max: [f32; 3], word: u32) {
+                self.set_slot_bounds(i, min, max);
+                self.slots[i] = word;
+            }
+        }
+    )*};
 }
-
-impl WideNode for Bvh8Node {
-    const ARITY: usize = 8;
-    const EMPTY: Self = Bvh8Node::EMPTY;
-    fn set_slot(&mut self, i: usize, min: [f32; 3], max: [f32; 3], word: u32) {
-        self.set_slot_bounds(i, min, max);
-        self.slots[i] = word;
-    }
-}
+impl_wide_node!(Bvh4Node, Bvh8Node);
 
 /// Up to `N` binary slots that become one `N`-wide node's children, in leaf order.
 #[derive(Clone, Copy)]
@@ -220,12 +214,12 @@ pub(super) fn collapse(
     (nodes, wide_nodes)
 }
 
-/// The `N`-wide tree (`T::ARITY == N`) over `arena`, its leaf count and its deepest node's depth.
+/// The `N`-wide tree of `T` nodes (`T` must have `N` slots) over `arena`, its leaf count and its
+/// deepest node's depth.
 fn collapse_to<T: WideNode, const N: usize>(
     arena: &Arena,
     leaf_count: usize,
 ) -> (Vec<T>, usize, u32) {
-    debug_assert_eq!(T::ARITY, N);
     // An N-wide tree over `n` leaves has at most `n - 1` nodes, typically about `n / (N - 1.5)`.
     let mut nodes = Vec::with_capacity(leaf_count / (N / 2) + 1);
     nodes.push(T::EMPTY);

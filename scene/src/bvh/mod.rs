@@ -83,7 +83,7 @@ pub struct BvhStats {
     pub binary_max_depth: u32,
     /// Bytes of the node arrays (4-wide and 8-wide).
     pub memory_bytes: usize,
-    /// Nodes of the CPU's 8-wide tree ([`wide`]), once packed (0 before).
+    /// Nodes of the CPU's 8-wide tree ([`Bvh::wide_nodes`]); 0 when it was not built.
     pub wide_node_count: usize,
     /// SAH cost of the 4-wide tree (see [`sah_cost`]) with the build's traversal and intersection costs:
     /// the expected cost of a random ray through the root, for comparing builder settings.
@@ -347,7 +347,7 @@ mod tests {
     struct Packed {
         bvh: Bvh,
         nodes: Vec<Bvh4Node>,
-        /// The CPU's 8-wide tree collapsed from `nodes`.
+        /// The CPU's 8-wide tree over the same leaves as `nodes`.
         wide_nodes: Vec<Bvh8Node>,
         /// Positions in leaf order (what the blocks hold).
         triangles: Vec<TrianglePositions>,
@@ -414,7 +414,6 @@ mod tests {
     /// traversal's stack allows; every node reached once; and fewer nodes.
     fn validate_wide(nodes: &[Bvh4Node], wide_nodes: &[Bvh8Node]) {
         use fovea_core::bvh::wide::MAX_WIDE_DEPTH;
-        use fovea_core::scene::SLOT_LEAF;
         let mut leaves4: Vec<u32> = nodes
             .iter()
             .flat_map(|n| (0..4).filter(|&s| n.is_leaf_slot(s)).map(|s| n.slot(s)))
@@ -437,7 +436,7 @@ mod tests {
                 if word == SLOT_EMPTY {
                     let (lo, hi) = node.slot_bounds(slot);
                     assert!((0..3).all(|k| lo[k] > hi[k]), "empty slot with a box");
-                } else if word & SLOT_LEAF != 0 {
+                } else if fovea_core::scene::is_leaf_word(word) {
                     leaves8.push(word);
                 } else {
                     let child = &wide_nodes[word as usize];
