@@ -27,7 +27,7 @@ use crate::material::alpha::is_cut_out;
 use crate::math::lane_mask::{eq_mask, gt_mask, lane_u32, le_mask};
 use crate::scene::features::FEATURE_ALPHA_CUTOUT;
 use crate::scene::{
-    leaf_count, leaf_first, Bvh4Node, Features, SceneSlices, SceneSource, SceneView,
+    leaf_count, leaf_first, Bvh4Node, Features, SceneSlices, SceneSource, SceneView, TriangleBlock,
     BLOCK_LANE_CUTOUT, INVALID_INDEX, SLOT_LEAF,
 };
 
@@ -217,13 +217,14 @@ fn test_block_lane<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     watertight: &WatertightRay,
+    block: &TriangleBlock,
     test: &BlockTest,
     k: usize,
     lane: u32,
     closest: &mut f32,
     best: &mut Hit,
 ) -> bool {
-    let h = watertight.block_lane_hit(test, k, *closest);
+    let h = watertight.block_lane_hit(block, test, k, *closest);
     if !h.hit {
         return false;
     }
@@ -343,7 +344,7 @@ pub(crate) fn test_leaf<F: Features, S: SceneSource>(
     let mut left = leaf_count(item);
     while left > 0 {
         let block = source.block(scene, b);
-        let mut test = watertight.test_block(&block);
+        let mut test = watertight.test_block(&block, *closest);
         if left < 4 {
             test.candidates &= (1 << left) - 1;
         }
@@ -357,7 +358,9 @@ pub(crate) fn test_leaf<F: Features, S: SceneSource>(
                 let k = lowest_slot(pending);
                 pending &= pending - 1;
                 let word = lane_u32(lanes, k);
-                if test_block_lane(scene, source, watertight, &test, k, word, closest, best) && any
+                if test_block_lane(
+                    scene, source, watertight, &block, &test, k, word, closest, best,
+                ) && any
                 {
                     return true;
                 }

@@ -16,7 +16,7 @@
 //!
 //! Only for targets other than SPIR-V: it uses the `wide` crate's `f32x8`, and the GPU has its own
 //! layout.
-use ::wide::{f32x8, CmpLe};
+use ::wide::{f32x8, i32x8, CmpLe};
 use arrayvec::ArrayVec;
 use bytemuck::{Pod, Zeroable};
 
@@ -64,6 +64,14 @@ impl Bvh8Node {
     };
 
     crate::scene::layout::slot_box_methods!();
+
+    /// The six bound arrays as rows `min_x, max_x, min_y, max_y, min_z, max_z` (row 6 is the slot
+    /// words), so that traversal can index them by axis and ray direction.
+    #[inline(always)]
+    #[must_use]
+    pub fn bound_rows(&self) -> &[[f32; 8]; 7] {
+        bytemuck::cast_ref(self)
+    }
 }
 
 impl Default for Bvh8Node {
@@ -77,7 +85,9 @@ struct RayBox8 {
     origin: [f32x8; 3],
     inv_near: [f32x8; 3],
     inv_far: [f32x8; 3],
-    negative: [bool; 3],
+    /// Per axis, which bound array of a node is the near plane: 1 (`max`) where the ray runs
+    /// towards `-axis`, else 0 (`min`); see [`Bvh8Node::bound_rows`].
+    near_row: [usize; 3],
 }
 
 impl RayBox8 {
@@ -97,29 +107,35 @@ impl RayBox8 {
                 f32x8::splat(s.inv_far.y),
                 f32x8::splat(s.inv_far.z),
             ],
-            negative: s.negative,
+            near_row: s.negative.map(usize::from),
         }
     }
 
     /// The entry distances into `node`'s eight boxes within `[0, t_max]` and the mask of the boxes
     /// entered (bit `i` for slot `i`): the 4-wide test's arithmetic, eight lanes at a time.
+    ///
+    /// Two details keep the per-node dependency chain short (as in Embree's BVH8 traversal): each
+    /// axis's near and far bounds are loaded by a per-ray row index instead of picked by a branch,
+    /// and the entry distance is the integer maximum of the float bits, which equals the float
+    /// maximum once it includes 0 (non-negative floats order as their bits do; a negative one, as a
+    /// negative integer, loses to 0).
     #[inline(always)]
     fn intersect(&self, node: &Bvh8Node, t_max: f32) -> ([f32; 8], u32) {
-        let axis = |min: &[f32; 8], max: &[f32; 8], k: usize| -> (f32x8, f32x8) {
-            let (near, far) = if self.negative[k] {
-                (max, min)
-            } else {
-                (min, max)
-            };
+        let rows = node.bound_rows();
+        let axis = |k: usize| -> (f32x8, f32x8) {
+            let near = 2 * k + (self.near_row[k] & 1);
+            let far = 2 * k + 1 - (self.near_row[k] & 1);
             (
-                (f32x8::new(*near) - self.origin[k]) * self.inv_near[k],
-                (f32x8::new(*far) - self.origin[k]) * self.inv_far[k],
+                (f32x8::new(rows[near]) - self.origin[k]) * self.inv_near[k],
+                (f32x8::new(rows[far]) - self.origin[k]) * self.inv_far[k],
             )
         };
-        let (tn_x, tf_x) = axis(&node.min_x, &node.max_x, 0);
-        let (tn_y, tf_y) = axis(&node.min_y, &node.max_y, 1);
-        let (tn_z, tf_z) = axis(&node.min_z, &node.max_z, 2);
-        let near = tn_x.fast_max(tn_y).fast_max(tn_z.fast_max(f32x8::ZERO));
+        let (tn_x, tf_x) = axis(0);
+        let (tn_y, tf_y) = axis(1);
+        let (tn_z, tf_z) = axis(2);
+        let bits = |v: f32x8| -> i32x8 { bytemuck::cast(v) };
+        let near: f32x8 =
+            bytemuck::cast(bits(tn_x).max(bits(tn_y)).max(bits(tn_z).max(i32x8::ZERO)));
         let far = tf_x
             .fast_min(tf_y)
             .fast_min(tf_z.fast_min(f32x8::splat(t_max.min(f32::MAX))));
@@ -311,6 +327,70 @@ mod tests {
             let (_, mask) =
                 RayBox8::new(&Ray::new(origin, -Vec3::Z)).intersect(&node, f32::INFINITY);
             assert_eq!(mask, 0, "box behind the ray");
+        }
+    }
+
+    /// The vector test (integer maximum, row-indexed bounds) decides exactly as the scalar slab test
+    /// with float minima and maxima does, with the same entry distances, for boxes that touch or
+    /// contain the origin (bounds at the origin's coordinates give zero distances of both signs).
+    #[test]
+    fn matches_the_scalar_slab_test() {
+        let mut rng = crate::test_support::SplitMix64(3);
+        let mut nodes = [Bvh8Node::EMPTY; 24];
+        for (n, node) in nodes.iter_mut().enumerate() {
+            for i in 0..8 {
+                let a = rng.in_cube(2.0);
+                let b = rng.in_cube(2.0);
+                let (mut lo, mut hi) = (a.min(b), a.max(b));
+                // Some bounds exactly at the origins used below (0 and the random ones are near 0).
+                if (n + i) % 3 == 0 {
+                    lo.x = 0.0;
+                }
+                if (n + i) % 4 == 0 {
+                    hi.y = 0.0;
+                    lo.y = lo.y.min(0.0);
+                }
+                node.set_slot_bounds(i, lo.to_array(), hi.to_array());
+            }
+        }
+        let check = |ray: Ray| {
+            let s = SlabInverses::new(&ray);
+            let rb = RayBox8::new(&ray);
+            let (o, dims) = (ray.origin.to_array(), [0usize, 1, 2]);
+            let inv_near = s.inv_near.to_array();
+            let inv_far = s.inv_far.to_array();
+            for node in &nodes {
+                for t_max in [f32::INFINITY, 1.0, 0.0] {
+                    let (t, mask) = rb.intersect(node, t_max);
+                    for (i, &entry) in t.iter().enumerate() {
+                        let (lo, hi) = node.slot_bounds(i);
+                        let (mut near, mut far) = (0.0f32, t_max.min(f32::MAX));
+                        for k in dims {
+                            let (n, f) = if s.negative[k] {
+                                (hi[k], lo[k])
+                            } else {
+                                (lo[k], hi[k])
+                            };
+                            near = near.max((n - o[k]) * inv_near[k]);
+                            far = far.min((f - o[k]) * inv_far[k]);
+                        }
+                        let hit = near <= far;
+                        assert_eq!(mask & (1 << i) != 0, hit, "{ray:?} slot {i} t_max {t_max}");
+                        if hit {
+                            assert_eq!(entry, near, "{ray:?} slot {i}");
+                        }
+                    }
+                }
+            }
+        };
+        crate::test_support::for_each_slab_stress_ray(&check);
+        for _ in 0..2000 {
+            let origin = if rng.uniform() < 0.3 {
+                Vec3::ZERO
+            } else {
+                rng.in_cube(2.5)
+            };
+            check(Ray::new(origin, rng.in_cube(1.0)));
         }
     }
 

@@ -18,7 +18,7 @@
 use glam::{Vec3, Vec4};
 
 use super::ray::Ray;
-use crate::math::lane_mask::{eq_mask, gt_mask, lane};
+use crate::math::lane_mask::{eq_mask, gt_mask, lane, negate_where_negative};
 use crate::scene::{TriangleBlock, TrianglePositions};
 
 /// The result of one ray-triangle test: `hit` is true if the ray meets the triangle at `0 < t < t_max`;
@@ -45,17 +45,24 @@ impl TriangleHit {
     }
 }
 
-/// What [`WatertightRay::test_block`] found for the four lanes of a [`TriangleBlock`].
+/// What [`WatertightRay::test_block`] found for the four lanes of a [`TriangleBlock`]: which lanes may
+/// be hit, and for each the numbers that [`WatertightRay::block_lane_hit`] finishes it from, computed
+/// four lanes at a time.
 #[derive(Clone, Copy, Debug)]
 pub struct BlockTest {
-    /// Bit `k` set: lane `k` may be hit (finish it with [`WatertightRay::block_lane_hit`]).
+    /// Bit `k` set: lane `k` may be hit in `(0, t_max)` for the `t_max` the block was tested with
+    /// (finish it with [`WatertightRay::block_lane_hit`]).
     pub candidates: u32,
-    /// The sheared vertices `ax, ay, bx, by, cx, cy` of every lane.
-    sheared: [Vec4; 6],
-    /// Their edge functions `u, v, w` (before any exact recomputation).
-    edges: [Vec4; 3],
-    /// The permuted vertex depths `az, bz, cz` (before scaling by `Sz`) of every lane.
-    depth: [Vec4; 3],
+    /// Bit `k` set: an edge function of lane `k` rounded to zero, so its sign test needs the exact
+    /// recomputation, which [`WatertightRay::block_lane_hit`] does for that lane alone.
+    exact: u32,
+    /// Per lane (outside `exact`): the scaled distance and determinant with the determinant's sign
+    /// taken out, the distance and the barycentrics of `v1` and `v2`.
+    t_scaled: Vec4,
+    det_abs: Vec4,
+    t: Vec4,
+    b1: Vec4,
+    b2: Vec4,
 }
 
 /// Per-ray precomputation of the watertight test (Woop et al. 2013, Sec. 3.1): the axis permutation
@@ -187,14 +194,14 @@ impl WatertightRay {
         self.intersect_sheared([ax, ay, bx, by, cx, cy], [u, v, w], [a.z, b.z, c.z], t_max)
     }
 
-    /// The four triangles of `block` at once, as far as the edge test: which lanes may hit (the same
-    /// lanes [`Self::intersect`] would not reject at its sign or determinant test; lanes whose edge
-    /// functions rounded to zero are included, since their exact test is scalar), and the sheared
-    /// vertices that [`Self::block_lane_hit`] finishes each candidate lane from. Every lane's numbers are
+    /// The four triangles of `block` at once: which lanes may be hit in `(0, t_max)` (the lanes
+    /// [`Self::intersect`] would not reject; lanes whose edge functions rounded to zero are included,
+    /// since their exact test is scalar) and, for every lane, the distance and barycentrics that
+    /// [`Self::block_lane_hit`] then checks against the closest hit so far. Every lane's numbers are
     /// computed by the same operations as [`Self::intersect`]'s, so a lane's result is bit-identical.
-    #[inline]
+    #[inline(always)]
     #[must_use]
-    pub fn test_block(&self, block: &TriangleBlock) -> BlockTest {
+    pub fn test_block(&self, block: &TriangleBlock, t_max: f32) -> BlockTest {
         // A vertex's components (four lanes each) relative to the origin, in the permuted frame, as
         // `relative` computes one vertex.
         let (o, (kx, ky, kz)) = (self.origin, (self.kx, self.ky, self.kz));
@@ -228,37 +235,64 @@ impl WatertightRay {
         let v = ax * cy - ay * cx;
         let w = bx * ay - by * ax;
         let zero = Vec4::ZERO;
-        let rounded_to_zero = eq_mask(u, zero) | eq_mask(v, zero) | eq_mask(w, zero);
+        let exact = (eq_mask(u, zero) | eq_mask(v, zero) | eq_mask(w, zero)) & 0xF;
         let negative = gt_mask(zero, u) | gt_mask(zero, v) | gt_mask(zero, w);
         let positive = gt_mask(u, zero) | gt_mask(v, zero) | gt_mask(w, zero);
-        let degenerate = eq_mask(u + v + w, zero);
+        // `intersect_sheared`'s arithmetic, four lanes at a time (meaningless for `exact` lanes).
+        let det = u + v + w;
+        let sz = Vec4::splat(self.sz);
+        let t_scaled = u * (sz * a[2]) + v * (sz * b[2]) + w * (sz * c[2]);
+        let t_scaled = negate_where_negative(t_scaled, det);
+        let det_abs = negate_where_negative(det, det);
+        let inv_det = Vec4::ONE / det;
+        let t = t_scaled / det_abs;
+        // Lanes that pass every test that does not involve `t_max`, and whose distance is below it;
+        // `block_lane_hit` repeats the tests that do, against the closest hit by then.
+        let inside = !(negative & positive) & !eq_mask(det, zero);
+        let in_range = gt_mask(t_scaled, zero) & gt_mask(Vec4::splat(t_max), t);
         BlockTest {
-            candidates: (rounded_to_zero | !((negative & positive) | degenerate)) & 0xF,
-            sheared: [ax, ay, bx, by, cx, cy],
-            edges: [u, v, w],
-            depth: [a[2], b[2], c[2]],
+            candidates: exact | (inside & in_range & !exact & 0xF),
+            exact,
+            t_scaled,
+            det_abs,
+            t,
+            b1: v * inv_det,
+            b2: w * inv_det,
         }
     }
 
-    /// Lane `k` of a [`Self::test_block`] result tested in `(0, t_max)`: the hit
-    /// [`Self::intersect`] gives that triangle.
-    #[inline]
+    /// Lane `k` of a [`Self::test_block`] result of `block` tested in `(0, t_max)`: the hit
+    /// [`Self::intersect`] gives that triangle. `t_max` may be below the block test's.
+    #[inline(always)]
     #[must_use]
-    pub fn block_lane_hit(&self, test: &BlockTest, k: usize, t_max: f32) -> TriangleHit {
-        let (s, e, d) = (&test.sheared, &test.edges, &test.depth);
-        self.intersect_sheared(
-            [
-                lane(s[0], k),
-                lane(s[1], k),
-                lane(s[2], k),
-                lane(s[3], k),
-                lane(s[4], k),
-                lane(s[5], k),
-            ],
-            [lane(e[0], k), lane(e[1], k), lane(e[2], k)],
-            [lane(d[0], k), lane(d[1], k), lane(d[2], k)],
-            t_max,
-        )
+    pub fn block_lane_hit(
+        &self,
+        block: &TriangleBlock,
+        test: &BlockTest,
+        k: usize,
+        t_max: f32,
+    ) -> TriangleHit {
+        if test.exact & (1 << k) != 0 {
+            // Rare: an edge function rounded to zero; the whole single-triangle test, for its exact
+            // recomputation.
+            return self.intersect(&block.lane_positions(k), t_max);
+        }
+        let (t_scaled, det_abs, t) = (
+            lane(test.t_scaled, k),
+            lane(test.det_abs, k),
+            lane(test.t, k),
+        );
+        // `intersect_sheared`'s range tests (`t_scaled > 0` is already in the candidates).
+        if t_scaled < t_max * det_abs && t > 0.0 && t < t_max {
+            TriangleHit {
+                t,
+                b1: lane(test.b1, k),
+                b2: lane(test.b2, k),
+                hit: true,
+            }
+        } else {
+            TriangleHit::miss()
+        }
     }
 
     /// [`Self::intersect`] from the sheared vertices `[ax, ay, bx, by, cx, cy]`, their edge functions
@@ -470,8 +504,16 @@ mod tests {
             }
             for ray in &rays {
                 let w = WatertightRay::new(ray);
-                let test = w.test_block(&block);
-                for t_max in [f32::INFINITY, 1.5, 0.7] {
+                // The block tested against a farther closest hit than its lanes are (as after an
+                // earlier lane's hit) and against the same.
+                for (block_t_max, t_max) in [
+                    (f32::INFINITY, f32::INFINITY),
+                    (f32::INFINITY, 1.5),
+                    (1.5, 1.5),
+                    (1.5, 0.7),
+                    (0.7, 0.7),
+                ] {
+                    let test = w.test_block(&block, block_t_max);
                     for k in 0..4 {
                         let lane = if k < chunk.len() {
                             chunk[k]
@@ -480,7 +522,7 @@ mod tests {
                         };
                         let single = w.intersect(&lane, t_max);
                         let by_block = if test.candidates & (1 << k) != 0 {
-                            w.block_lane_hit(&test, k, t_max)
+                            w.block_lane_hit(&block, &test, k, t_max)
                         } else {
                             TriangleHit::miss()
                         };

@@ -89,6 +89,26 @@ pub fn eq_mask(a: Vec4, b: Vec4) -> u32 {
     }
 }
 
+/// `-v` in the lanes where `sign_of` is negative, `v` in the others (exact: only signs change).
+#[inline(always)]
+#[must_use]
+pub fn negate_where_negative(v: Vec4, sign_of: Vec4) -> Vec4 {
+    #[cfg(not(target_arch = "spirv"))]
+    {
+        Vec4::select(sign_of.cmplt(Vec4::ZERO), -v, v)
+    }
+    #[cfg(target_arch = "spirv")]
+    {
+        let pick = |v: f32, s: f32| if s < 0.0 { -v } else { v };
+        Vec4::new(
+            pick(v.x, sign_of.x),
+            pick(v.y, sign_of.y),
+            pick(v.z, sign_of.z),
+            pick(v.w, sign_of.w),
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -112,6 +132,11 @@ mod tests {
                 assert_eq!(le_mask(a, b), lanes(&|p, q| p <= q, a, b));
                 assert_eq!(gt_mask(a, b), lanes(&|p, q| p > q, a, b));
                 assert_eq!(eq_mask(a, b), lanes(&|p, q| p == q, a, b));
+                let negated = negate_where_negative(a, b);
+                for i in 0..4 {
+                    let expected = if b[i] < 0.0 { -a[i] } else { a[i] };
+                    assert_eq!(negated[i].to_bits(), expected.to_bits());
+                }
             }
         }
     }
