@@ -80,16 +80,25 @@ pub struct WatertightRay {
     pub sz: f32,
 }
 
-/// `v[k]` for `k` in 0..3, with selects rather than dynamic indexing (cheap on both targets).
-#[inline]
+/// `v[k]` for `k` in 0..3. The CPU indexes a local copy (no branches: `k` varies from ray to ray, so
+/// branches on it are mispredicted), the GPU selects (a dynamically indexed local array is a loop over
+/// the lanes on lavapipe).
+#[inline(always)]
 #[must_use]
 fn component(v: Vec3, k: u32) -> f32 {
-    if k == 0 {
-        v.x
-    } else if k == 1 {
-        v.y
-    } else {
-        v.z
+    #[cfg(not(target_arch = "spirv"))]
+    {
+        [v.x, v.y, v.z, 0.0][(k & 3) as usize]
+    }
+    #[cfg(target_arch = "spirv")]
+    {
+        if k == 0 {
+            v.x
+        } else if k == 1 {
+            v.y
+        } else {
+            v.z
+        }
     }
 }
 
@@ -111,19 +120,18 @@ impl WatertightRay {
     pub fn new(ray: &Ray) -> Self {
         let d = ray.direction;
         let a = d.abs();
-        let kz: u32 = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let mut kx = if kz == 2 { 0 } else { kz + 1 };
-        let mut ky = if kx == 2 { 0 } else { kx + 1 };
+        // The dominant axis (x before y before z on ties) and the two others, from comparisons turned
+        // into integers rather than branches, which the ray-to-ray changes of axis would mispredict.
+        let x_dominant = u32::from(a.x >= a.y) & u32::from(a.x >= a.z);
+        let y_over_z = u32::from(a.y >= a.z);
+        let kz = (1 - x_dominant) * (2 - y_over_z);
+        // The cyclic successors: 0 -> 1 -> 2 -> 0.
+        let next = |k: u32| (k + 1) * u32::from(k != 2);
+        let (kx, ky) = (next(kz), next(next(kz)));
         let dz = component(d, kz);
-        if dz < 0.0 {
-            core::mem::swap(&mut kx, &mut ky);
-        }
+        // Swapped towards -z, to keep the winding.
+        let swap = (kx ^ ky) * u32::from(dz < 0.0);
+        let (kx, ky) = (kx ^ swap, ky ^ swap);
         let (sx, sy, sz) = if dz != 0.0 {
             (component(d, kx) / dz, component(d, ky) / dz, 1.0 / dz)
         } else {
@@ -206,13 +214,21 @@ impl WatertightRay {
         // `relative` computes one vertex.
         let (o, (kx, ky, kz)) = (self.origin, (self.kx, self.ky, self.kz));
         let relative = |x: Vec4, y: Vec4, z: Vec4| -> [Vec4; 3] {
+            // As `component`: indexed on the CPU, selected on the GPU.
             let pick = |k: u32| -> Vec4 {
-                if k == 0 {
-                    x
-                } else if k == 1 {
-                    y
-                } else {
-                    z
+                #[cfg(not(target_arch = "spirv"))]
+                {
+                    [x, y, z, z][(k & 3) as usize]
+                }
+                #[cfg(target_arch = "spirv")]
+                {
+                    if k == 0 {
+                        x
+                    } else if k == 1 {
+                        y
+                    } else {
+                        z
+                    }
                 }
             };
             [
@@ -538,6 +554,39 @@ mod tests {
                             );
                         }
                     }
+                }
+            }
+        }
+    }
+
+    /// The branch-free axis choice equals the plain one: dominant axis `kz` (x before y before z on
+    /// ties), `kx`, `ky` its cyclic successors, swapped for a negative `d[kz]`.
+    #[test]
+    fn axis_permutation_matches_the_definition() {
+        let values = [0.0f32, -0.0, 1.0, -1.0, 2.0, -2.0, 0.5, -0.5];
+        for &x in &values {
+            for &y in &values {
+                for &z in &values {
+                    let d = Vec3::new(x, y, z);
+                    let a = d.abs();
+                    let kz = if a.x >= a.y && a.x >= a.z {
+                        0
+                    } else if a.y >= a.z {
+                        1
+                    } else {
+                        2
+                    };
+                    let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+                    if d[kz as usize] < 0.0 {
+                        core::mem::swap(&mut kx, &mut ky);
+                    }
+                    let w = WatertightRay::new(&Ray::new(Vec3::new(1.0, 2.0, 3.0), d));
+                    assert_eq!((w.kx, w.ky, w.kz), (kx, ky, kz), "{d:?}");
+                    let o = [1.0, 2.0, 3.0];
+                    assert_eq!(
+                        w.origin,
+                        Vec3::new(o[kx as usize], o[ky as usize], o[kz as usize])
+                    );
                 }
             }
         }
