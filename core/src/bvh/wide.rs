@@ -11,8 +11,10 @@
 //! (Wald et al. 2008; Embree's BVH8, Wald et al. 2014).
 //!
 //! Hit children are visited near to far as in Embree: one hit child is entered without stack traffic,
-//! two are ordered by one comparison, and three or more are pushed and sorted by an insertion sort,
-//! farthest deepest. Any-hit queries push in slot order, unsorted.
+//! two to four are ordered by a branch-free sorting network on stack entries that compare as integers
+//! (distance, then slot word), five or more are pushed and sorted by an insertion sort, farthest
+//! deepest. Any-hit queries push in slot order, unsorted. Of equally near boxes the one with the lower
+//! slot word is visited first.
 //!
 //! Only for targets other than SPIR-V: it uses the `wide` crate's `f32x8`, and the GPU has its own
 //! layout.
@@ -143,16 +145,66 @@ impl RayBox8 {
     }
 }
 
-/// The traversal stack: slot words with their entry distances. Entries are written as they are
-/// pushed; the array is never zeroed as a whole.
+/// A traversal stack entry: a slot word below its entry distance's bits, so that entries compare as
+/// integers by distance (entry distances are never negative, and non-negative floats order as their
+/// bits), ties by slot word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct Entry(u64);
+
+impl Entry {
+    #[inline(always)]
+    fn new(item: u32, t: f32) -> Self {
+        Self(u64::from(t.to_bits()) << 32 | u64::from(item))
+    }
+
+    #[inline(always)]
+    fn item(self) -> u32 {
+        self.0 as u32
+    }
+
+    /// Whether the entry's box may still hold a hit nearer than `closest` (`closest >= 0`).
+    #[inline(always)]
+    fn nearer_than(self, closest: f32) -> bool {
+        (self.0 >> 32) as u32 <= closest.to_bits()
+    }
+}
+
+/// A compare-exchange of a sorting network: the farther entry into `a`, the nearer into `b`, without
+/// a branch (which child is nearer is what a branch predictor cannot know).
+#[inline(always)]
+fn order(a: &mut Entry, b: &mut Entry) {
+    let (x, y) = (*a, *b);
+    *a = x.max(y);
+    *b = x.min(y);
+}
+
+/// Sorts three entries farthest first (a sorting network of three compare-exchanges).
+#[inline(always)]
+fn order3(a: &mut Entry, b: &mut Entry, c: &mut Entry) {
+    order(a, b);
+    order(b, c);
+    order(a, b);
+}
+
+/// Sorts four entries farthest first (a sorting network of five compare-exchanges).
+#[inline(always)]
+fn order4(a: &mut Entry, b: &mut Entry, c: &mut Entry, d: &mut Entry) {
+    order(a, b);
+    order(c, d);
+    order(a, c);
+    order(b, d);
+    order(b, c);
+}
+
+/// The traversal stack. Entries are written as they are pushed; the array is never zeroed as a whole.
 struct Stack {
-    entries: ArrayVec<(u32, f32), WIDE_STACK_SIZE>,
+    entries: ArrayVec<Entry, WIDE_STACK_SIZE>,
 }
 
 impl Stack {
     #[inline(always)]
-    fn push(&mut self, item: u32, t: f32) {
-        self.entries.push((item, t));
+    fn push(&mut self, entry: Entry) {
+        self.entries.push(entry);
     }
 
     /// Sorts the entries from `start` up by decreasing distance, so the nearest is on top (an
@@ -163,7 +215,7 @@ impl Stack {
         for i in 1..run.len() {
             let entry = run[i];
             let mut j = i;
-            while j > 0 && run[j - 1].1 < entry.1 {
+            while j > 0 && run[j - 1] < entry {
                 run[j] = run[j - 1];
                 j -= 1;
             }
@@ -174,9 +226,9 @@ impl Stack {
     /// Pops the next entry whose box may still hold a hit nearer than `closest`.
     #[inline(always)]
     fn pop_nearer(&mut self, closest: f32) -> Option<u32> {
-        while let Some((item, t)) = self.entries.pop() {
-            if t <= closest {
-                return Some(item);
+        while let Some(entry) = self.entries.pop() {
+            if entry.nearer_than(closest) {
+                return Some(entry.item());
             }
         }
         None
@@ -217,30 +269,58 @@ fn traverse_wide<F: Features, S: SceneSource>(
                 }
                 let second = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                let (a, b) = (
-                    (node.slots[first], t[first]),
-                    (node.slots[second], t[second]),
-                );
+                // Two to four hit children: ordered by a sorting network (unless `any`), the
+                // nearest entered, the others pushed farthest first.
+                let mut a = Entry::new(node.slots[first], t[first]);
+                let mut b = Entry::new(node.slots[second], t[second]);
                 if mask == 0 {
-                    // Two: continue with the nearer (the lower slot on a tie).
-                    let (near, far) = if any || a.1 <= b.1 { (a, b) } else { (b, a) };
-                    stack.push(far.0, far.1);
-                    item = near.0;
+                    if !any {
+                        order(&mut a, &mut b);
+                    }
+                    stack.push(a);
+                    item = b.item();
                     continue;
                 }
+                let third = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let mut c = Entry::new(node.slots[third], t[third]);
+                if mask == 0 {
+                    if !any {
+                        order3(&mut a, &mut b, &mut c);
+                    }
+                    stack.push(a);
+                    stack.push(b);
+                    item = c.item();
+                    continue;
+                }
+                let fourth = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let mut d = Entry::new(node.slots[fourth], t[fourth]);
+                if mask == 0 {
+                    if !any {
+                        order4(&mut a, &mut b, &mut c, &mut d);
+                    }
+                    stack.push(a);
+                    stack.push(b);
+                    stack.push(c);
+                    item = d.item();
+                    continue;
+                }
+                // Five or more: pushed, then sorted in place.
                 let start = stack.entries.len();
-                stack.push(a.0, a.1);
-                stack.push(b.0, b.1);
+                for entry in [a, b, c, d] {
+                    stack.push(entry);
+                }
                 while mask != 0 {
                     let i = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
-                    stack.push(node.slots[i], t[i]);
+                    stack.push(Entry::new(node.slots[i], t[i]));
                 }
                 if !any {
                     stack.sort_from(start);
                 }
                 // The nearest, just pushed: nearer than `closest`.
-                item = stack.entries.pop().map_or(item, |(next, _)| next);
+                item = stack.entries.pop().map_or(item, Entry::item);
                 continue;
             }
         } else if test_leaf(
@@ -394,16 +474,47 @@ mod tests {
         }
     }
 
+    /// Entries order by distance, then by slot word (leaf words, with their high bit, after nodes);
+    /// the sorting networks sort every arrangement of four entries, ties included, farthest first.
+    #[test]
+    fn entries_order_by_distance_and_networks_sort() {
+        assert!(Entry::new(7, 1.0) < Entry::new(3, 2.0));
+        assert!(Entry::new(3, 0.0) < Entry::new(7, 0.0));
+        assert!(Entry::new(5, 1.0) < Entry::new(SLOT_LEAF | 1, 1.0));
+        assert!(Entry::new(9, 1e-40) > Entry::new(9, 0.0));
+        assert!(Entry::new(1, 2.0).nearer_than(2.0) && !Entry::new(1, 2.0).nearer_than(1.5));
+        assert!(Entry::new(1, 3.0e38).nearer_than(f32::INFINITY));
+        let values = [
+            Entry::new(1, 0.5),
+            Entry::new(2, 0.5),
+            Entry::new(SLOT_LEAF | 3, 2.0),
+            Entry::new(4, 0.0),
+        ];
+        for p in 0..256usize {
+            let pick = |k: usize| values[(p >> (2 * k)) & 3];
+            let [mut a, mut b, mut c, mut d] = [pick(0), pick(1), pick(2), pick(3)];
+            let mut expected = [a, b, c, d];
+            expected.sort_unstable_by(|x, y| y.cmp(x));
+            order4(&mut a, &mut b, &mut c, &mut d);
+            assert_eq!([a, b, c, d], expected);
+            let [mut a, mut b, mut c] = [pick(0), pick(1), pick(2)];
+            let mut expected = [a, b, c];
+            expected.sort_unstable_by(|x, y| y.cmp(x));
+            order3(&mut a, &mut b, &mut c);
+            assert_eq!([a, b, c], expected);
+        }
+    }
+
     /// The stack sorts a pushed run nearest on top and skips entries beyond the closest hit.
     #[test]
     fn stack_sorts_runs_and_skips_farther_entries() {
         let mut stack = Stack {
             entries: ArrayVec::new(),
         };
-        stack.push(100, 0.5);
+        stack.push(Entry::new(100, 0.5));
         let start = stack.entries.len();
         for (item, t) in [(1, 3.0), (2, 1.0), (3, 4.0), (4, 2.0)] {
-            stack.push(item, t);
+            stack.push(Entry::new(item, t));
         }
         stack.sort_from(start);
         assert_eq!(stack.pop_nearer(f32::INFINITY), Some(2));
