@@ -54,9 +54,8 @@ def rays(count):
     return closest.astype(np.float32), occlusion.astype(np.float32)
 
 
-def path_rays(scene, mi, dr, count):
+def path_rays(scene, mi, count):
     """The rays of `count` three-bounce paths from the kit's camera (see the module documentation)."""
-    import scenes as S
     rng = np.random.default_rng(11)
     side = int(np.sqrt(count))
     count = side * side
@@ -120,7 +119,7 @@ def main():
     dr.eval()
     dr.sync_thread()
 
-    closest, occlusion = rays(count) if ray_set == "random" else path_rays(scene, mi, dr, count)
+    closest, occlusion = rays(count) if ray_set == "random" else path_rays(scene, mi, count)
     tmp = ray_file + ".tmp"
     np.concatenate([closest, occlusion]).astype("<f4").tofile(tmp)
     os.replace(tmp, ray_file)
