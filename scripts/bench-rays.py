@@ -12,8 +12,8 @@ SCENE is `small` or `big` (read from $PEER_WORK/scenes); an empty COUNT takes th
     [-0.99, 2.99]), uniform directions;
   - occlusion rays (kind 1): uniform origins in the room towards uniform points on the ceiling light,
     t_max just short of the light, as a path tracer's shadow rays;
-- `paths`: the rays of COUNT three-bounce paths (default 2**18) from the kit's camera, as a path tracer
-  of the benchmark traces them: per path the camera ray and three bounce rays (closest hit; each bounce
+- `paths`: the rays of COUNT three-bounce paths (default 2**18; rounded down to a square number, one
+  path per pixel of a square image) from the kit's camera, as a path tracer of the benchmark traces them: per path the camera ray and three bounce rays (closest hit; each bounce
   cosine-distributed about the geometric normal, leaving from the hit point moved 1e-4 along it) and,
   at each of the three vertices, a shadow ray to a uniform point on the light (occlusion). Mitsuba
   finds the hit points. Paths that escape or end stop early.

@@ -211,6 +211,15 @@ impl Stack {
         self.entries.push(entry);
     }
 
+    /// Pushes `sorted` (farthest first) but its last entry, the nearest, whose slot word it returns.
+    #[inline(always)]
+    fn push_all_but_nearest<const N: usize>(&mut self, sorted: [Entry; N]) -> u32 {
+        for &entry in &sorted[..N - 1] {
+            self.push(entry);
+        }
+        sorted[N - 1].item()
+    }
+
     /// Sorts the entries from `start` up by decreasing distance, so the nearest is on top (an
     /// insertion sort: at most eight entries).
     #[inline(always)]
@@ -283,8 +292,7 @@ fn traverse_wide<F: Features, S: SceneSource>(
                     if !any {
                         order(&mut a, &mut b);
                     }
-                    stack.push(a);
-                    item = b.item();
+                    item = stack.push_all_but_nearest([a, b]);
                     continue;
                 }
                 let mut c = take(&mut mask);
@@ -292,9 +300,7 @@ fn traverse_wide<F: Features, S: SceneSource>(
                     if !any {
                         order3(&mut a, &mut b, &mut c);
                     }
-                    stack.push(a);
-                    stack.push(b);
-                    item = c.item();
+                    item = stack.push_all_but_nearest([a, b, c]);
                     continue;
                 }
                 let mut d = take(&mut mask);
@@ -302,10 +308,7 @@ fn traverse_wide<F: Features, S: SceneSource>(
                     if !any {
                         order4(&mut a, &mut b, &mut c, &mut d);
                     }
-                    stack.push(a);
-                    stack.push(b);
-                    stack.push(c);
-                    item = d.item();
+                    item = stack.push_all_but_nearest([a, b, c, d]);
                     continue;
                 }
                 // Five or more: pushed, then sorted in place.
