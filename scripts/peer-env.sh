@@ -14,3 +14,6 @@ if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
 fi
 # The kit's camera (camera.json) and integrator (max_depth 4 = 3 bounces) as fovea options, uniform sampling.
 PEER_FOVEA_VIEW=(--uniform --eye 0,0,2.8 --target 0,0,-1 --fov 45 --depth 3)
+# The kit's materials: its purely diffuse MTL materials are Mitsuba `diffuse`, so Lambertian in fovea too
+# (separate from the view, so that scripts/bench-ab.sh can still run builds older than the option).
+PEER_FOVEA_MATERIALS=(--mtl-diffuse lambert)

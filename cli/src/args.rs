@@ -35,6 +35,24 @@ pub enum Backend {
     Vulkan,
 }
 
+/// How an OBJ scene's purely diffuse MTL materials (`Ks 0 0 0`, no PBR keys) reflect.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MtlDiffuse {
+    /// Burley's diffuse of the Disney BRDF, the paper's model.
+    Disney,
+    /// Lambertian, as Mitsuba's and pbrt's `diffuse` material (for comparisons with them).
+    Lambert,
+}
+
+impl From<MtlDiffuse> for fovea_scene::mesh::MtlDiffuse {
+    fn from(m: MtlDiffuse) -> Self {
+        match m {
+            MtlDiffuse::Disney => Self::Disney,
+            MtlDiffuse::Lambert => Self::Lambert,
+        }
+    }
+}
+
 /// How pixels that a block leaves empty are filled.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Fill {
@@ -105,6 +123,10 @@ pub struct RenderArgs {
     /// MTL file to use instead of the one the OBJ names (e.g. Lost Empire's torch variant).
     #[arg(long, value_name = "FILE.mtl")]
     pub mtl: Option<PathBuf>,
+    /// The diffuse lobe of purely diffuse MTL materials (`Ks 0 0 0` and no `Pm`, `Pr`, `Ps`, `Pc`,
+    /// `aniso`): `lambert` makes an OBJ scene the same scene to Mitsuba or pbrt, whose `diffuse` it is.
+    #[arg(long, value_enum, default_value = "disney")]
+    pub mtl_diffuse: MtlDiffuse,
     /// How block pixels are filled.
     #[arg(long, value_enum, default_value = "bilinear")]
     pub fill: Fill,
@@ -156,6 +178,9 @@ pub struct ReportArgs {
     /// Largest spp of the uniform sweep 1, 2, 4, ... (default 64; 8 with --quick).
     #[arg(long, value_name = "N")]
     pub sweep_max: Option<u32>,
+    /// The diffuse lobe of purely diffuse MTL materials (as for `render`).
+    #[arg(long, value_enum, default_value = "disney")]
+    pub mtl_diffuse: MtlDiffuse,
     /// Small and fast: 320x180, 1 run, a 256 spp reference, sweep to 8 (explicit options still win).
     #[arg(long)]
     pub quick: bool,

@@ -221,6 +221,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = prepare_scene(
         args.scene.as_deref(),
         args.mtl.as_deref(),
+        args.mtl_diffuse.into(),
         &plan.lighting.environment(args.scene.is_none()),
         &plan.lighting.point_lights,
         renderer.wants_wide_bvh(),

@@ -6,7 +6,7 @@ use fovea_core::camera::Camera;
 use fovea_core::scene::Light;
 use fovea_scene::bvh::BvhBuildOptions;
 use fovea_scene::environment::Environment;
-use fovea_scene::mesh::{LoadOptions, LoadedScene};
+use fovea_scene::mesh::{LoadOptions, LoadedScene, MtlDiffuse};
 use fovea_scene::pack::{pack_scene, PackedScene};
 use glam::Vec3;
 
@@ -41,12 +41,14 @@ pub struct PreparedScene {
     pub is_default: bool,
 }
 
-/// Loads `path` (or the default scene), adds `environment` and the `extra_lights` (point lights from the
-/// command line) and packs it, with the CPU's 8-wide tree if `wide_bvh` (see
+/// Loads `path` (or the default scene; OBJ materials from `mtl_override` if given, purely diffuse ones
+/// as `mtl_diffuse` says), adds `environment` and the `extra_lights` (point lights from the command line)
+/// and packs it, with the CPU's 8-wide tree if `wide_bvh` (see
 /// [`crate::backend::Renderer::wants_wide_bvh`]).
 pub fn prepare_scene(
     path: Option<&Path>,
     mtl_override: Option<&Path>,
+    mtl_diffuse: MtlDiffuse,
     environment: &Environment,
     extra_lights: &[Light],
     wide_bvh: bool,
@@ -57,6 +59,7 @@ pub fn prepare_scene(
         .unwrap_or_else(default_scene_path);
     let options = LoadOptions {
         mtl_override: mtl_override.map(Path::to_path_buf),
+        mtl_diffuse,
         ..Default::default()
     };
     let start = Instant::now();

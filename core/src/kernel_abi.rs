@@ -224,6 +224,7 @@ fn probe_disney_params(inputs: &[[f32; 4]], base: usize) -> crate::bsdf::disney:
         sheen_tint: c[1],
         clearcoat: c[2],
         clearcoat_gloss: c[3],
+        lambertian: false,
     }
 }
 

@@ -15,7 +15,7 @@ use fovea_core::scene::{
 use fovea_scene::bvh::blocks::leaf_slots;
 use fovea_scene::bvh::{BvhBuildOptions, MAX_NODE_DEPTH};
 use fovea_scene::environment::Environment;
-use fovea_scene::mesh::{load_scene_from, LoadOptions};
+use fovea_scene::mesh::{load_scene_from, LoadOptions, MtlDiffuse};
 use fovea_scene::pack::{pack_scene, PackedScene};
 use fovea_scene::source::FileSource;
 use glam::Vec3;
@@ -23,7 +23,8 @@ use glam::Vec3;
 /// Separates the scene file from the files it refers to.
 pub const SIDE_FILE_SEPARATOR: &[u8] = b"\n#%FOVEA-FILE%#\n";
 
-/// Limits small enough that no input can make the pipeline allocate more than a few hundred MiB.
+/// Limits small enough that no input can make the pipeline allocate more than a few hundred MiB; purely
+/// diffuse MTL materials Lambertian, the loader's non-default branch.
 pub fn fuzz_options() -> LoadOptions {
     LoadOptions {
         mtl_override: None,
@@ -31,6 +32,7 @@ pub fn fuzz_options() -> LoadOptions {
         max_texture_bytes: 32 << 20,
         max_vertices: 1 << 20,
         max_triangles: 1 << 20,
+        mtl_diffuse: MtlDiffuse::Lambert,
     }
 }
 

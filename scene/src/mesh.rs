@@ -42,6 +42,20 @@ pub struct LoadOptions {
     pub max_vertices: u64,
     /// Most triangles a scene may have (default 2^28; the BVH needs fewer than 2^31).
     pub max_triangles: u64,
+    /// OBJ only: the diffuse lobe of purely diffuse MTL materials (see [`MtlDiffuse`]).
+    pub mtl_diffuse: MtlDiffuse,
+}
+
+/// How an OBJ scene's purely diffuse MTL materials reflect: those with `Ks 0 0 0` given explicitly and
+/// none of the PBR keys `Pm`, `Pr`, `Ps`, `Pc`, `aniso`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MtlDiffuse {
+    /// Burley's diffuse of the Disney BRDF, the paper's model (retro-reflective at grazing angles).
+    #[default]
+    Disney,
+    /// Lambertian ([`fovea_core::scene::MATERIAL_LAMBERTIAN`]): what Mitsuba's and pbrt's `diffuse`
+    /// material is, so that such a scene is the same scene to them.
+    Lambert,
 }
 
 /// Default of [`LoadOptions::max_vertices`] and [`LoadOptions::max_triangles`].
@@ -56,6 +70,7 @@ impl Default for LoadOptions {
             max_texture_bytes: limits.max_bytes,
             max_vertices: DEFAULT_MAX_ELEMENTS,
             max_triangles: DEFAULT_MAX_ELEMENTS,
+            mtl_diffuse: MtlDiffuse::Disney,
         }
     }
 }

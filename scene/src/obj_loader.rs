@@ -29,7 +29,10 @@
 //!
 //! `specular` is 0.5 (an index of refraction of 1.5), except 0 when the material gives `Ks 0 0 0`
 //! explicitly and no `Pm` (no specular reflection at all: a pure diffuse material, as Mitsuba's `diffuse`
-//! for the same MTL); `specular_tint` is 0 for every material. Faces without a (known) material get a
+//! for the same MTL); `specular_tint` is 0 for every material. Such a material that has none of the
+//! PBR keys `Pm`, `Pr`, `Ps`, `Pc`, `aniso` either is *purely diffuse*: with [`LoadOptions::mtl_diffuse`]
+//! [`MtlDiffuse::Lambert`] it gets `MATERIAL_LAMBERTIAN`, a Lambertian diffuse lobe instead of Burley's,
+//! and is then the very BRDF of Mitsuba's `diffuse`. Faces without a (known) material get a
 //! default grey diffuse material named `default`. Texture paths are relative to the MTL file; MTL texture
 //! options (`-bm 1 file.png`) are skipped by taking the last token. Emission is single-sided (front face),
 //! as OBJ has no double-sided flag.
@@ -38,12 +41,12 @@ use std::collections::HashMap;
 use std::io::{Cursor, Read};
 use std::path::{Path, PathBuf};
 
-use fovea_core::scene::{Material, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
+use fovea_core::scene::{Material, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT, MATERIAL_LAMBERTIAN};
 use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::error::SceneError;
-use crate::mesh::{LoadOptions, LoadedScene};
+use crate::mesh::{LoadOptions, LoadedScene, MtlDiffuse};
 use crate::source::{FileSource, Filesystem};
 use crate::texture::{load_texture_from, Texture, TextureRole};
 
@@ -728,6 +731,12 @@ fn convert_materials(
         if let Some(v) = param(m, "aniso", &mut warnings, mtl) {
             out.anisotropic = v.clamp(0.0, 1.0);
         }
+        let pbr_keys = ["Pm", "Pr", "Ps", "Pc", "aniso"];
+        let purely_diffuse =
+            no_specular && !pbr_keys.iter().any(|k| m.unknown_param.contains_key(*k));
+        if purely_diffuse && options.mtl_diffuse == MtlDiffuse::Lambert {
+            out.flags |= MATERIAL_LAMBERTIAN;
+        }
         let dissolve = m.dissolve.unwrap_or(1.0);
         if alpha_texture != INVALID_INDEX {
             out.flags |= MATERIAL_ALPHA_CUTOUT;
@@ -944,6 +953,51 @@ mod tests {
         std::fs::write(&file, "v 0 0 0\n").unwrap();
         let e = load_scene(&file, &LoadOptions::default()).unwrap_err();
         assert!(matches!(e, SceneError::Empty { .. }), "{e}");
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// `--mtl-diffuse lambert` makes exactly the purely diffuse materials Lambertian: `Ks 0 0 0` given
+    /// and no PBR key; by default none is.
+    #[test]
+    fn purely_diffuse_materials_can_be_lambertian() {
+        let dir = temp_dir("lambert");
+        std::fs::write(
+            dir.join("m.mtl"),
+            "newmtl white\nKd 0.73 0.73 0.73\nKs 0 0 0\nNs 10\n\
+             newmtl no_ks\nKd 0.5 0.5 0.5\n\
+             newmtl shiny\nKd 0.5 0.5 0.5\nKs 0.1 0.1 0.1\n\
+             newmtl rough_metal\nKd 0.9 0.8 0.3\nKs 0 0 0\nPm 1\n\
+             newmtl sheen\nKd 0.5 0.5 0.5\nKs 0 0 0\nPs 1\n\
+             newmtl light\nKe 15 15 15\nKd 0 0 0\nKs 0 0 0\n",
+        )
+        .unwrap();
+        let mut obj = String::from("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n");
+        for name in ["white", "no_ks", "shiny", "rough_metal", "sheen", "light"] {
+            obj.push_str(&format!("usemtl {name}\nf 1 2 3\n"));
+        }
+        std::fs::write(dir.join("a.obj"), obj).unwrap();
+        let lambert = LoadOptions {
+            mtl_diffuse: MtlDiffuse::Lambert,
+            ..LoadOptions::default()
+        };
+        let with = load_scene(&dir.join("a.obj"), &lambert).unwrap();
+        let without = load_scene(&dir.join("a.obj"), &LoadOptions::default()).unwrap();
+        for (name, expected) in [
+            ("white", true),
+            ("no_ks", false),
+            ("shiny", false),
+            ("rough_metal", false),
+            ("sheen", false),
+            ("light", true),
+        ] {
+            let flag = |s: &LoadedScene| material(s, name).flags & MATERIAL_LAMBERTIAN != 0;
+            assert_eq!(flag(&with), expected, "{name}");
+            assert!(!flag(&without), "{name}");
+            // Nothing else about the material changes.
+            let mut m = *material(&with, name);
+            m.flags &= !MATERIAL_LAMBERTIAN;
+            assert_eq!(&m, material(&without, name), "{name}");
+        }
         std::fs::remove_dir_all(dir).ok();
     }
 

@@ -129,8 +129,17 @@ pub fn load_packed_with_camera(
     path: &Path,
     environment: &Environment,
 ) -> (PackedScene, Option<fovea_scene::mesh::CameraDesc>) {
-    let loaded = load_scene(path, &LoadOptions::default())
-        .unwrap_or_else(|e| panic!("loading {}: {e}", path.display()));
+    load_packed_with_camera_and(path, environment, &LoadOptions::default())
+}
+
+/// [`load_packed_with_camera`] with other load options.
+pub fn load_packed_with_camera_and(
+    path: &Path,
+    environment: &Environment,
+    options: &LoadOptions,
+) -> (PackedScene, Option<fovea_scene::mesh::CameraDesc>) {
+    let loaded =
+        load_scene(path, options).unwrap_or_else(|e| panic!("loading {}: {e}", path.display()));
     let camera = loaded.camera;
     (
         pack_scene(loaded, environment, &BvhBuildOptions::default()),

@@ -518,6 +518,10 @@ fn cli_reports_bad_scenes_and_options_without_writing() {
             "--no-such-option",
         ),
         (
+            vec![cornell.into(), "--mtl-diffuse".into(), "phong".into()],
+            "invalid value 'phong' for '--mtl-diffuse",
+        ),
+        (
             vec![cornell.into(), "--point-light".into(), "0,1,2".into()],
             "expected 6 values",
         ),
@@ -574,6 +578,35 @@ fn cli_reports_bad_scenes_and_options_without_writing() {
     assert!(start.elapsed().as_secs() < 30, "{:?}", start.elapsed());
     let leftovers: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// `--mtl-diffuse lambert` renders the Cornell box's purely diffuse walls Lambertian: a different image
+/// from the default Disney diffuse, from the same seed.
+#[test]
+fn cli_mtl_diffuse_switches_the_diffuse_lobe() {
+    let Some(bin) = fovea_binary() else { return };
+    let dir = temp_dir("mtl_diffuse");
+    let cornell = cornell_box_path();
+    let mut images = Vec::new();
+    for model in ["disney", "lambert"] {
+        let png = dir.join(format!("{model}.png"));
+        let mut args = vec![cornell.to_str().unwrap()];
+        args.extend(SMALL);
+        args.extend(["--mtl-diffuse", model, "-o", png.to_str().unwrap()]);
+        let out = run(&bin, &args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        images.push(image::open(&png).unwrap().to_rgb8());
+    }
+    assert!(images[1].pixels().any(|p| p.0 != [0, 0, 0]), "black image");
+    assert_ne!(
+        images[0], images[1],
+        "--mtl-diffuse lambert changed nothing"
+    );
     std::fs::remove_dir_all(dir).ok();
 }
 

@@ -16,6 +16,7 @@ use fovea_core::foveation::fill::FILL_BILINEAR;
 use fovea_core::foveation::regions::FoveationParams;
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_scene::environment::Environment;
+use fovea_scene::mesh::{LoadOptions, MtlDiffuse};
 use fovea_tests::*;
 use glam::Vec3;
 
@@ -51,6 +52,9 @@ struct SceneCase {
     path: PathBuf,
     environment: Environment,
     view: View,
+    /// How purely diffuse MTL materials reflect (Lambertian for one Cornell box, so that both backends
+    /// run that lobe too).
+    mtl_diffuse: MtlDiffuse,
 }
 
 fn cases() -> Vec<SceneCase> {
@@ -60,6 +64,7 @@ fn cases() -> Vec<SceneCase> {
         path: s.join(rel),
         environment,
         view,
+        mtl_diffuse: MtlDiffuse::Disney,
     };
     vec![
         case(
@@ -74,6 +79,15 @@ fn cases() -> Vec<SceneCase> {
             Environment::None,
             View::Cornell,
         ),
+        SceneCase {
+            mtl_diffuse: MtlDiffuse::Lambert,
+            ..case(
+                "mcguire Original, Lambertian",
+                "cornell_box_mcguire/CornellBox-Original.obj",
+                Environment::None,
+                View::Cornell,
+            )
+        },
         case(
             "mcguire Mirror",
             "cornell_box_mcguire/CornellBox-Mirror.obj",
@@ -222,7 +236,21 @@ fn small_scenes_render_alike_on_cpu_and_vulkan() {
             continue;
         }
         let start = std::time::Instant::now();
-        let (packed, desc) = load_packed_with_camera(&case.path, &case.environment);
+        let options = LoadOptions {
+            mtl_diffuse: case.mtl_diffuse,
+            ..LoadOptions::default()
+        };
+        let (packed, desc) = load_packed_with_camera_and(&case.path, &case.environment, &options);
+        if case.mtl_diffuse == MtlDiffuse::Lambert {
+            assert!(
+                packed
+                    .materials
+                    .iter()
+                    .any(|m| m.flags & fovea_core::scene::MATERIAL_LAMBERTIAN != 0),
+                "{}: no Lambertian material",
+                case.name
+            );
+        }
         let cam = camera(&case.view, &packed, desc.as_ref());
         let frame = frame_params(cam, foveation(), W, H, 7);
         let (cpu, _) = render(&packed, &frame);

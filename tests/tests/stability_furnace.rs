@@ -17,6 +17,8 @@
 //! - **white Disney diffuse** (`metallic = 0`, `roughness = 1`, `specular = 0`): the expected value of a
 //!   pixel is `a(cos θo)` of its facet, computed here by quadrature of `eval` (f64 sum over a 512 × 512
 //!   cosine-weighted grid); the mean over the sphere's interior pixels must match within 1 %.
+//! - **white Lambertian diffuse** (the same with `MATERIAL_LAMBERTIAN`): the quadrature albedo is 1 at
+//!   every angle, and so must the image's mean be, within 1 %.
 use std::time::Instant;
 
 use fovea_core::bsdf::DisneyParams;
@@ -61,6 +63,15 @@ fn diffuse() -> Material {
     }
 }
 
+/// [`diffuse`] with a Lambertian diffuse lobe (`MATERIAL_LAMBERTIAN`, as `--mtl-diffuse lambert` gives
+/// purely diffuse OBJ materials): albedo exactly 1 from every direction.
+fn lambertian() -> Material {
+    Material {
+        flags: fovea_core::scene::MATERIAL_LAMBERTIAN,
+        ..diffuse()
+    }
+}
+
 fn params(m: &Material) -> DisneyParams {
     DisneyParams {
         base_color: Vec3::new(m.base_color[0], m.base_color[1], m.base_color[2]),
@@ -73,6 +84,7 @@ fn params(m: &Material) -> DisneyParams {
         sheen_tint: m.sheen_tint,
         clearcoat: m.clearcoat,
         clearcoat_gloss: m.clearcoat_gloss,
+        lambertian: m.flags & fovea_core::scene::MATERIAL_LAMBERTIAN != 0,
     }
 }
 
@@ -274,7 +286,26 @@ fn furnaces() -> Vec<Furnace> {
             material: diffuse(),
             albedo_table: Some(albedo_table(&diffuse())),
         },
+        Furnace {
+            name: "white Lambertian diffuse",
+            material: lambertian(),
+            albedo_table: Some(lambertian_albedo()),
+        },
     ]
+}
+
+/// The quadrature albedo table of [`lambertian`], checked to be 1 at every angle (Lambert's BRDF is
+/// `1 / π` exactly, and the quadrature's error is far below 1e-4).
+fn lambertian_albedo() -> Vec<f64> {
+    let table = albedo_table(&lambertian());
+    for (i, a) in table.iter().enumerate() {
+        assert!(
+            (a - 1.0).abs() < 1e-4,
+            "cos θo {}: albedo {a}",
+            i as f64 / (TABLE - 1) as f64
+        );
+    }
+    table
 }
 
 fn check(backend: &str, furnace: &Furnace, f: &Figures, spp: u32, seconds: f64) {

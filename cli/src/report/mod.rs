@@ -368,6 +368,7 @@ fn run_scene(
     let scene = prepare_scene(
         scene_path,
         None,
+        args.mtl_diffuse.into(),
         environment,
         point_lights,
         renderer.wants_wide_bvh(),

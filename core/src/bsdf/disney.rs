@@ -30,6 +30,9 @@
 //! ∫ f cos θi dωi ≤ Ê_cc + (1 - Ê_cc) (Ê_spec + (1 - Ê_spec) · 1) = 1. Materials whose base albedo is
 //! below one everywhere (any base colour up to about 0.64 at roughness 1, up to 1 at roughness 0) keep
 //! Burley's diffuse and sheen unchanged apart from the layer weights t.
+//!
+//! [`DisneyParams::lambertian`] swaps Burley's diffuse for a Lambertian one (albedo exactly the colour),
+//! so that a purely diffuse OBJ material can be the very BRDF that Mitsuba's and pbrt's `diffuse` is.
 use crate::math::color::luminance;
 use crate::math::float::{cos, ln, powf, sin, sqr, sqrt, INV_PI, PI};
 use crate::sampling::ggx_vndf::{ggx_d, normalize_or_zero, sample_ggx_vndf, smith_g1_over_2cos};
@@ -58,6 +61,11 @@ pub struct DisneyParams {
     pub sheen_tint: f32,
     pub clearcoat: f32,
     pub clearcoat_gloss: f32,
+    /// The diffuse lobe is Lambertian (`base_color · (1 - metallic) / π`) instead of Burley's diffuse with
+    /// its roughness-dependent retro-reflection: what Mitsuba's and pbrt's `diffuse` material is, for
+    /// comparisons with renderers that model a purely diffuse surface that way. The other lobes and the
+    /// layering are unchanged (a Lambertian base's albedo is exactly its colour).
+    pub lambertian: bool,
 }
 
 /// The result of importance sampling the BRDF.
@@ -173,6 +181,8 @@ struct Lobes {
     /// Sheen colour × (1 - metallic).
     sheen: Vec3,
     roughness: f32,
+    /// [`DisneyParams::lambertian`]: the diffuse factor is 1 instead of Burley's `fd`, its albedo 1.
+    lambertian: bool,
     ax: f32,
     ay: f32,
     cspec0: Vec3,
@@ -228,7 +238,11 @@ impl Lobes {
     #[inline]
     #[must_use]
     fn base_albedo(&self, mu: f32) -> f32 {
-        let diffuse = self.diffuse * diffuse_albedo(mu, self.roughness);
+        let diffuse = if self.lambertian {
+            self.diffuse
+        } else {
+            self.diffuse * diffuse_albedo(mu, self.roughness)
+        };
         if self.sheen_on {
             (diffuse + self.sheen * sheen_albedo_bound(mu)).max_element()
         } else {
@@ -256,6 +270,7 @@ impl DisneyParams {
             sheen_tint: 0.0,
             clearcoat: 0.0,
             clearcoat_gloss: 0.0,
+            lambertian: false,
         }
     }
 
@@ -325,6 +340,7 @@ impl DisneyParams {
             diffuse: base * one_minus_metallic,
             sheen: sheen * one_minus_metallic,
             roughness: self.roughness.clamp(0.0, 1.0),
+            lambertian: self.lambertian,
             ax: alphas.x,
             ay: alphas.y,
             cspec0,
@@ -433,11 +449,15 @@ impl DisneyParams {
 
         // Base: diffuse with retro-reflection, and sheen (both already scaled by 1 - metallic),
         // normalised so that its albedo is at most 1 from both directions.
-        let fl = schlick_weight(wi.z);
-        let fv = schlick_weight(wo.z);
         let fh = schlick_weight(cos_d);
-        let fd90 = 0.5 + 2.0 * lobes.roughness * cos_d * cos_d;
-        let fd = (1.0 + (fd90 - 1.0) * fl) * (1.0 + (fd90 - 1.0) * fv);
+        let fd = if lobes.lambertian {
+            1.0
+        } else {
+            let fl = schlick_weight(wi.z);
+            let fv = schlick_weight(wo.z);
+            let fd90 = 0.5 + 2.0 * lobes.roughness * cos_d * cos_d;
+            (1.0 + (fd90 - 1.0) * fl) * (1.0 + (fd90 - 1.0) * fv)
+        };
         let norm = lobes.base_albedo_o.max(lobes.base_albedo(wi.z)).max(1.0);
         let mut f_base = lobes.diffuse * (INV_PI * fd);
         if lobes.sheen_on {
@@ -594,6 +614,7 @@ mod tests {
                 sheen_tint: self.next(),
                 clearcoat: self.next(),
                 clearcoat_gloss: self.next(),
+                lambertian: false,
             }
         }
     }
@@ -615,9 +636,23 @@ mod tests {
                 sheen_tint: 0.0,
                 clearcoat: cc,
                 clearcoat_gloss: gloss,
+                lambertian: false,
             });
         }
         out
+    }
+
+    /// The corners with a Lambertian diffuse lobe ([`DisneyParams::lambertian`]): those of [`corners`]
+    /// with metallic 0 and no anisotropy (24), where the diffuse lobe matters.
+    fn lambertian_corners(base: Vec3) -> Vec<DisneyParams> {
+        corners(base)
+            .into_iter()
+            .filter(|p| p.metallic == 0.0 && p.anisotropic == 0.0)
+            .map(|p| DisneyParams {
+                lambertian: true,
+                ..p
+            })
+            .collect()
     }
 
     /// Outgoing directions used throughout: head-on, oblique, grazing, nearly tangent, not unit.
@@ -832,6 +867,7 @@ mod tests {
         let mut rng = Rng(77);
         let mut params = corners(Vec3::ONE);
         params.extend(corners(Vec3::new(0.8, 0.1, 0.3)));
+        params.extend(lambertian_corners(Vec3::new(0.8, 0.1, 0.3)));
         for _ in 0..300 {
             params.push(rng.params());
         }
@@ -886,6 +922,7 @@ mod tests {
             sheen_tint: 0.0,
             clearcoat: 0.0,
             clearcoat_gloss: 0.0,
+            lambertian: false,
         };
         let wild = DisneyParams {
             base_color: Vec3::new(-1.0, 1e30, 3.0),
@@ -898,6 +935,7 @@ mod tests {
             sheen_tint: -3.0,
             clearcoat: 4.0,
             clearcoat_gloss: -8.0,
+            lambertian: false,
         };
         let mirror_like = DisneyParams {
             metallic: 1.0,
@@ -952,6 +990,7 @@ mod tests {
     fn eval_is_reciprocal() {
         let mut rng = Rng(31337);
         let mut params = corners(Vec3::new(0.7, 0.9, 0.2));
+        params.extend(lambertian_corners(Vec3::new(0.7, 0.9, 0.2)));
         for _ in 0..300 {
             params.push(rng.params());
         }
@@ -963,6 +1002,43 @@ mod tests {
                 let f_ba = p.eval(b, a);
                 assert!(rel_close3(f_ab, f_ba, 1e-4), "{p:?} {a} {b}: {f_ab} {f_ba}");
             }
+        }
+    }
+
+    /// A Lambertian material without specular, sheen or clearcoat is exactly Lambert's BRDF at every
+    /// roughness: `f = base / π`, `pdf = cos θi / π` (cosine sampling), so every sample's weight
+    /// `f cos θi / pdf` is the base colour; with a specular layer its albedo stays at most 1.
+    #[test]
+    fn lambertian_is_lambert() {
+        let mut rng = Rng(4242);
+        let base = Vec3::new(0.73, 0.065, 0.05);
+        for roughness in [0.0, 0.5, 1.0] {
+            let p = DisneyParams {
+                roughness,
+                specular: 0.0,
+                lambertian: true,
+                ..DisneyParams::diffuse(base)
+            };
+            for _ in 0..2_000 {
+                let (wo, wi) = (rng.upper_dir(), rng.upper_dir());
+                let (f, pdf) = p.eval_and_pdf(wo, wi);
+                assert!(
+                    rel_close3(f, base * INV_PI, 1e-6),
+                    "{roughness} {wo} {wi}: {f}"
+                );
+                assert!(rel_close(pdf, wi.normalize().z * INV_PI, 1e-5), "{pdf}");
+                let s = p.sample(wo, rng.vec3());
+                if s.pdf > 0.0 {
+                    assert!(rel_close3(s.f * (s.wi.z / s.pdf), base, 1e-5), "{s:?}");
+                }
+            }
+            // Burley's diffuse at the same roughness differs (retro-reflection at grazing angles).
+            let burley = DisneyParams {
+                lambertian: false,
+                ..p
+            };
+            let (wo, wi) = (Vec3::new(0.99, 0.0, 0.141).normalize(), Vec3::Z);
+            assert!(burley.eval(wo, wi) != p.eval(wo, wi));
         }
     }
 
@@ -1013,7 +1089,10 @@ mod tests {
             Vec3::new(0.0, 1.0, 0.02).normalize(),
         ];
         let mut rng = Rng(8);
-        for p in corners(Vec3::ONE) {
+        for p in corners(Vec3::ONE)
+            .into_iter()
+            .chain(lambertian_corners(Vec3::ONE))
+        {
             for wo in wos {
                 let n = 8_192;
                 let (mut sum, mut sum2) = (0.0f64, 0.0f64);
@@ -1313,7 +1392,12 @@ mod tests {
         let n = sample_count(250_000, 2_000_000);
         let mut tested = 0;
         let mut max_rel = 0.0f32;
-        for (k, p) in corners(Vec3::new(0.9, 0.6, 0.3)).into_iter().enumerate() {
+        let base = Vec3::new(0.9, 0.6, 0.3);
+        for (k, p) in corners(base)
+            .into_iter()
+            .chain(lambertian_corners(base))
+            .enumerate()
+        {
             let deg = INCIDENT_DEG[k % INCIDENT_DEG.len()];
             let wo = incident(deg);
             let axis = mirror_axis(wo);

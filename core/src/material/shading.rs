@@ -12,7 +12,7 @@ use crate::scene::features::{
     FEATURE_BASE_COLOR_TEXTURE, FEATURE_LOBE_ANISOTROPY, FEATURE_METALLIC_ROUGHNESS_TEXTURE,
     FEATURE_NORMAL_TEXTURE, FEATURE_SHADING_NORMALS, FEATURE_UVS,
 };
-use crate::scene::{Features, SceneSource, SceneView, INVALID_INDEX};
+use crate::scene::{Features, SceneSource, SceneView, INVALID_INDEX, MATERIAL_LAMBERTIAN};
 
 /// Everything the integrator needs at a hit point.
 #[derive(Clone, Copy, Debug)]
@@ -125,6 +125,7 @@ pub fn surface_point<F: Features, S: SceneSource>(
         sheen_tint: material.sheen_tint,
         clearcoat: material.clearcoat,
         clearcoat_gloss: material.clearcoat_gloss,
+        lambertian: material.flags & MATERIAL_LAMBERTIAN != 0,
     };
     SurfacePoint {
         position,

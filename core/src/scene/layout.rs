@@ -382,6 +382,9 @@ pub const MATERIAL_ALPHA_CUTOUT: u32 = 1;
 /// [`Material::flags`]: the material emits from both faces (otherwise only from the front face, the side
 /// the counter-clockwise winding faces).
 pub const MATERIAL_DOUBLE_SIDED_EMISSION: u32 = 2;
+/// [`Material::flags`]: the diffuse lobe is Lambertian instead of Burley's retro-reflective diffuse (see
+/// [`crate::bsdf::DisneyParams::lambertian`]); set for purely diffuse OBJ materials on request.
+pub const MATERIAL_LAMBERTIAN: u32 = 4;
 
 /// A Disney "principled" material (Burley 2012) with optional textures (112 bytes).
 ///

@@ -48,13 +48,14 @@ pub(crate) const SIGNIFICANCE: f64 = 0.01;
 /// Number of chi-square tests in the family, for the Šidák correction, by part; each test asserts its
 /// share with [`family_share`]. Cosine hemisphere 1; GGX VNDF 20 (alpha 0.01, 0.1, 0.5, 1 × 5 incident
 /// angles; alpha 1e-4 is a near-delta, not chi-square tested); Disney lobes 18 (specular 4 roughnesses ×
-/// 3 angles, clearcoat 2 glosses × 3 angles); Disney full BSDF 88 (the 96 corners less the 8 pure
-/// near-delta mirrors); lights 4 (2 triangle configurations, 2 environment maps).
+/// 3 angles, clearcoat 2 glosses × 3 angles); Disney full BSDF 112 (the 96 corners less the 8 pure
+/// near-delta mirrors, and the 24 corners with a Lambertian diffuse lobe); lights 4 (2 triangle
+/// configurations, 2 environment maps).
 pub(crate) const FAMILY_PARTS: [(&str, u32); 5] = [
     ("cosine hemisphere", 1),
     ("ggx vndf", 20),
     ("disney lobes", 18),
-    ("disney full bsdf", 88),
+    ("disney full bsdf", 112),
     ("lights", 4),
 ];
 
