@@ -1,5 +1,8 @@
 //! BVH traversal over the flat node arrays of [`crate::scene::SceneView`]: the 4-wide tree both
-//! backends share ([`traverse`]) and, on the CPU, an 8-wide tree over the same leaves ([`wide`]).
+//! backends share ([`traverse`]) and, on the CPU, an 8-wide tree over the same leaves ([`wide`]), which
+//! a block's coherent camera rays also traverse as one packet ([`packet`]).
+#[cfg(not(target_arch = "spirv"))]
+pub mod packet;
 pub mod traverse;
 #[cfg(not(target_arch = "spirv"))]
 pub mod wide;

@@ -83,7 +83,7 @@ impl Default for Bvh8Node {
 }
 
 /// The per-ray part of the 8-wide slab test (see [`SlabInverses`]).
-struct RayBox8 {
+pub(super) struct RayBox8 {
     origin: [f32x8; 3],
     inv_near: [f32x8; 3],
     inv_far: [f32x8; 3],
@@ -94,7 +94,7 @@ struct RayBox8 {
 
 impl RayBox8 {
     #[inline(always)]
-    fn new(ray: &Ray) -> Self {
+    pub(super) fn new(ray: &Ray) -> Self {
         let s = SlabInverses::new(ray);
         let o = ray.origin;
         Self {
@@ -122,7 +122,7 @@ impl RayBox8 {
     /// maximum once it includes 0 (non-negative floats order as their bits do; a negative one, as a
     /// negative integer, loses to 0).
     #[inline(always)]
-    fn intersect(&self, node: &Bvh8Node, t_max: f32) -> ([f32; 8], u32) {
+    pub(super) fn intersect(&self, node: &Bvh8Node, t_max: f32) -> ([f32; 8], u32) {
         let rows = node.bound_rows();
         let axis = |k: usize| -> (f32x8, f32x8) {
             let near = 2 * k + (self.near_row[k] & 1);
@@ -153,22 +153,22 @@ impl RayBox8 {
 /// report different triangles for 21 of the 8,192 probe rays of `tests/cross_backend_probe.rs`, with the
 /// opposite order for 42.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-struct Entry(u64);
+pub(super) struct Entry(u64);
 
 impl Entry {
     #[inline(always)]
-    fn new(item: u32, t: f32) -> Self {
+    pub(super) fn new(item: u32, t: f32) -> Self {
         Self(u64::from(t.to_bits()) << 32 | u64::from(!item))
     }
 
     #[inline(always)]
-    fn item(self) -> u32 {
+    pub(super) fn item(self) -> u32 {
         !(self.0 as u32)
     }
 
     /// Whether the entry's box may still hold a hit nearer than `closest` (`closest >= 0`).
     #[inline(always)]
-    fn nearer_than(self, closest: f32) -> bool {
+    pub(super) fn nearer_than(self, closest: f32) -> bool {
         (self.0 >> 32) as u32 <= closest.to_bits()
     }
 }

@@ -62,6 +62,56 @@ pub fn render_block_sample_with<F: crate::scene::Features, S: SceneSource>(
     trace_path_with(scene, source, ray, &mut rng, &frame.integrator)
 }
 
+/// [`render_block_sample`] for samples `first .. first + out.len()` of `block` (at most
+/// [`crate::bvh::packet::PACKET_SIZE`]), their camera rays traced as one packet over the CPU's 8-wide
+/// tree ([`crate::bvh::packet`]): `out[k]` is sample `first + k`'s value, the same as
+/// [`render_block_sample`] gives it (up to which of two triangles hit at exactly the same distance a
+/// camera ray reports). The scene must have its 8-wide tree.
+#[cfg(not(target_arch = "spirv"))]
+pub fn render_block_samples_packet<F: crate::scene::Features>(
+    scene: &SceneView<F>,
+    frame: &FrameParams,
+    block: &OwnedBlock,
+    first: u32,
+    out: &mut [Vec3],
+) {
+    use crate::bvh::packet::{closest_hits_packet, PACKET_SIZE};
+    use crate::bvh::Hit;
+    use arrayvec::ArrayVec;
+    let mut rngs: ArrayVec<SampleRng, PACKET_SIZE> = ArrayVec::new();
+    let mut rays: ArrayVec<crate::geometry::Ray, PACKET_SIZE> = ArrayVec::new();
+    for k in 0..out.len() as u32 {
+        let mut rng = SampleRng::new(
+            block.origin,
+            frame.frame_index,
+            first + k,
+            block.region,
+            frame.seed,
+        );
+        let film = block_sample_position(block, frame.width, frame.height, rng.next_2d());
+        rays.push(frame.camera.generate_ray(film, frame.width, frame.height));
+        rngs.push(rng);
+    }
+    let mut hits = [Hit::miss(); PACKET_SIZE];
+    closest_hits_packet(
+        scene,
+        &SceneSlices,
+        &rays,
+        crate::lights::INFINITE_DISTANCE,
+        &mut hits,
+    );
+    for (k, value) in out.iter_mut().enumerate() {
+        *value = path::trace_path_from_hit(
+            scene,
+            &SceneSlices,
+            rays[k],
+            hits[k],
+            &mut rngs[k],
+            &frame.integrator,
+        );
+    }
+}
+
 /// Renders samples `first`, `first + stride`, `first + 2 stride`, ... below `block_count · spp` of a
 /// dispatch chunk, one after the other, into `out[i]` (rgb, `w` = 0): sample `i` is sample `i % spp` of
 /// block `blocks[i / spp]`, with the value [`render_block_sample_with`] gives it.
