@@ -9,6 +9,7 @@ pub use path::{trace_path, trace_path_with, IntegratorSettings};
 
 use crate::camera::Camera;
 use crate::foveation::{block_sample_position, FoveationParams, OwnedBlock};
+use crate::geometry::Ray;
 use crate::kernel_abi::GpuBlock;
 use crate::rng::SampleRng;
 use crate::scene::{SceneSlices, SceneSource, SceneView};
@@ -50,6 +51,14 @@ pub fn render_block_sample_with<F: crate::scene::Features, S: SceneSource>(
     block: &OwnedBlock,
     sample: u32,
 ) -> Vec3 {
+    let (ray, mut rng) = camera_sample(frame, block, sample);
+    trace_path_with(scene, source, ray, &mut rng, &frame.integrator)
+}
+
+/// Sample `sample` of `block`'s jittered camera ray and the random numbers its path goes on with.
+#[inline]
+#[must_use]
+fn camera_sample(frame: &FrameParams, block: &OwnedBlock, sample: u32) -> (Ray, SampleRng) {
     let mut rng = SampleRng::new(
         block.origin,
         frame.frame_index,
@@ -59,7 +68,7 @@ pub fn render_block_sample_with<F: crate::scene::Features, S: SceneSource>(
     );
     let film = block_sample_position(block, frame.width, frame.height, rng.next_2d());
     let ray = frame.camera.generate_ray(film, frame.width, frame.height);
-    trace_path_with(scene, source, ray, &mut rng, &frame.integrator)
+    (ray, rng)
 }
 
 /// [`render_block_sample`] for samples `first .. first + out.len()` of `block` (at most
@@ -67,6 +76,9 @@ pub fn render_block_sample_with<F: crate::scene::Features, S: SceneSource>(
 /// tree ([`crate::bvh::packet`]): `out[k]` is sample `first + k`'s value, the same as
 /// [`render_block_sample`] gives it (up to which of two triangles hit at exactly the same distance a
 /// camera ray reports). The scene must have its 8-wide tree.
+///
+/// # Panics
+/// If `out` holds more than [`crate::bvh::packet::PACKET_SIZE`] values.
 #[cfg(not(target_arch = "spirv"))]
 pub fn render_block_samples_packet<F: crate::scene::Features>(
     scene: &SceneView<F>,
@@ -79,17 +91,10 @@ pub fn render_block_samples_packet<F: crate::scene::Features>(
     use crate::bvh::Hit;
     use arrayvec::ArrayVec;
     let mut rngs: ArrayVec<SampleRng, PACKET_SIZE> = ArrayVec::new();
-    let mut rays: ArrayVec<crate::geometry::Ray, PACKET_SIZE> = ArrayVec::new();
+    let mut rays: ArrayVec<Ray, PACKET_SIZE> = ArrayVec::new();
     for k in 0..out.len() as u32 {
-        let mut rng = SampleRng::new(
-            block.origin,
-            frame.frame_index,
-            first + k,
-            block.region,
-            frame.seed,
-        );
-        let film = block_sample_position(block, frame.width, frame.height, rng.next_2d());
-        rays.push(frame.camera.generate_ray(film, frame.width, frame.height));
+        let (ray, rng) = camera_sample(frame, block, first + k);
+        rays.push(ray);
         rngs.push(rng);
     }
     let mut hits = [Hit::miss(); PACKET_SIZE];
