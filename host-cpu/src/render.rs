@@ -2,15 +2,14 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use fovea_core::bvh::packet::PACKET_SIZE;
 use fovea_core::foveation::blocks::{owning_block, samples_in_block};
 use fovea_core::foveation::fill::{cell_buffer_len, cell_mean_at, fill_value};
 use fovea_core::foveation::regions::REGION_COUNT;
-use fovea_core::integrator::{render_block_sample, render_block_samples_packet, FrameParams};
+use fovea_core::integrator::{block_sample_sum, FrameParams};
 use fovea_core::scene::{Features, SceneView};
 
 use crate::specialize::{dispatch, path_mask, WithScene};
-use glam::{Vec3, Vec4};
+use glam::Vec4;
 use rayon::prelude::*;
 
 /// A rendered frame in linear HDR (`[r, g, b, 1]` per pixel, row-major, top row first).
@@ -139,31 +138,7 @@ impl WithScene for SamplePass<'_> {
                             continue;
                         }
                         let spp = samples_in_block(&block, foveation);
-                        let mut sum = Vec3::ZERO;
-                        if scene.wide_nodes.is_empty() {
-                            for s in 0..spp {
-                                sum += render_block_sample(scene, frame, &block, s);
-                            }
-                        } else {
-                            // The camera rays of up to eight samples at a time as one packet;
-                            // summed in sample order, as above.
-                            let mut values = [Vec3::ZERO; PACKET_SIZE];
-                            let mut first = 0;
-                            while first < spp {
-                                let n = (spp - first).min(PACKET_SIZE as u32) as usize;
-                                render_block_samples_packet(
-                                    scene,
-                                    frame,
-                                    &block,
-                                    first,
-                                    &mut values[..n],
-                                );
-                                for v in &values[..n] {
-                                    sum += *v;
-                                }
-                                first += n as u32;
-                            }
-                        }
+                        let sum = block_sample_sum(scene, frame, &block, spp);
                         let mean = sum / spp.max(1) as f32;
                         let value = [mean.x, mean.y, mean.z, 1.0];
                         let x_end = (block.origin[0] + block.size).min(width);

@@ -73,19 +73,7 @@ fn lambertian() -> Material {
 }
 
 fn params(m: &Material) -> DisneyParams {
-    DisneyParams {
-        base_color: Vec3::new(m.base_color[0], m.base_color[1], m.base_color[2]),
-        metallic: m.metallic,
-        roughness: m.roughness,
-        anisotropic: m.anisotropic,
-        specular: m.specular,
-        specular_tint: m.specular_tint,
-        sheen: m.sheen,
-        sheen_tint: m.sheen_tint,
-        clearcoat: m.clearcoat,
-        clearcoat_gloss: m.clearcoat_gloss,
-        lambertian: m.flags & fovea_core::scene::MATERIAL_LAMBERTIAN != 0,
-    }
+    fovea_core::material::material_params(m)
 }
 
 /// Entries of the albedo table: `cos θo = i / (TABLE - 1)`.

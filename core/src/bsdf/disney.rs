@@ -447,8 +447,8 @@ impl DisneyParams {
         // cos θd = wo·h = wi·h = |wo + wi| / 2 for unit directions: symmetric in wo and wi.
         let cos_d = (0.5 * len).min(1.0);
 
-        // Base: diffuse with retro-reflection, and sheen (both already scaled by 1 - metallic),
-        // normalised so that its albedo is at most 1 from both directions.
+        // Base: diffuse (Burley's, with retro-reflection, or Lambertian) and sheen, both already
+        // scaled by 1 - metallic, normalised so that its albedo is at most 1 from both directions.
         let fh = schlick_weight(cos_d);
         let fd = if lobes.lambertian {
             1.0

@@ -15,12 +15,13 @@
 //! may pick the other one.
 //!
 //! Rays that do not share their origin, or whose direction changes sign along an axis within the
-//! packet, are traced one by one.
+//! packet, are traced one by one, and so are the rays of a scene without an 8-wide tree (over the
+//! 4-wide one, [`closest_hit_with`]).
 use ::wide::{f32x8, CmpLe};
 use arrayvec::ArrayVec;
 
-use super::traverse::{test_leaf, Hit, SlabInverses};
-use super::wide::{closest_hit_wide, Bvh8Node, Entry, WIDE_ARITY, WIDE_STACK_SIZE};
+use super::traverse::{closest_hit_with, test_leaf, Hit, SlabInverses};
+use super::wide::{Bvh8Node, Entry, Stack};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
 use crate::scene::{Features, SceneSource, SceneView, SLOT_LEAF};
@@ -106,7 +107,7 @@ impl PacketBox {
 
 /// The closest hit in `(0, t_max)` of each of `rays` (at most [`PACKET_SIZE`]) over the scene's
 /// 8-wide tree, written to `hits[i]` for `rays[i]`; see the module documentation for how it relates to
-/// [`super::wide::closest_hit_wide`]. Misses everything if the scene has no 8-wide tree.
+/// [`super::wide::closest_hit_wide`]; without an 8-wide tree, what [`closest_hit_with`] finds.
 ///
 /// # Panics
 /// If there are more than [`PACKET_SIZE`] rays or fewer hits than rays.
@@ -119,15 +120,14 @@ pub fn closest_hits_packet<F: Features, S: SceneSource>(
 ) {
     assert!(rays.len() <= PACKET_SIZE && hits.len() >= rays.len());
     let count = rays.len();
-    if scene.wide_nodes.is_empty() || count == 0 {
-        for hit in hits.iter_mut().take(count) {
-            *hit = Hit::miss();
-        }
-        return;
-    }
-    let Some(packet) = PacketBox::new(rays) else {
+    let packet = if count == 0 || scene.wide_nodes.is_empty() {
+        None
+    } else {
+        PacketBox::new(rays)
+    };
+    let Some(packet) = packet else {
         for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
-            *hit = closest_hit_wide(scene, source, ray, t_max);
+            *hit = closest_hit_with(scene, source, ray, t_max);
         }
         return;
     };
@@ -142,33 +142,22 @@ pub fn closest_hits_packet<F: Features, S: SceneSource>(
     let mut closest = [t_max; PACKET_SIZE];
     // The farthest of the rays' closest hits: boxes beyond it hold nothing nearer for any of them.
     let mut farthest = t_max;
-    let mut stack: ArrayVec<Entry, WIDE_STACK_SIZE> = ArrayVec::new();
+    let mut stack = Stack::new();
     let mut item = 0u32;
     loop {
         if item & SLOT_LEAF == 0 {
             let node = &nodes[item as usize];
             let (t, mut mask) = packet.intersect(node, farthest);
             if mask != 0 {
-                // Hit children farthest first (an insertion sort of at most eight), so that the
-                // nearest ends on top.
-                let mut children: ArrayVec<Entry, WIDE_ARITY> = ArrayVec::new();
+                // The hit children pushed and sorted farthest first; the nearest, on top, is next.
+                let start = stack.len();
                 while mask != 0 {
                     let c = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
-                    let entry = Entry::new(node.slots[c], t[c]);
-                    let mut j = children.len();
-                    children.push(entry);
-                    while j > 0 && children[j - 1] < entry {
-                        children[j] = children[j - 1];
-                        j -= 1;
-                    }
-                    children[j] = entry;
+                    stack.push(Entry::new(node.slots[c], t[c]));
                 }
-                let nearest = children[children.len() - 1];
-                for &child in &children[..children.len() - 1] {
-                    stack.push(child);
-                }
-                item = nearest.item();
+                stack.sort_from(start);
+                item = stack.pop().unwrap_or(item);
                 continue;
             }
         } else {
@@ -186,14 +175,9 @@ pub fn closest_hits_packet<F: Features, S: SceneSource>(
             farthest = closest[..count].iter().copied().fold(0.0, f32::max);
         }
         // The next entry that may hold a hit nearer than one of the rays' closest.
-        loop {
-            let Some(entry) = stack.pop() else {
-                return;
-            };
-            if entry.nearer_than(farthest) {
-                item = entry.item();
-                break;
-            }
+        match stack.pop_nearer(farthest) {
+            Some(next) => item = next,
+            None => return,
         }
     }
 }

@@ -83,7 +83,7 @@ impl Default for Bvh8Node {
 }
 
 /// The per-ray part of the 8-wide slab test (see [`SlabInverses`]).
-pub(super) struct RayBox8 {
+struct RayBox8 {
     origin: [f32x8; 3],
     inv_near: [f32x8; 3],
     inv_far: [f32x8; 3],
@@ -94,7 +94,7 @@ pub(super) struct RayBox8 {
 
 impl RayBox8 {
     #[inline(always)]
-    pub(super) fn new(ray: &Ray) -> Self {
+    fn new(ray: &Ray) -> Self {
         let s = SlabInverses::new(ray);
         let o = ray.origin;
         Self {
@@ -122,7 +122,7 @@ impl RayBox8 {
     /// maximum once it includes 0 (non-negative floats order as their bits do; a negative one, as a
     /// negative integer, loses to 0).
     #[inline(always)]
-    pub(super) fn intersect(&self, node: &Bvh8Node, t_max: f32) -> ([f32; 8], u32) {
+    fn intersect(&self, node: &Bvh8Node, t_max: f32) -> ([f32; 8], u32) {
         let rows = node.bound_rows();
         let axis = |k: usize| -> (f32x8, f32x8) {
             let near = 2 * k + (self.near_row[k] & 1);
@@ -200,14 +200,23 @@ fn order4(a: &mut Entry, b: &mut Entry, c: &mut Entry, d: &mut Entry) {
     order(b, c);
 }
 
-/// The traversal stack. Entries are written as they are pushed; the array is never zeroed as a whole.
-struct Stack {
+/// The traversal stack (also the camera-ray packets', [`super::packet`]). Entries are written as they
+/// are pushed; the array is never zeroed as a whole.
+pub(super) struct Stack {
     entries: ArrayVec<Entry, WIDE_STACK_SIZE>,
 }
 
 impl Stack {
+    /// An empty stack.
     #[inline(always)]
-    fn push(&mut self, entry: Entry) {
+    pub(super) fn new() -> Self {
+        Self {
+            entries: ArrayVec::new(),
+        }
+    }
+
+    #[inline(always)]
+    pub(super) fn push(&mut self, entry: Entry) {
         self.entries.push(entry);
     }
 
@@ -220,10 +229,22 @@ impl Stack {
         sorted[N - 1].item()
     }
 
+    /// The number of entries.
+    #[inline(always)]
+    pub(super) fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Pops the top entry's slot word (the one just pushed).
+    #[inline(always)]
+    pub(super) fn pop(&mut self) -> Option<u32> {
+        self.entries.pop().map(Entry::item)
+    }
+
     /// Sorts the entries from `start` up by decreasing distance, so the nearest is on top (an
     /// insertion sort: at most eight entries).
     #[inline(always)]
-    fn sort_from(&mut self, start: usize) {
+    pub(super) fn sort_from(&mut self, start: usize) {
         let run = &mut self.entries[start..];
         for i in 1..run.len() {
             let entry = run[i];
@@ -238,7 +259,7 @@ impl Stack {
 
     /// Pops the next entry whose box may still hold a hit nearer than `closest`.
     #[inline(always)]
-    fn pop_nearer(&mut self, closest: f32) -> Option<u32> {
+    pub(super) fn pop_nearer(&mut self, closest: f32) -> Option<u32> {
         while let Some(entry) = self.entries.pop() {
             if entry.nearer_than(closest) {
                 return Some(entry.item());
@@ -265,9 +286,7 @@ fn traverse_wide<F: Features, S: SceneSource>(
     let watertight = WatertightRay::new(ray);
     let ray_box = RayBox8::new(ray);
     let mut closest = t_max;
-    let mut stack = Stack {
-        entries: ArrayVec::new(),
-    };
+    let mut stack = Stack::new();
     let mut item = 0u32;
     loop {
         if item & SLOT_LEAF == 0 {
@@ -312,7 +331,7 @@ fn traverse_wide<F: Features, S: SceneSource>(
                     continue;
                 }
                 // Five or more: pushed, then sorted in place.
-                let start = stack.entries.len();
+                let start = stack.len();
                 for entry in [a, b, c, d] {
                     stack.push(entry);
                 }
@@ -323,7 +342,7 @@ fn traverse_wide<F: Features, S: SceneSource>(
                     stack.sort_from(start);
                 }
                 // The nearest, just pushed: nearer than `closest`.
-                item = stack.entries.pop().map_or(item, Entry::item);
+                item = stack.pop().unwrap_or(item);
                 continue;
             }
         } else if test_leaf(
@@ -513,9 +532,7 @@ mod tests {
     /// The stack sorts a pushed run nearest on top and skips entries beyond the closest hit.
     #[test]
     fn stack_sorts_runs_and_skips_farther_entries() {
-        let mut stack = Stack {
-            entries: ArrayVec::new(),
-        };
+        let mut stack = Stack::new();
         stack.push(Entry::new(100, 0.5));
         let start = stack.entries.len();
         for (item, t) in [(1, 3.0), (2, 1.0), (3, 4.0), (4, 2.0)] {

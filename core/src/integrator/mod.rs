@@ -75,7 +75,7 @@ fn camera_sample(frame: &FrameParams, block: &OwnedBlock, sample: u32) -> (Ray, 
 /// [`crate::bvh::packet::PACKET_SIZE`]), their camera rays traced as one packet over the CPU's 8-wide
 /// tree ([`crate::bvh::packet`]): `out[k]` is sample `first + k`'s value, the same as
 /// [`render_block_sample`] gives it (up to which of two triangles hit at exactly the same distance a
-/// camera ray reports). The scene must have its 8-wide tree.
+/// camera ray reports).
 ///
 /// # Panics
 /// If `out` holds more than [`crate::bvh::packet::PACKET_SIZE`] values.
@@ -115,6 +115,31 @@ pub fn render_block_samples_packet<F: crate::scene::Features>(
             &frame.integrator,
         );
     }
+}
+
+/// The sum of samples `0 .. spp` of `block`, in sample order, their camera rays traced eight at a time
+/// by [`render_block_samples_packet`]: the CPU host's value of a block is this over `spp`.
+#[cfg(not(target_arch = "spirv"))]
+#[must_use]
+pub fn block_sample_sum<F: crate::scene::Features>(
+    scene: &SceneView<F>,
+    frame: &FrameParams,
+    block: &OwnedBlock,
+    spp: u32,
+) -> Vec3 {
+    use crate::bvh::packet::PACKET_SIZE;
+    let mut values = [Vec3::ZERO; PACKET_SIZE];
+    let mut sum = Vec3::ZERO;
+    let mut first = 0;
+    while first < spp {
+        let n = (spp - first).min(PACKET_SIZE as u32) as usize;
+        render_block_samples_packet(scene, frame, block, first, &mut values[..n]);
+        for v in &values[..n] {
+            sum += *v;
+        }
+        first += n as u32;
+    }
+    sum
 }
 
 /// Renders samples `first`, `first + stride`, `first + 2 stride`, ... below `block_count · spp` of a

@@ -3,4 +3,4 @@ pub mod alpha;
 pub mod shading;
 pub mod texture;
 
-pub use shading::{surface_point, SurfacePoint};
+pub use shading::{material_params, surface_point, SurfacePoint};

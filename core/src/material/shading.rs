@@ -12,7 +12,9 @@ use crate::scene::features::{
     FEATURE_BASE_COLOR_TEXTURE, FEATURE_LOBE_ANISOTROPY, FEATURE_METALLIC_ROUGHNESS_TEXTURE,
     FEATURE_NORMAL_TEXTURE, FEATURE_SHADING_NORMALS, FEATURE_UVS,
 };
-use crate::scene::{Features, SceneSource, SceneView, INVALID_INDEX, MATERIAL_LAMBERTIAN};
+use crate::scene::{
+    Features, Material, SceneSource, SceneView, INVALID_INDEX, MATERIAL_LAMBERTIAN,
+};
 
 /// Everything the integrator needs at a hit point.
 #[derive(Clone, Copy, Debug)]
@@ -28,6 +30,25 @@ pub struct SurfacePoint {
     pub frame: Frame,
     pub uv: Vec2,
     pub params: DisneyParams,
+}
+
+/// The Disney parameters of `material`'s factors, before any texture.
+#[inline]
+#[must_use]
+pub fn material_params(material: &Material) -> DisneyParams {
+    DisneyParams {
+        base_color: vec3_from(material.base_color),
+        metallic: material.metallic,
+        roughness: material.roughness,
+        anisotropic: material.anisotropic,
+        specular: material.specular,
+        specular_tint: material.specular_tint,
+        sheen: material.sheen,
+        sheen_tint: material.sheen_tint,
+        clearcoat: material.clearcoat,
+        clearcoat_gloss: material.clearcoat_gloss,
+        lambertian: material.flags & MATERIAL_LAMBERTIAN != 0,
+    }
 }
 
 /// Builds the shading point for `hit` (which must be a hit).
@@ -118,14 +139,7 @@ pub fn surface_point<F: Features, S: SceneSource>(
         base_color,
         metallic,
         roughness,
-        anisotropic: material.anisotropic,
-        specular: material.specular,
-        specular_tint: material.specular_tint,
-        sheen: material.sheen,
-        sheen_tint: material.sheen_tint,
-        clearcoat: material.clearcoat,
-        clearcoat_gloss: material.clearcoat_gloss,
-        lambertian: material.flags & MATERIAL_LAMBERTIAN != 0,
+        ..material_params(&material)
     };
     SurfacePoint {
         position,
