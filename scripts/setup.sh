@@ -3,6 +3,7 @@
 # - a Rust toolchain (cargo >= 1.87, the workspace's rust-version) and a C compiler for crates with build scripts;
 # - for the Vulkan backend: the SPIR-V tools (spirv-val, spirv-opt), a Vulkan loader, Mesa's drivers (lavapipe
 #   runs the kernel on the CPU where there is no GPU), vulkaninfo and the validation layers;
+# - for `fovea view`'s tests: Xvfb (an X server without a screen) and xauth, which xvfb-run needs;
 # - the pinned nightly that rust-gpu builds the kernel with (see README, "GPU build").
 set -euo pipefail
 
@@ -11,7 +12,9 @@ MIN_RUST=1.87
 NIGHTLY_COMPONENTS=(rust-src rustc-dev llvm-tools)
 
 # --- apt packages -----------------------------------------------------------------------------------------
-apt_packages=(gcc g++ pkg-config spirv-tools mesa-vulkan-drivers libvulkan1 vulkan-tools vulkan-validationlayers)
+# xvfb and xauth: an X server for the tests of `fovea view`'s window (xvfb-run), where no desktop runs.
+apt_packages=(gcc g++ pkg-config spirv-tools mesa-vulkan-drivers libvulkan1 vulkan-tools vulkan-validationlayers
+  xvfb xauth)
 need_apt=()
 for pkg in "${apt_packages[@]}"; do
   if command -v dpkg-query >/dev/null 2>&1; then

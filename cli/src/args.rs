@@ -22,8 +22,170 @@ pub enum Command {
     /// Benchmarks: BVH build throughput, ray traversal throughput, and a generated 10 M-triangle scene
     /// (load, build, render, peak memory).
     Bench(crate::bench::BenchArgs),
+    /// Live view: a window whose fovea follows the gaze (mouse, an eye tracker over UDP, or a trace),
+    /// with fly controls, accumulation while the eye rests and a frame-time budget.
+    View(Box<ViewArgs>),
     /// List the devices fovea can render on.
     Devices,
+}
+
+/// Where the live view's gaze comes from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum GazeSourceArg {
+    /// The mouse pointer.
+    Mouse,
+    /// Datagrams `t,x,y` on this UDP port of 127.0.0.1.
+    Udp(u16),
+    /// The `--gaze-trace` file, replayed with its timestamps.
+    Trace,
+}
+
+impl std::str::FromStr for GazeSourceArg {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let lower = s.to_ascii_lowercase();
+        match lower.as_str() {
+            "mouse" => Ok(Self::Mouse),
+            "trace" => Ok(Self::Trace),
+            _ => match lower.strip_prefix("udp:") {
+                Some(port) => port
+                    .parse::<u16>()
+                    .ok()
+                    .filter(|&p| p > 0)
+                    .map(Self::Udp)
+                    .ok_or_else(|| format!("'{port}' is not a UDP port (1 to 65535)")),
+                None => Err(format!(
+                    "'{s}' is not a gaze source: use mouse, udp:PORT or trace"
+                )),
+            },
+        }
+    }
+}
+
+/// `WxH` window size, parsed at the edge.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WindowSize(pub [u32; 2]);
+
+impl std::str::FromStr for WindowSize {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let parts: Vec<&str> = s.split(['x', 'X']).collect();
+        let parsed: Option<Vec<u32>> = parts.iter().map(|p| p.trim().parse().ok()).collect();
+        match parsed.as_deref() {
+            Some(&[w, h]) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => {
+                Ok(Self([w, h]))
+            }
+            _ => Err(format!(
+                "'{s}' is not a window size WxH with each edge 1 to 16384"
+            )),
+        }
+    }
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct ViewArgs {
+    /// Scene file (.gltf, .glb or .obj). Default: the bundled Lost Empire.
+    pub scene: Option<PathBuf>,
+
+    /// Backend: `vulkan` renders and presents on the GPU; `cpu` renders on the CPU and presents the
+    /// frame through Vulkan (any Vulkan driver, lavapipe included); `auto` picks Vulkan on a hardware
+    /// GPU, else the CPU.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: Backend,
+    /// Vulkan device index (see `fovea devices`).
+    #[arg(long, value_name = "N")]
+    pub device: Option<usize>,
+    /// Initial window size (the frame is rendered at the window's size).
+    #[arg(long, default_value = "1280x720", value_name = "WxH")]
+    pub size: WindowSize,
+    /// Where the gaze comes from: `mouse` (the pointer), `udp:PORT` (an eye tracker sending `t,x,y`
+    /// datagrams to 127.0.0.1:PORT; see README, "Eye-tracker protocol") or `trace` (--gaze-trace).
+    #[arg(long, default_value = "mouse", value_name = "SOURCE")]
+    pub gaze_source: GazeSourceArg,
+    /// Gaze trace to replay with its timestamps: lines `t,x,y` (seconds since the start, coordinates
+    /// as for UDP). Implies --gaze-source trace.
+    #[arg(long, value_name = "FILE.csv")]
+    pub gaze_trace: Option<PathBuf>,
+    /// Gaze coordinates are window pixels with the origin at the bottom left (as Pupil exports),
+    /// instead of 0..1 of the window with the origin at the top left (as Tobii reports).
+    #[arg(long)]
+    pub gaze_pixels: bool,
+    /// Start with every pixel at the fovea's samples per pixel (toggle with U).
+    #[arg(long)]
+    pub uniform: bool,
+    /// Samples per pixel (fovea) and per block (intermediate, periphery); the first configuration C
+    /// cycles through.
+    #[arg(long, default_value = "32,16,8", value_name = "F,I,P")]
+    pub spp: String,
+    /// Block edge in pixels per region; each must divide the next.
+    #[arg(long, default_value = "1,2,4", value_name = "F,I,P")]
+    pub blocks: String,
+    /// Region radii in pixels (instead of eccentricity angles).
+    #[arg(long, value_name = "R1,R2")]
+    pub radii: Option<String>,
+    #[command(flatten)]
+    pub display: DisplayArgs,
+    /// Frame-time budget in milliseconds: frames that would take longer render a fraction of the
+    /// configuration's samples and accumulation completes it while the eye rests (0: no budget).
+    #[arg(long, default_value_t = 33.0, value_name = "MS")]
+    pub budget_ms: f64,
+    /// Bounces per path.
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub depth: u32,
+    /// Russian roulette from this bounce on (0: off).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub russian_roulette: u32,
+    /// Exposure compensation in EV (stops) before tone mapping.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "EV",
+        allow_hyphen_values = true
+    )]
+    pub exposure: f32,
+    /// Seed of all random numbers.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub seed: u32,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub lighting: LightingArgs,
+    /// MTL file to use instead of the one the OBJ names.
+    #[arg(long, value_name = "FILE.mtl")]
+    pub mtl: Option<PathBuf>,
+    /// The diffuse lobe of purely diffuse MTL materials (as for `render`).
+    #[arg(long, value_enum, default_value = "disney")]
+    pub mtl_diffuse: MtlDiffuse,
+    /// How block pixels are filled.
+    #[arg(long, value_enum, default_value = "bilinear")]
+    pub fill: Fill,
+    /// Render with every optional feature on.
+    #[arg(long)]
+    pub no_specialize: bool,
+    /// Worker threads of the CPU backend (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Start with the region overlay on (toggle with O).
+    #[arg(long)]
+    pub overlay: bool,
+    /// Replay timed input events from FILE (see README, "Scripted runs").
+    #[arg(long, value_name = "FILE")]
+    pub script: Option<PathBuf>,
+    /// Exit (status 0) after this many frames.
+    #[arg(long, value_name = "N")]
+    pub exit_after_frames: Option<u64>,
+    /// Take a screenshot after frame K (repeat for several).
+    #[arg(long, value_name = "K")]
+    pub screenshot_at_frame: Vec<u64>,
+    /// Folder for screenshots (P key): fovea_view_FRAME.png, .exr, _regions.png and .json.
+    #[arg(long, default_value = "screenshots", value_name = "DIR")]
+    pub screenshot_dir: PathBuf,
+    /// Write every frame's figures (time, samples, gaze, accumulation, latency) as JSON at exit.
+    #[arg(long, value_name = "FILE.json")]
+    pub stats: Option<PathBuf>,
+    /// No summary line at exit.
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 /// Which backend renders.

@@ -44,7 +44,7 @@ pub struct VulkanRenderer {
 
 /// Why `--backend auto` did not pick Vulkan, or `None` when it should.
 #[cfg(feature = "vulkan")]
-fn auto_vulkan_refusal() -> Option<String> {
+pub(crate) fn auto_vulkan_refusal() -> Option<String> {
     match fovea_vulkan::list_devices() {
         Err(e) => Some(e.to_string()),
         Ok(devices) => {
@@ -141,6 +141,7 @@ impl Renderer {
         let options = fovea_vulkan::ContextOptions {
             device_index: device,
             validation: fovea_vulkan::validation_requested(),
+            window: None,
         };
         match fovea_vulkan::VulkanContext::new(&options) {
             Ok(ctx) => Ok(Self::Vulkan(Box::new(VulkanRenderer {

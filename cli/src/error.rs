@@ -19,6 +19,9 @@ pub enum FoveaError {
     /// A backend that cannot run here.
     #[error("{0}")]
     Backend(String),
+    /// The live view cannot open or drive its window.
+    #[error("fovea view: {0}")]
+    View(String),
 }
 
 impl FoveaError {

@@ -10,6 +10,7 @@ mod report;
 mod scene_setup;
 mod stats;
 mod trace;
+mod view;
 
 use clap::Parser;
 
@@ -19,6 +20,7 @@ fn main() -> std::process::ExitCode {
         args::Command::Render(r) => render::run(r),
         args::Command::Report(r) => report::run(r),
         args::Command::Bench(b) => bench::run(b),
+        args::Command::View(v) => view::run(v),
         args::Command::Devices => {
             backend::print_devices();
             Ok(())

@@ -2,9 +2,9 @@
 //! destination folder that is renamed into place, so a failed or interrupted run leaves nothing behind.
 use std::path::{Path, PathBuf};
 
-use fovea_core::foveation::blocks::owning_block;
+use fovea_core::foveation::overlay::overlay_rgba8;
 use fovea_core::foveation::regions::FoveationParams;
-use fovea_core::post::tonemap::tonemap_to_srgb8;
+use fovea_core::post::tonemap::{pack_rgba8, tonemap_to_srgb8};
 use fovea_cpu::FrameImage;
 use glam::Vec3;
 
@@ -144,11 +144,8 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()>
     })
 }
 
-/// Colours of the regions in the overlay: fovea green, intermediate amber, periphery blue.
-const REGION_COLORS: [[f32; 3]; 3] = [[0.2, 0.85, 0.3], [1.0, 0.7, 0.1], [0.25, 0.45, 1.0]];
-
 /// The render (tone-mapped 8-bit RGB bytes `base`) with each pixel tinted by the region of its owning
-/// block and block edges darkened.
+/// block and block edges darkened (core's [`overlay_rgba8`], which the live view draws on the GPU too).
 pub fn regions_overlay(
     base: &[u8],
     width: u32,
@@ -158,15 +155,14 @@ pub fn regions_overlay(
     let mut out = Vec::with_capacity(base.len());
     for y in 0..height {
         for x in 0..width {
-            let block = owning_block(x, y, foveation);
-            let tint = REGION_COLORS[block.region.min(2) as usize];
-            let edge = block.size > 1 && (x == block.origin[0] || y == block.origin[1]);
             let i = ((y * width + x) * 3) as usize;
-            for c in 0..3 {
-                let v = 0.5 * base[i + c] as f32 / 255.0 + 0.5 * tint[c];
-                let v = if edge { v * 0.6 } else { v };
-                out.push((v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
-            }
+            let rgba = pack_rgba8(
+                u32::from(base[i]),
+                u32::from(base[i + 1]),
+                u32::from(base[i + 2]),
+            );
+            let o = overlay_rgba8(rgba, x, y, foveation);
+            out.extend_from_slice(&[o as u8, (o >> 8) as u8, (o >> 16) as u8]);
         }
     }
     out

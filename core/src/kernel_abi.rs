@@ -58,8 +58,11 @@ pub const BINDING_FRAME: u32 = 21;
 pub const BINDING_SCENE_TEXELS: u32 = 22;
 /// `TriangleBlock` array (the leaves' triangles four at a time).
 pub const BINDING_TRIANGLE_BLOCKS: u32 = 23;
+/// The live view's running mean of the filled HDR frames since the last reset (`[f32; 4]` per pixel,
+/// read and written by `accumulate`; [`crate::post::accumulate`]).
+pub const BINDING_ACCUMULATION: u32 = 24;
 /// Number of bindings.
-pub const BINDING_COUNT: u32 = 24;
+pub const BINDING_COUNT: u32 = 25;
 
 /// Specialization constant id of `render_samples`' feature mask (`FEATURE_*` bits; default every
 /// feature). The host sets it per scene when it creates the pipeline.
@@ -93,7 +96,8 @@ impl GpuBlock {
 /// `render_samples` renders the chunk's `block_count · spp` samples, sample `i` being sample `i % spp` of
 /// block `i / spp` (all blocks of a chunk belong to one region, so they share `spp`), about
 /// [`SAMPLES_PER_INVOCATION`] per invocation. `reduce_blocks` runs one invocation per block of the
-/// chunk. `cell_means`, `fill` and `tonemap` run one invocation per cell or pixel, `item_count` in all.
+/// chunk. `cell_means`, `fill`, `accumulate`, `tonemap` and `overlay_regions` run one invocation per
+/// cell or pixel, `item_count` in all.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct KernelPushConstants {
@@ -107,7 +111,9 @@ pub struct KernelPushConstants {
     pub fill_mode: u32,
     /// Exposure compensation in EV for `tonemap`.
     pub exposure_ev: f32,
-    pub _pad: [u32; 3],
+    /// Frames already in the running mean before this one (`accumulate`; 0 starts afresh).
+    pub accumulated_frames: u32,
+    pub _pad: [u32; 2],
 }
 
 /// Workgroup size of every entry point.

@@ -4,7 +4,8 @@
 //! one call into `fovea-core`; no rendering math lives here. One frame runs, per dispatch chunk of blocks
 //! of one region, `render_samples` then `reduce_blocks`, and then, once per frame, `cell_means`, `fill`
 //! and `tonemap` (the CPU host's passes 1-3 and its tone mapping, in the same order and with the same
-//! sums). `probe` evaluates single core functions for the cross-backend tests.
+//! sums). The live view adds `accumulate` (between `fill` and `tonemap`) and `overlay_regions` (after
+//! `tonemap`). `probe` evaluates single core functions for the cross-backend tests.
 //!
 //! All entry points run [`WORKGROUP_SIZE`] = 64 invocations per workgroup. The invocation index is
 //! `id.x + id.y · (num_workgroups.x · 64)`, so a host may dispatch up to 65535 workgroups in x and more
@@ -16,10 +17,12 @@
 // Entry points take one argument per binding.
 #![allow(clippy::too_many_arguments)]
 
+use fovea_core::foveation::overlay::overlay_rgba8;
 use fovea_core::foveation::{block_extent, cell_mean_at, fill_value};
 use fovea_core::glam::{Vec3, Vec4};
 use fovea_core::integrator::{render_sample_stream, FrameParams};
 use fovea_core::kernel_abi::{self, GpuBlock, KernelPushConstants, WORKGROUP_SIZE};
+use fovea_core::post::accumulate::accumulate_mean;
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::features::FEATURES_ALL;
 // Built for the host (a plain library), the scene texel binding is the scene's own slices.
@@ -61,6 +64,7 @@ const _: () = {
     assert!(kernel_abi::BINDING_FRAME == 21);
     assert!(kernel_abi::BINDING_SCENE_TEXELS == 22);
     assert!(kernel_abi::BINDING_TRIANGLE_BLOCKS == 23);
+    assert!(kernel_abi::BINDING_ACCUMULATION == 24);
     assert!(kernel_abi::BINDING_PROBE_INPUT == 15);
     assert!(kernel_abi::BINDING_PROBE_OUTPUT == 16);
     assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
@@ -247,6 +251,49 @@ pub fn tonemap(
     }
     let c = hdr[p as usize];
     ldr[p as usize] = tonemap_to_rgba8(Vec3::new(c[0], c[1], c[2]), pc.exposure_ev);
+}
+
+/// Live view, between `fill` and `tonemap`: invocation `p < item_count` adds pixel `p` of the filled HDR
+/// frame to the running mean of the `accumulated_frames` frames before it (core's [`accumulate_mean`];
+/// 0 starts afresh) and writes the mean back over the HDR pixel, so that `tonemap` (and a screenshot's
+/// read-back) see the accumulated image.
+#[spirv(compute(threads(64)))]
+pub fn accumulate(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &mut [[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 24)] accumulation: &mut [[f32; 4]],
+) {
+    let p = invocation_index(id, num_workgroups);
+    if p >= pc.item_count {
+        return;
+    }
+    let mean = accumulate_mean(
+        Vec4::from(accumulation[p as usize]),
+        Vec4::from(hdr[p as usize]),
+        pc.accumulated_frames,
+    );
+    accumulation[p as usize] = mean.to_array();
+    hdr[p as usize] = mean.to_array();
+}
+
+/// Live view, after `tonemap`: invocation `p < item_count` draws the region overlay over pixel `p` of
+/// the RGBA8 image (core's [`overlay_rgba8`], the picture of `fovea render --regions-overlay`).
+#[spirv(compute(threads(64)))]
+pub fn overlay_regions(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 20)] ldr: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+) {
+    let p = invocation_index(id, num_workgroups);
+    if p >= pc.item_count || frame.width == 0 {
+        return;
+    }
+    let (x, y) = (p % frame.width, p / frame.width);
+    ldr[p as usize] = overlay_rgba8(ldr[p as usize], x, y, &frame.foveation);
 }
 
 /// Cross-backend probe: item `i < item_count` evaluates core function `spp` (a `PROBE_*` selector of

@@ -27,6 +27,10 @@ pub struct ContextOptions {
     pub device_index: Option<usize>,
     /// Enable `VK_LAYER_KHRONOS_validation` and record its messages.
     pub validation: bool,
+    /// A window to present to (`fovea view`): the instance gets the window system's surface extensions,
+    /// the device must present to the window's surface from its compute queue, and `VK_KHR_swapchain` is
+    /// enabled.
+    pub window: Option<crate::present::WindowHandles>,
 }
 
 impl ContextOptions {
@@ -36,6 +40,7 @@ impl ContextOptions {
         Self {
             device_index: None,
             validation: validation_requested(),
+            window: None,
         }
     }
 }
@@ -68,6 +73,9 @@ pub(crate) mod pipeline {
     pub const CELL_MEANS: usize = 2;
     pub const FILL: usize = 3;
     pub const TONEMAP: usize = 4;
+    /// The live view's two passes (see `crate::live`).
+    pub const ACCUMULATE: usize = 5;
+    pub const OVERLAY_REGIONS: usize = 6;
 }
 
 /// Timeout of each fence wait per chunk of work.
@@ -85,7 +93,7 @@ pub struct VulkanContext {
     pub(crate) fence: vk::Fence,
     pub(crate) set_layout: vk::DescriptorSetLayout,
     pub(crate) pipeline_layout: vk::PipelineLayout,
-    pub(crate) pipelines: [vk::Pipeline; 5],
+    pub(crate) pipelines: [vk::Pipeline; 7],
     /// The kernel module, kept for re-specialising `render_samples` per scene.
     pub(crate) module: vk::ShaderModule,
     /// The feature mask `pipelines[RENDER_SAMPLES]` was specialised for.
@@ -102,6 +110,10 @@ pub struct VulkanContext {
     /// Mask of the valid timestamp bits.
     pub(crate) timestamp_mask: u64,
     pub(crate) frame: Option<FrameResources>,
+    /// Size of the last frame rendered (what [`Self::read_back_hdr`] and [`Self::present`] show).
+    pub(crate) last_frame_size: Option<(u32, u32)>,
+    /// The window's swapchain (live view), created by the first [`Self::present`].
+    pub(crate) presenter: Option<crate::present::Presenter>,
     pub(crate) poisoned: bool,
     /// A failure the next submission reports instead of submitting ([`Self::inject_fault`]).
     pub(crate) injected_fault: Option<vk::Result>,
@@ -130,13 +142,32 @@ impl VulkanContext {
             }
         }
 
-        let instance = InstanceHandle::new(options.validation)?;
+        let instance = match &options.window {
+            None => InstanceHandle::new(options.validation)?,
+            Some(window) => {
+                let extensions = crate::present::surface_extensions(window)?;
+                let mut instance =
+                    InstanceHandle::with_extensions(options.validation, &extensions)?;
+                crate::present::create_surface(&mut instance, window)?;
+                instance
+            }
+        };
         let physical = instance.physical_devices()?;
-        let infos: Vec<DeviceInfo> = physical
+        let mut infos: Vec<DeviceInfo> = physical
             .iter()
             .enumerate()
             .map(|(i, &pd)| instance.describe(i, pd))
             .collect();
+        if instance.surface.is_some() {
+            for (info, &pd) in infos.iter_mut().zip(&physical) {
+                if info.unsuitable.is_none()
+                    && crate::present::present_queue_family(&instance, pd).is_none()
+                {
+                    info.unsuitable =
+                        Some("no compute queue that can present to the window".into());
+                }
+            }
+        }
         let index = choose_device(&infos, options.device_index)?;
         let pd = physical[index];
         let info = infos[index].clone();
@@ -144,17 +175,22 @@ impl VulkanContext {
 
         // SAFETY (this block and the queries below): `pd` belongs to `vk_instance`.
         let queue_families = unsafe { vk_instance.get_physical_device_queue_family_properties(pd) };
-        // Prefer a compute-only queue family (async compute), else any with compute.
-        let family = queue_families
-            .iter()
-            .enumerate()
-            .filter(|(_, q)| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
-            .min_by_key(|(_, q)| q.queue_flags.contains(vk::QueueFlags::GRAPHICS))
-            .map(|(i, _)| i as u32)
-            .ok_or_else(|| VulkanError::UnsuitableDevice {
-                device: info.name.clone(),
-                reason: "no compute queue".into(),
-            })?;
+        // Prefer a compute-only queue family (async compute), else any with compute; with a window, the
+        // first compute family that presents to it.
+        let family = if instance.surface.is_some() {
+            crate::present::present_queue_family(&instance, pd)
+        } else {
+            queue_families
+                .iter()
+                .enumerate()
+                .filter(|(_, q)| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
+                .min_by_key(|(_, q)| q.queue_flags.contains(vk::QueueFlags::GRAPHICS))
+                .map(|(i, _)| i as u32)
+        }
+        .ok_or_else(|| VulkanError::UnsuitableDevice {
+            device: info.name.clone(),
+            reason: "no compute queue".into(),
+        })?;
         let timestamp_bits = queue_families[family as usize].timestamp_valid_bits;
 
         // Features the module's capabilities need.
@@ -244,8 +280,14 @@ impl VulkanContext {
             .features(want)
             .push_next(&mut want11)
             .push_next(&mut want12);
+        let mut device_extensions = Vec::new();
+        if instance.surface.is_some() {
+            crate::present::check_swapchain_extension(&instance, pd, &info.name)?;
+            device_extensions.push(ash::khr::swapchain::NAME.as_ptr());
+        }
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
+            .enabled_extension_names(&device_extensions)
             .push_next(&mut enabled);
         // SAFETY: the create info and everything it points to live until the call returns.
         let device = unsafe { vk_instance.create_device(pd, &device_info, None) }
@@ -285,7 +327,7 @@ impl VulkanContext {
             fence: vk::Fence::null(),
             set_layout: vk::DescriptorSetLayout::null(),
             pipeline_layout: vk::PipelineLayout::null(),
-            pipelines: [vk::Pipeline::null(); 5],
+            pipelines: [vk::Pipeline::null(); 7],
             module: vk::ShaderModule::null(),
             render_features: FEATURES_ALL,
             probe_pipelines: [vk::Pipeline::null(); 2],
@@ -299,6 +341,8 @@ impl VulkanContext {
                 (1u64 << timestamp_bits) - 1
             },
             frame: None,
+            last_frame_size: None,
+            presenter: None,
             poisoned: false,
             injected_fault: None,
             max_chunk_samples: if info.device_type == "cpu" {
@@ -511,6 +555,19 @@ impl VulkanContext {
         timeout: Duration,
         record: impl FnOnce(&ash::Device, vk::CommandBuffer),
     ) -> Result<()> {
+        self.submit_and_wait_with(what, timeout, None, None, record)
+    }
+
+    /// [`Self::submit_and_wait`] whose submission first waits for `wait` (a semaphore, at a stage) and
+    /// signals `signal` when done (the swapchain's acquire and present semaphores).
+    pub(crate) fn submit_and_wait_with(
+        &mut self,
+        what: &'static str,
+        timeout: Duration,
+        wait: Option<(vk::Semaphore, vk::PipelineStageFlags)>,
+        signal: Option<vk::Semaphore>,
+        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
+    ) -> Result<()> {
         self.check_usable()?;
         let device = &self.shared.device;
         let cb = self.command_buffer;
@@ -539,7 +596,15 @@ impl VulkanContext {
                 })
                 .and_then(|()| {
                     let cbs = [cb];
-                    let submit = [vk::SubmitInfo::default().command_buffers(&cbs)];
+                    let wait_semaphores: Vec<vk::Semaphore> = wait.iter().map(|w| w.0).collect();
+                    let wait_stages: Vec<vk::PipelineStageFlags> =
+                        wait.iter().map(|w| w.1).collect();
+                    let signal_semaphores: Vec<vk::Semaphore> = signal.into_iter().collect();
+                    let submit = [vk::SubmitInfo::default()
+                        .command_buffers(&cbs)
+                        .wait_semaphores(&wait_semaphores)
+                        .wait_dst_stage_mask(&wait_stages)
+                        .signal_semaphores(&signal_semaphores)];
                     device
                         .queue_submit(self.queue, &submit, self.fence)
                         .during("vkQueueSubmit")
@@ -768,6 +833,8 @@ impl Drop for VulkanContext {
         // half-built context) are skipped by the Vulkan destroy functions.
         unsafe {
             let _ = device.device_wait_idle();
+            // The swapchain goes before the surface (with the instance, later).
+            self.presenter = None;
             self.frame = None;
             for p in self.pipelines {
                 device.destroy_pipeline(p, None);

@@ -43,6 +43,9 @@ pub enum VulkanError {
     /// The context hit a timeout or device loss earlier and refuses further work.
     #[error("the Vulkan context is unusable after an earlier device loss or timeout")]
     Poisoned,
+    /// A window cannot be presented to (no surface support, no device that presents to it, ...).
+    #[error("cannot present to the window: {0}")]
+    NoPresentation(String),
     /// Invalid arguments (a scene from another context, bad frame parameters, ...).
     #[error("{0}")]
     Invalid(String),

@@ -84,6 +84,44 @@ impl Sizes {
     }
 }
 
+/// A frame planned and bound, ready for [`VulkanContext::dispatch_frame`].
+struct PreparedFrame {
+    plan: ChunkPlan,
+    sizes: Sizes,
+    blocks_per_region: [u64; 3],
+    plan_ms: f64,
+    warmup_ms: f64,
+    /// The live view's accumulation buffer was created for this frame (so it holds no mean yet).
+    accumulation_is_new: bool,
+}
+
+impl PreparedFrame {
+    fn stats(
+        &self,
+        scene: &GpuScene,
+        render_ms: f64,
+        gpu_timestamps: bool,
+        submissions: u32,
+    ) -> GpuRenderStats {
+        let samples_per_region = self.plan.samples_per_region();
+        GpuRenderStats {
+            render: RenderStats {
+                render_ms,
+                primary_samples: samples_per_region.iter().sum(),
+                samples_per_region,
+                blocks_per_region: self.blocks_per_region,
+                path_features: scene.features.0,
+            },
+            idle_invocations: self.plan.idle_invocations(),
+            chunks: self.plan.chunks.len() as u32,
+            submissions,
+            gpu_timestamps,
+            plan_ms: self.plan_ms,
+            warmup_ms: self.warmup_ms,
+        }
+    }
+}
+
 /// The per-frame buffers (see `kernel_abi` for what each binding holds).
 pub(crate) struct FrameResources {
     sizes: Sizes,
@@ -96,6 +134,21 @@ pub(crate) struct FrameResources {
     ldr: GpuBuffer,
     ldr_readback: GpuBuffer,
     hdr_readback: GpuBuffer,
+    /// The live view's running mean ([`BINDING_ACCUMULATION`]), created by the first live frame.
+    accumulation: Option<GpuBuffer>,
+}
+
+/// What the last submission of a frame does after the fill.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum FrameTail {
+    /// `fovea render`: tone map, then copy the LDR (and, with `want_hdr`, the HDR) image to the host.
+    ReadBack { want_hdr: bool },
+    /// `fovea view`: add the frame to the running mean of `accumulated_frames` earlier ones, tone map
+    /// the mean, draw the region overlay if asked; the image stays on the device for the swapchain.
+    Live {
+        accumulated_frames: u32,
+        overlay: bool,
+    },
 }
 
 const PIXEL: u64 = 16;
@@ -172,6 +225,7 @@ impl FrameResources {
                 dst,
                 MemoryLocation::GpuToCpu,
             )?,
+            accumulation: None,
         })
     }
 }
@@ -212,6 +266,28 @@ pub(crate) fn record_dispatch(
             bytemuck::bytes_of(pc),
         );
         device.cmd_dispatch(cb, x, y, 1);
+    }
+}
+
+/// Makes the transfer writes before it visible to host reads after the submission's fence.
+///
+/// # Safety
+/// `cb` must be in the recording state.
+unsafe fn host_read_barrier(device: &ash::Device, cb: vk::CommandBuffer) {
+    let to_host = [vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ)];
+    // SAFETY: the caller guarantees a recording command buffer.
+    unsafe {
+        device.cmd_pipeline_barrier(
+            cb,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &to_host,
+            &[],
+            &[],
+        );
     }
 }
 
@@ -291,6 +367,125 @@ impl VulkanContext {
         want_hdr: bool,
         progress: &dyn Fn(u64),
     ) -> Result<(GpuFrame, GpuRenderStats)> {
+        let prepared = self.prepare_frame(scene, frame, false)?;
+        let tail = FrameTail::ReadBack { want_hdr };
+        let result = self.dispatch_frame(
+            &prepared.plan,
+            &prepared.sizes,
+            fill_mode,
+            exposure_ev,
+            tail,
+            progress,
+        );
+        let (render_ms, gpu_timestamps, submissions) = result?;
+
+        let pixels = prepared.sizes.pixels;
+        let (w, h) = (frame.width, frame.height);
+        let res = self.frame.as_mut().expect("frame resources exist");
+        let ldr = res.ldr_readback.read::<u32>(pixels as usize)?;
+        let hdr = if want_hdr {
+            Some(FrameImage {
+                width: w,
+                height: h,
+                pixels: res.hdr_readback.read::<[f32; 4]>(pixels as usize)?,
+            })
+        } else {
+            None
+        };
+        let stats = prepared.stats(scene, render_ms, gpu_timestamps, submissions);
+        Ok((
+            GpuFrame {
+                width: w,
+                height: h,
+                ldr,
+                hdr,
+            },
+            stats,
+        ))
+    }
+
+    /// Renders one frame of the live view (`fovea view`): the same passes as [`Self::render_frame`],
+    /// then the frame joins the running mean of the `accumulated_frames` frames before it (0 starts
+    /// afresh), the mean is tone-mapped and, with `overlay`, the regions are drawn over it. Nothing is
+    /// read back: [`Self::present`] shows the image, [`Self::read_back_hdr`] fetches the mean for a
+    /// screenshot. Returns the statistics and the number of earlier frames actually averaged in (0 when
+    /// the frame's buffers had to be re-created, which loses the mean).
+    pub fn render_live_frame(
+        &mut self,
+        scene: &GpuScene,
+        frame: &FrameParams,
+        fill_mode: u32,
+        exposure_ev: f32,
+        accumulated_frames: u32,
+        overlay: bool,
+    ) -> Result<(GpuRenderStats, u32)> {
+        let prepared = self.prepare_frame(scene, frame, true)?;
+        let accumulated_frames = if prepared.accumulation_is_new {
+            0
+        } else {
+            accumulated_frames
+        };
+        let tail = FrameTail::Live {
+            accumulated_frames,
+            overlay,
+        };
+        let (render_ms, gpu_timestamps, submissions) = self.dispatch_frame(
+            &prepared.plan,
+            &prepared.sizes,
+            fill_mode,
+            exposure_ev,
+            tail,
+            &|_| {},
+        )?;
+        let stats = prepared.stats(scene, render_ms, gpu_timestamps, submissions);
+        Ok((stats, accumulated_frames))
+    }
+
+    /// The HDR image of the last frame (with the live view, the running mean), copied to the host.
+    pub fn read_back_hdr(&mut self) -> Result<FrameImage> {
+        let (w, h) = self
+            .last_frame_size
+            .ok_or_else(|| VulkanError::Invalid("no frame has been rendered yet".into()))?;
+        let pixels = u64::from(w) * u64::from(h);
+        let res = self.frame.as_ref().expect("a rendered frame has resources");
+        let (src, dst) = (res.replicated.buffer, res.hdr_readback.buffer);
+        self.submit_and_wait("the HDR read-back", CHUNK_TIMEOUT, |device, cb| {
+            barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
+            // SAFETY: both buffers hold at least `pixels` HDR pixels; the host barrier makes the copy
+            // visible to the mapped read after the fence.
+            unsafe {
+                device.cmd_copy_buffer(
+                    cb,
+                    src,
+                    dst,
+                    &[vk::BufferCopy::default().size(pixels * PIXEL)],
+                );
+                host_read_barrier(device, cb);
+            }
+        })?;
+        let res = self.frame.as_mut().expect("a rendered frame has resources");
+        Ok(FrameImage {
+            width: w,
+            height: h,
+            pixels: res.hdr_readback.read::<[f32; 4]>(pixels as usize)?,
+        })
+    }
+
+    /// The device buffer holding the last frame's RGBA8 image (what the swapchain copy reads).
+    pub(crate) fn last_ldr_buffer(&self) -> Option<(vk::Buffer, u32, u32)> {
+        let (w, h) = self.last_frame_size?;
+        self.frame.as_ref().map(|f| (f.ldr.buffer, w, h))
+    }
+
+    /// Checks the frame, plans its blocks and chunks, makes sure the frame's buffers fit (with
+    /// `live`, also the accumulation buffer) and point the bindings at them, specialises and warms up the
+    /// pipelines.
+    fn prepare_frame(
+        &mut self,
+        scene: &GpuScene,
+        frame: &FrameParams,
+        live: bool,
+    ) -> Result<PreparedFrame> {
         self.check_usable()?;
         scene.check_uploaded_to(&self.shared)?;
         let (w, h) = (frame.width, frame.height);
@@ -334,6 +529,33 @@ impl VulkanContext {
             self.frame = None; // free the old buffers first
             self.frame = Some(FrameResources::new(self, sizes)?);
         }
+        if self.last_frame_size != Some((w, h)) {
+            // A mean of another image size is meaningless.
+            if let Some(res) = self.frame.as_mut() {
+                res.accumulation = None;
+            }
+        }
+        self.last_frame_size = Some((w, h));
+        let mut accumulation_is_new = false;
+        if live
+            && self
+                .frame
+                .as_ref()
+                .is_some_and(|f| f.accumulation.is_none())
+        {
+            let buffer = GpuBuffer::new(
+                &self.shared,
+                "live-view accumulation",
+                pixels * PIXEL,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+            )?;
+            self.frame
+                .as_mut()
+                .expect("frame resources exist")
+                .accumulation = Some(buffer);
+            accumulation_is_new = true;
+        }
         {
             let res = self
                 .frame
@@ -353,49 +575,18 @@ impl VulkanContext {
             start.elapsed().as_secs_f64() * 1e3
         };
 
-        let result = self.dispatch_frame(&plan, &sizes, fill_mode, exposure_ev, want_hdr, progress);
-        let (render_ms, gpu_timestamps, submissions) = result?;
-
-        let res = self.frame.as_mut().expect("frame resources exist");
-        let ldr = res.ldr_readback.read::<u32>(pixels as usize)?;
-        let hdr = if want_hdr {
-            Some(FrameImage {
-                width: w,
-                height: h,
-                pixels: res.hdr_readback.read::<[f32; 4]>(pixels as usize)?,
-            })
-        } else {
-            None
-        };
-        let samples_per_region = plan.samples_per_region();
-        let stats = GpuRenderStats {
-            render: RenderStats {
-                render_ms,
-                primary_samples: samples_per_region.iter().sum(),
-                samples_per_region,
-                blocks_per_region: [
-                    blocks[0].len() as u64,
-                    blocks[1].len() as u64,
-                    blocks[2].len() as u64,
-                ],
-                path_features: scene.features.0,
-            },
-            idle_invocations: plan.idle_invocations(),
-            chunks: plan.chunks.len() as u32,
-            submissions,
-            gpu_timestamps,
+        Ok(PreparedFrame {
+            blocks_per_region: [
+                blocks[0].len() as u64,
+                blocks[1].len() as u64,
+                blocks[2].len() as u64,
+            ],
+            plan,
+            sizes,
             plan_ms,
             warmup_ms,
-        };
-        Ok((
-            GpuFrame {
-                width: w,
-                height: h,
-                ldr,
-                hdr,
-            },
-            stats,
-        ))
+            accumulation_is_new,
+        })
     }
 
     /// Points every binding at this frame's buffers (nothing is in flight: every submission was waited
@@ -420,6 +611,16 @@ impl VulkanContext {
                 &res.frame,
                 std::mem::size_of::<FrameParams>() as u64,
             ),
+            // Only `accumulate` reads it, and only live frames (which create it) dispatch that; until
+            // then the binding points at the cell means, so that every binding is valid.
+            match &res.accumulation {
+                Some(a) => (BINDING_ACCUMULATION, a, sizes.pixels * PIXEL),
+                None => (
+                    BINDING_ACCUMULATION,
+                    &res.cell_means,
+                    sizes.cells.max(1) * PIXEL,
+                ),
+            },
         ];
         for (binding, buf, range) in frame_buffers {
             infos.push((
@@ -461,7 +662,8 @@ impl VulkanContext {
             item_count: 0,
             fill_mode: 0,
             exposure_ev: 0.0,
-            _pad: [0; 3],
+            accumulated_frames: 0,
+            _pad: [0; 2],
         };
         let max_x = self.limits.max_workgroup_count_x;
         self.submit_and_wait("the pipeline warm-up", CHUNK_TIMEOUT, |device, cb| {
@@ -481,7 +683,7 @@ impl VulkanContext {
         sizes: &Sizes,
         fill_mode: u32,
         exposure_ev: f32,
-        want_hdr: bool,
+        tail: FrameTail,
         progress: &dyn Fn(u64),
     ) -> Result<(f64, bool, u32)> {
         let layout = self.pipeline_layout;
@@ -514,7 +716,8 @@ impl VulkanContext {
             item_count: 0,
             fill_mode,
             exposure_ev,
-            _pad: [0; 3],
+            accumulated_frames: 0,
+            _pad: [0; 2],
         };
 
         let wall = Instant::now();
@@ -582,37 +785,43 @@ impl VulkanContext {
             };
             dispatch(device, cb, pipeline::FILL, 0, &pc, pixels);
             barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+            if let FrameTail::Live {
+                accumulated_frames, ..
+            } = tail
+            {
+                let pc = KernelPushConstants {
+                    accumulated_frames,
+                    ..pc
+                };
+                dispatch(device, cb, pipeline::ACCUMULATE, 0, &pc, pixels);
+                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+            }
             dispatch(device, cb, pipeline::TONEMAP, 0, &pc, pixels);
+            if matches!(tail, FrameTail::Live { overlay: true, .. }) {
+                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+                dispatch(device, cb, pipeline::OVERLAY_REGIONS, 0, &pc, pixels);
+            }
             barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
             // SAFETY: the readback buffers are as large as the images; the host barrier makes the copies
             // visible to the mapped reads after the fence.
             unsafe {
-                device.cmd_copy_buffer(
-                    cb,
-                    ldr,
-                    ldr_rb,
-                    &[vk::BufferCopy::default().size(pixels * 4)],
-                );
-                if want_hdr {
+                if let FrameTail::ReadBack { want_hdr } = tail {
                     device.cmd_copy_buffer(
                         cb,
-                        hdr,
-                        hdr_rb,
-                        &[vk::BufferCopy::default().size(pixels * PIXEL)],
+                        ldr,
+                        ldr_rb,
+                        &[vk::BufferCopy::default().size(pixels * 4)],
                     );
+                    if want_hdr {
+                        device.cmd_copy_buffer(
+                            cb,
+                            hdr,
+                            hdr_rb,
+                            &[vk::BufferCopy::default().size(pixels * PIXEL)],
+                        );
+                    }
+                    host_read_barrier(device, cb);
                 }
-                let to_host = [vk::MemoryBarrier::default()
-                    .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                    .dst_access_mask(vk::AccessFlags::HOST_READ)];
-                device.cmd_pipeline_barrier(
-                    cb,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::PipelineStageFlags::HOST,
-                    vk::DependencyFlags::empty(),
-                    &to_host,
-                    &[],
-                    &[],
-                );
                 if timed {
                     device.cmd_write_timestamp(
                         cb,

@@ -23,6 +23,9 @@ pub(crate) struct InstanceHandle {
     /// Owned here so the pointer the callback receives stays valid until the messenger is destroyed.
     _log_box: Box<MessageLog>,
     pub log: MessageLog,
+    /// A window's surface (the live view), destroyed before the instance; every swapchain on it is
+    /// destroyed earlier, with the context.
+    pub surface: Option<(ash::khr::surface::Instance, vk::SurfaceKHR)>,
 }
 
 /// Records every warning or error the validation layer sends.
@@ -53,6 +56,12 @@ impl InstanceHandle {
     /// Loads Vulkan and creates an instance (API 1.2). With `validation`, enables the Khronos validation
     /// layer and a messenger that records warnings and errors.
     pub fn new(validation: bool) -> Result<Self> {
+        Self::with_extensions(validation, &[])
+    }
+
+    /// [`Self::new`] with `extra_extensions` enabled besides (a window's surface extensions); a missing
+    /// one is an error that names it.
+    pub fn with_extensions(validation: bool, extra_extensions: &[&CStr]) -> Result<Self> {
         // SAFETY: loading the system Vulkan loader runs its initialisation code; we trust the loader.
         let entry =
             unsafe { ash::Entry::load() }.map_err(|e| VulkanError::NoLoader(e.to_string()))?;
@@ -95,6 +104,23 @@ impl InstanceHandle {
             layers.push(VALIDATION_LAYER.as_ptr());
             extensions.push(ash::ext::debug_utils::NAME.as_ptr());
         }
+        if !extra_extensions.is_empty() {
+            // SAFETY: plain query on a loaded entry.
+            let available = unsafe { entry.enumerate_instance_extension_properties(None) }
+                .during("vkEnumerateInstanceExtensionProperties")?;
+            for &name in extra_extensions {
+                if !available
+                    .iter()
+                    .any(|e| e.extension_name_as_c_str().ok() == Some(name))
+                {
+                    return Err(VulkanError::NoPresentation(format!(
+                        "the Vulkan loader lacks the instance extension {} that this window system needs",
+                        name.to_string_lossy()
+                    )));
+                }
+                extensions.push(name.as_ptr());
+            }
+        }
         let app = vk::ApplicationInfo::default()
             .application_name(c"fovea")
             .engine_name(c"fovea")
@@ -118,6 +144,7 @@ impl InstanceHandle {
             debug: None,
             _log_box: log_box,
             log,
+            surface: None,
         };
         if validation {
             let loader = ash::ext::debug_utils::Instance::new(&handle.entry, &handle.instance);
@@ -220,8 +247,11 @@ impl InstanceHandle {
 
 impl Drop for InstanceHandle {
     fn drop(&mut self) {
-        // SAFETY: every child object (device, messenger) is destroyed here or before, in order.
+        // SAFETY: every child object (device, surface, messenger) is destroyed here or before, in order.
         unsafe {
+            if let Some((loader, surface)) = self.surface.take() {
+                loader.destroy_surface(surface, None);
+            }
             if let Some((loader, messenger)) = self.debug.take() {
                 loader.destroy_debug_utils_messenger(messenger, None);
             }

@@ -13,6 +13,10 @@
 //! 2. **Cell means** (`cell_means`), 3. **fill** (`fill`) and the **tone map** (`tonemap`) run one
 //!    invocation per cell or pixel, then the LDR (and optionally HDR) image is copied back.
 //!
+//! The live view (`fovea view`) adds two passes, `accumulate` and `overlay_regions`, keeps the image on
+//! the device and presents it to a window's swapchain ([`present`]); the CPU backend's frames go through
+//! the same presenter from the host.
+//!
 //! `render_ms` comes from GPU timestamps around the whole frame (wall time where the queue has none).
 //! With `FOVEA_VULKAN_VALIDATION=1` the Khronos validation layer is enabled and its warnings and errors are
 //! collected ([`VulkanContext::validation_messages`]).
@@ -22,6 +26,7 @@ pub mod context;
 pub mod error;
 pub mod frame;
 pub mod instance;
+pub mod present;
 pub mod probe;
 pub mod scene;
 pub mod spirv;
@@ -32,4 +37,5 @@ pub use context::{validation_requested, ContextOptions, VulkanContext};
 pub use error::VulkanError;
 pub use frame::{GpuFrame, GpuRenderStats};
 pub use instance::{list_devices, DeviceInfo};
+pub use present::{HudOverlay, PresentOutcome, PresentSource, WindowHandles};
 pub use scene::GpuScene;

@@ -192,7 +192,8 @@ impl VulkanContext {
             item_count,
             fill_mode: 0,
             exposure_ev: 0.0,
-            _pad: [0; 3],
+            accumulated_frames: 0,
+            _pad: [0; 2],
         };
         let layout = self.pipeline_layout;
         let max_x = self.limits.max_workgroup_count_x;

@@ -5,12 +5,14 @@ use crate::error::{Result, VulkanError};
 pub static EMBEDDED_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_SPV"));
 
 /// Entry points the host creates a pipeline for, in [`crate::context`]'s pipeline order.
-pub const ENTRY_POINTS: [&str; 5] = [
+pub const ENTRY_POINTS: [&str; 7] = [
     "render_samples",
     "reduce_blocks",
     "cell_means",
     "fill",
     "tonemap",
+    "accumulate",
+    "overlay_regions",
 ];
 
 /// SPIR-V magic number (first word of every module).

@@ -188,6 +188,7 @@ pub fn vulkan_context_or_skip(what: &str) -> Option<fovea_vulkan::VulkanContext>
     let options = ContextOptions {
         device_index: None,
         validation: fovea_vulkan::validation_requested(),
+        window: None,
     };
     match VulkanContext::new(&options) {
         Ok(ctx) => Some(ctx),

@@ -183,6 +183,7 @@ fn bad_device_index_is_a_clear_error() {
     let err = VulkanContext::new(&ContextOptions {
         device_index: Some(devices.len() + 3),
         validation: false,
+        window: None,
     })
     .err()
     .expect("an out-of-range index fails");

@@ -1,0 +1,951 @@
+//! The live view's window and event loop (winit): input and scripted events change the viewer's
+//! state; each redraw reads the newest gaze, moves the camera, renders one frame (or a budgeted
+//! fraction of one) into the running mean, presents it with the on-screen figures, and records it.
+//!
+//! **Accumulation** restarts when the camera moves, the gaze moves by half a pixel or more (foveated
+//! only: a uniform frame does not depend on the gaze), the window's size, the configuration, the
+//! uniform toggle or the budget shift changes, or on `R`. A moving gaze restarts the whole mean rather
+//! than only where the regions changed: every pixel's owning block and sample jitter depend on the
+//! gaze, so a partial restart would need per-pixel sample counts on both backends; the budget keeps
+//! restarts cheap, and the eye, once it rests, sees the image converge from there.
+use std::collections::HashSet;
+use std::time::{Duration, Instant};
+
+use fovea_core::camera::Camera;
+use fovea_core::foveation::regions::FOVEATION_OK;
+use fovea_core::integrator::FrameParams;
+use glam::Vec3;
+use serde_json::json;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, StartCause, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+use winit::window::{Window, WindowId};
+
+use crate::args::Backend;
+use crate::error::{FoveaError, Result};
+use crate::scene_setup::{choose_camera, prepare_scene, PreparedScene};
+use crate::view::fly::{FlyCamera, Movement};
+use crate::view::gaze::GazeConvention;
+use crate::view::hud::render_hud;
+use crate::view::live::LiveRenderer;
+use crate::view::options::{GazeInput, ViewOptions};
+use crate::view::record::{median, stats_document, write_screenshot, FrameRecord};
+use crate::view::sampling::{frame_foveation, frame_spp, BudgetController};
+use crate::view::script::{ScriptEvent, ViewKey};
+
+/// Frames in one mean before the view stops rendering and waits (the image has converged far past
+/// what a viewer can tell apart).
+const MAX_ACCUMULATED_FRAMES: u32 = 4096;
+/// Time step of the fly controls in scripted runs (real time otherwise), so a script moves the camera
+/// the same way on every machine.
+const SCRIPT_DT: f32 = 1.0 / 30.0;
+/// How often a minimised or paused scripted run advances its frame clock.
+const IDLE_TICK: Duration = Duration::from_millis(15);
+/// Where the on-screen figures go.
+const HUD_CORNER: [u32; 2] = [8, 8];
+
+/// Opens the window and runs the view until it is closed.
+pub fn run(options: ViewOptions) -> Result<()> {
+    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
+        return Err(FoveaError::View(
+            "no display to open a window on (neither DISPLAY nor WAYLAND_DISPLAY is set); run it in a \
+             desktop session, or headless under Xvfb: xvfb-run -a fovea view ..."
+                .into(),
+        ));
+    }
+    let use_gpu = match options.backend {
+        Backend::Cpu => false,
+        Backend::Vulkan => true,
+        Backend::Auto => match crate::backend::auto_vulkan_refusal() {
+            None => true,
+            Some(why) => {
+                if !options.quiet {
+                    eprintln!("note: rendering on the CPU (presenting through Vulkan): {why}");
+                }
+                false
+            }
+        },
+    };
+    let scene = prepare_scene(
+        options.scene.as_deref(),
+        options.mtl.as_deref(),
+        options.mtl_diffuse,
+        &options.lighting.environment(options.scene.is_none()),
+        &options.lighting.point_lights,
+        !use_gpu,
+    )?;
+    if scene.packed.lights.is_empty() {
+        eprintln!(
+            "warning: the scene has no light and no sky: the image will be black (add --sky R,G,B \
+             or --point-light X,Y,Z,R,G,B)"
+        );
+    }
+    let event_loop = EventLoop::new().map_err(|e| {
+        FoveaError::View(format!(
+            "cannot connect to the display: {e} (is the X server or Wayland compositor running?)"
+        ))
+    })?;
+    let mut viewer = Viewer::new(options, scene, use_gpu)?;
+    event_loop
+        .run_app(&mut viewer)
+        .map_err(|e| FoveaError::View(format!("the window's event loop failed: {e}")))?;
+    viewer.finish()
+}
+
+/// The state of the view.
+struct Viewer {
+    options: ViewOptions,
+    scene: PreparedScene,
+    use_gpu: bool,
+    // Field order: the renderer (which owns the window's surface) is dropped before the window.
+    renderer: Option<LiveRenderer>,
+    window: Option<Window>,
+    error: Option<FoveaError>,
+
+    // Input.
+    held: HashSet<ViewKey>,
+    /// Movement keys pressed (not held) this frame: they move the camera for one frame.
+    tapped: HashSet<ViewKey>,
+    cursor: Option<[f64; 2]>,
+    looking: bool,
+    window_size: [u32; 2],
+    minimized: bool,
+
+    // Gaze: the newest sample in window pixels and when it arrived.
+    gaze: [f32; 2],
+    gaze_arrived: Option<Instant>,
+    gaze_used: Option<Instant>,
+    started: Instant,
+
+    // Camera.
+    fly: FlyCamera,
+    fly_start: FlyCamera,
+    camera_moved: bool,
+    last_tick: Option<Instant>,
+
+    // Sampling.
+    config_index: usize,
+    uniform: bool,
+    overlay: bool,
+    hud_on: bool,
+    paused: bool,
+    budget: BudgetController,
+
+    // Accumulation: frames in the mean, and what the mean was rendered with.
+    accumulated: u32,
+    mean_key: Option<MeanKey>,
+    reset_requested: bool,
+
+    // Clock and records.
+    frame: u64,
+    frame_index_key: u32,
+    next_idle_tick: Instant,
+    records: Vec<FrameRecord>,
+    last_record: Option<FrameRecord>,
+    last_foveation: Option<fovea_core::foveation::regions::FoveationParams>,
+    screenshot_requested: bool,
+    screenshots: Vec<String>,
+    malformed_gaze: Vec<String>,
+    exit: bool,
+    present_mode: &'static str,
+}
+
+/// What a running mean depends on: any change starts a new one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct MeanKey {
+    size: [u32; 2],
+    config_index: usize,
+    uniform: bool,
+    shift: u32,
+    gaze: [f32; 2],
+}
+
+impl Viewer {
+    fn new(options: ViewOptions, scene: PreparedScene, use_gpu: bool) -> Result<Self> {
+        let [w, h] = options.window_size;
+        let c = &options.camera;
+        let camera = choose_camera(
+            &scene,
+            c.eye,
+            c.target,
+            c.up,
+            options.fov,
+            w as f32 / h as f32,
+        )?;
+        let eye = Vec3::from_slice(&camera.position[..3]);
+        let forward = Vec3::from_slice(&camera.forward[..3]);
+        let up = Vec3::from_slice(&camera.up[..3]);
+        let fov_deg = (2.0 * up.length().atan()).to_degrees();
+        let diagonal = (scene.packed.bounds_max - scene.packed.bounds_min).length();
+        let fly = FlyCamera::new(eye, eye + forward, Vec3::from(c.up), fov_deg, diagonal);
+        let now = Instant::now();
+        Ok(Self {
+            uniform: options.uniform,
+            overlay: options.overlay,
+            budget: BudgetController::new(options.budget_ms),
+            window_size: options.window_size,
+            gaze: [0.5 * w as f32, 0.5 * h as f32],
+            options,
+            scene,
+            use_gpu,
+            renderer: None,
+            window: None,
+            error: None,
+            held: HashSet::new(),
+            tapped: HashSet::new(),
+            cursor: None,
+            looking: false,
+            minimized: false,
+            gaze_arrived: None,
+            gaze_used: None,
+            started: now,
+            fly_start: fly.clone(),
+            fly,
+            camera_moved: false,
+            last_tick: None,
+            config_index: 0,
+            hud_on: true,
+            paused: false,
+            accumulated: 0,
+            mean_key: None,
+            reset_requested: false,
+            frame: 0,
+            frame_index_key: 0,
+            next_idle_tick: now,
+            records: Vec::new(),
+            last_record: None,
+            last_foveation: None,
+            screenshot_requested: false,
+            screenshots: Vec::new(),
+            malformed_gaze: Vec::new(),
+            exit: false,
+            present_mode: "",
+        })
+    }
+
+    /// Stops the event loop with `e` as the run's result.
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: FoveaError) {
+        if self.error.is_none() {
+            self.error = Some(e);
+        }
+        self.exit = true;
+        event_loop.exit();
+    }
+
+    fn scripted(&self) -> bool {
+        self.options.script.is_some()
+    }
+
+    /// Whether the next tick renders (else the view waits for input).
+    fn wants_frame(&self) -> bool {
+        !self.exit
+            && !self.minimized
+            && !self.paused
+            && self.window_size[0] > 0
+            && self.window_size[1] > 0
+            && (self.accumulated < MAX_ACCUMULATED_FRAMES
+                || self.view_changed_since_mean()
+                || !self.held.is_empty()
+                || !self.tapped.is_empty())
+    }
+
+    fn view_changed_since_mean(&self) -> bool {
+        self.reset_requested
+            || self.camera_moved
+            || self.mean_key.map(|k| k.config_index) != Some(self.config_index)
+    }
+
+    // ----- input --------------------------------------------------------------------------------------
+
+    fn key(&mut self, key: ViewKey, pressed: bool, repeat: bool, event_loop: &ActiveEventLoop) {
+        let movement = matches!(
+            key,
+            ViewKey::W
+                | ViewKey::A
+                | ViewKey::S
+                | ViewKey::D
+                | ViewKey::Q
+                | ViewKey::E
+                | ViewKey::Shift
+        );
+        if movement {
+            if pressed {
+                self.held.insert(key);
+            } else {
+                self.held.remove(&key);
+            }
+            return;
+        }
+        if !pressed || repeat {
+            return;
+        }
+        self.press(key, event_loop);
+    }
+
+    /// A key's action (keys other than the movement keys act on press).
+    fn press(&mut self, key: ViewKey, event_loop: &ActiveEventLoop) {
+        match key {
+            ViewKey::U => {
+                self.uniform = !self.uniform;
+                self.budget.reset();
+            }
+            ViewKey::O => self.overlay = !self.overlay,
+            ViewKey::C => {
+                self.config_index = (self.config_index + 1) % self.options.configs.len();
+                self.budget.reset();
+            }
+            ViewKey::Space => self.paused = !self.paused,
+            ViewKey::P => self.screenshot_requested = true,
+            ViewKey::R => {
+                self.fly.reset_to(&self.fly_start);
+                self.reset_requested = true;
+                self.budget.reset();
+            }
+            ViewKey::H => self.hud_on = !self.hud_on,
+            ViewKey::Escape => {
+                self.exit = true;
+                event_loop.exit();
+            }
+            ViewKey::W
+            | ViewKey::A
+            | ViewKey::S
+            | ViewKey::D
+            | ViewKey::Q
+            | ViewKey::E
+            | ViewKey::Shift => {
+                self.tapped.insert(key);
+            }
+        }
+        self.request_redraw();
+    }
+
+    fn cursor_moved(&mut self, x: f64, y: f64, at: Instant) {
+        if let Some([px, py]) = self.cursor {
+            if self.looking {
+                let rad_per_px =
+                    self.fly.fov_y_degrees().to_radians() / self.window_size[1].max(1) as f32;
+                if self.fly.look(x - px, y - py, rad_per_px) {
+                    self.camera_moved = true;
+                }
+            }
+        }
+        self.cursor = Some([x, y]);
+        if matches!(self.options.gaze, GazeInput::Mouse) {
+            self.gaze = [x as f32, y as f32];
+            self.gaze_arrived = Some(at);
+        }
+        self.request_redraw();
+    }
+
+    fn request_redraw(&self) {
+        if let Some(w) = &self.window {
+            w.request_redraw();
+        }
+    }
+
+    fn apply_script_event(&mut self, event: ScriptEvent, event_loop: &ActiveEventLoop) {
+        let now = Instant::now();
+        match event {
+            ScriptEvent::Gaze { x, y } => {
+                let [w, h] = self.window_size;
+                self.gaze =
+                    crate::view::gaze::to_window_pixels(GazeConvention::Normalized, x, y, [w, h]);
+                self.gaze_arrived = Some(now);
+            }
+            ScriptEvent::Mouse { x, y } => self.cursor_moved(x, y, now),
+            ScriptEvent::Press(k) => self.press(k, event_loop),
+            ScriptEvent::Down(k) => self.key(k, true, false, event_loop),
+            ScriptEvent::Up(k) => self.key(k, false, false, event_loop),
+            ScriptEvent::Button { down } => self.looking = down,
+            ScriptEvent::Wheel(steps) => self.fly.scroll(steps),
+            ScriptEvent::Resize { width, height } => {
+                if let Some(w) = &self.window {
+                    if let Some(size) = w.request_inner_size(PhysicalSize::new(width, height)) {
+                        self.window_size = [size.width, size.height];
+                    }
+                }
+            }
+            ScriptEvent::Minimize => {
+                if let Some(w) = &self.window {
+                    w.set_minimized(true);
+                }
+                self.minimized = true;
+            }
+            ScriptEvent::Restore => {
+                if let Some(w) = &self.window {
+                    w.set_minimized(false);
+                }
+                self.minimized = false;
+            }
+            ScriptEvent::Close => {
+                self.exit = true;
+                event_loop.exit();
+            }
+        }
+    }
+
+    /// Reads the live gaze sources (UDP, trace) just before a frame.
+    fn poll_gaze(&mut self) {
+        let size = self.window_size;
+        match &mut self.options.gaze {
+            GazeInput::Mouse => {}
+            GazeInput::Udp(source) => {
+                let poll = source.poll(size);
+                if let Some((sample, at)) = poll.newest {
+                    self.gaze = [sample.x, sample.y];
+                    self.gaze_arrived = Some(at);
+                }
+                for m in poll.malformed {
+                    if self.malformed_gaze.is_empty() && !self.options.quiet {
+                        eprintln!("warning: {m} (dropped; later ones are counted in --stats)");
+                    }
+                    if self.malformed_gaze.len() < 100 {
+                        self.malformed_gaze.push(m);
+                    }
+                }
+            }
+            GazeInput::Trace(trace) => {
+                let t = self.started.elapsed().as_secs_f64();
+                if let Some(sample) = trace.sample_at(t, size) {
+                    if [sample.x, sample.y] != self.gaze {
+                        self.gaze = [sample.x, sample.y];
+                        self.gaze_arrived = Some(Instant::now());
+                    }
+                }
+            }
+        }
+    }
+
+    fn movement(&self) -> Movement {
+        let on = |k: ViewKey| self.held.contains(&k) || self.tapped.contains(&k);
+        Movement {
+            forward: on(ViewKey::W),
+            back: on(ViewKey::S),
+            left: on(ViewKey::A),
+            right: on(ViewKey::D),
+            up: on(ViewKey::E),
+            down: on(ViewKey::Q),
+            fast: on(ViewKey::Shift),
+        }
+    }
+
+    // ----- frames -------------------------------------------------------------------------------------
+
+    /// One tick of the frame clock: scripted events, then a frame if the view renders, then the exit
+    /// checks.
+    fn tick(&mut self, event_loop: &ActiveEventLoop) {
+        let due = match self.options.script.as_mut() {
+            Some(s) => s.due(self.frame),
+            None => Vec::new(),
+        };
+        for e in due {
+            self.apply_script_event(e, event_loop);
+        }
+        if self.exit {
+            return;
+        }
+        if let Some(w) = &self.window {
+            let s = w.inner_size();
+            if !self.minimized {
+                self.window_size = [s.width, s.height];
+            }
+        }
+        if self.wants_frame() {
+            if let Err(e) = self.render_frame() {
+                self.fail(event_loop, e);
+                return;
+            }
+        }
+        self.frame += 1;
+        let script_done = self
+            .options
+            .script
+            .as_ref()
+            .is_some_and(|s| s.is_finished() && self.options.exit_after_frames.is_none());
+        if self
+            .options
+            .exit_after_frames
+            .is_some_and(|n| self.frame >= n)
+            || script_done
+        {
+            self.exit = true;
+            event_loop.exit();
+        }
+    }
+
+    fn render_frame(&mut self) -> Result<()> {
+        let tick_start = Instant::now();
+        self.poll_gaze();
+        let dt = if self.scripted() {
+            SCRIPT_DT
+        } else {
+            self.last_tick
+                .map_or(0.0, |t| t.elapsed().as_secs_f32())
+                .min(0.25)
+        };
+        self.last_tick = Some(tick_start);
+        if self.fly.update(dt, &self.movement()) {
+            self.camera_moved = true;
+        }
+        self.tapped.clear();
+
+        let size = self.window_size;
+        let config = self.options.configs[self.config_index].clone();
+        let radii = self.options.radii.radii_px(size);
+        // A new mean? (The budget shift may only change on such frames.)
+        let key = MeanKey {
+            size,
+            config_index: self.config_index,
+            uniform: self.uniform,
+            shift: self.budget.shift(),
+            gaze: self.gaze,
+        };
+        let restart = match self.mean_key {
+            None => true,
+            Some(old) => {
+                self.reset_requested
+                    || self.camera_moved
+                    || old.size != key.size
+                    || old.config_index != key.config_index
+                    || old.uniform != key.uniform
+                    || old.shift != key.shift
+                    || (!self.uniform
+                        && ((old.gaze[0] - key.gaze[0]).abs() >= 0.5
+                            || (old.gaze[1] - key.gaze[1]).abs() >= 0.5))
+            }
+        };
+        let accumulated_before = if restart { 0 } else { self.accumulated };
+        self.reset_requested = false;
+        self.camera_moved = false;
+
+        let shift = self.budget.shift();
+        let foveation = frame_foveation(&config, self.uniform, shift, self.gaze, radii);
+        if foveation.validate() != FOVEATION_OK {
+            return Err(FoveaError::option(
+                "--spp/--blocks/--radii",
+                "the foveation settings are inconsistent",
+            ));
+        }
+        let pose = self.fly.pose();
+        let camera = Camera::from_forward(
+            pose.eye,
+            pose.forward,
+            pose.up_hint,
+            pose.fov_y_degrees.to_radians(),
+            size[0] as f32 / size[1] as f32,
+        );
+        let frame = FrameParams {
+            camera,
+            foveation,
+            integrator: self.options.integrator,
+            width: size[0],
+            height: size[1],
+            frame_index: self.frame_index_key,
+            seed: self.options.seed,
+        };
+        self.frame_index_key = self.frame_index_key.wrapping_add(1);
+        let gaze_is_new = self.gaze_arrived.is_some() && self.gaze_arrived != self.gaze_used;
+        self.gaze_used = self.gaze_arrived;
+
+        let renderer = self.renderer.as_mut().expect("the window is open");
+        let render_start = Instant::now();
+        let (stats, before) = renderer.render(
+            &self.scene.packed,
+            &frame,
+            self.options.fill_mode,
+            self.options.exposure,
+            accumulated_before,
+            self.overlay,
+        )?;
+        let render_ms = render_start.elapsed().as_secs_f64() * 1e3;
+        self.accumulated = before + 1;
+        self.mean_key = Some(key);
+
+        let frame_spp = if self.uniform {
+            [frame.foveation.spp[0]; 3]
+        } else {
+            frame_spp(config.spp, shift)
+        };
+        let lines = self.hud_lines(&config.name, frame_spp, shift, &stats, render_ms);
+        let hud = self.hud_on.then(|| render_hud(&lines, 1));
+        let present_start = Instant::now();
+        let renderer = self.renderer.as_mut().expect("the window is open");
+        let outcome = renderer.present(
+            hud.as_ref().map(|h| fovea_vulkan::HudOverlay {
+                pixels: &h.pixels,
+                width: h.width,
+                height: h.height,
+                x: HUD_CORNER[0],
+                y: HUD_CORNER[1],
+            }),
+            size,
+        )?;
+        let presented_at = Instant::now();
+        self.present_mode = outcome.present_mode;
+        let latency_ms = if gaze_is_new && outcome.presented {
+            self.gaze_used
+                .map(|t| presented_at.duration_since(t).as_secs_f64() * 1e3)
+        } else {
+            None
+        };
+        let frame_ms = tick_start.elapsed().as_secs_f64() * 1e3;
+        // The first frame compiles the driver's pipelines (lavapipe: LLVM): not a measure of the budget.
+        if !self.records.is_empty() {
+            self.budget
+                .observe(frame_ms, config.spp, accumulated_before == 0);
+        }
+        let record = FrameRecord {
+            frame: self.frame,
+            gaze: self.gaze,
+            uniform: self.uniform,
+            config: config.name.clone(),
+            frame_spp,
+            budget_shift: shift,
+            render: stats,
+            accumulated_frames: self.accumulated,
+            render_ms,
+            present_ms: presented_at.duration_since(present_start).as_secs_f64() * 1e3,
+            frame_ms,
+            latency_ms,
+            window: size,
+            presented: outcome.presented,
+            eye: pose.eye.to_array(),
+            radii_px: [
+                frame.foveation.radius_fovea,
+                frame.foveation.radius_intermediate,
+            ],
+        };
+        self.last_foveation = Some(frame.foveation);
+        if self.screenshot_requested || self.options.screenshot_frames.contains(&self.frame) {
+            self.screenshot_requested = false;
+            self.screenshot(&record)?;
+        }
+        if self.window.is_some() && !self.options.quiet && self.frame.is_multiple_of(30) {
+            if let Some(w) = &self.window {
+                w.set_title(&format!(
+                    "fovea view - {:.1} ms, {} - {} frames accumulated",
+                    frame_ms, config.name, self.accumulated
+                ));
+            }
+        }
+        self.last_record = Some(record.clone());
+        if self.records.len() < 1_000_000 {
+            self.records.push(record);
+        }
+        Ok(())
+    }
+
+    fn hud_lines(
+        &self,
+        config: &str,
+        frame_spp: [u32; 3],
+        shift: u32,
+        stats: &fovea_cpu::RenderStats,
+        render_ms: f64,
+    ) -> Vec<String> {
+        let renderer = self.renderer.as_ref().expect("the window is open");
+        let recent: Vec<f64> = self
+            .records
+            .iter()
+            .rev()
+            .take(30)
+            .map(|r| r.frame_ms)
+            .collect();
+        let frame_ms = median(&recent).unwrap_or(render_ms);
+        let latency = self
+            .records
+            .iter()
+            .rev()
+            .find_map(|r| r.latency_ms)
+            .map_or("-".to_string(), |l| format!("{l:.1} ms"));
+        let eff = frame_spp.map(|s| u64::from(s) * u64::from(self.accumulated));
+        let [cw, ch] = self.window_size;
+        vec![
+            format!(
+                "fovea view  {}: {}  {}x{}",
+                renderer.backend_name, renderer.device, cw, ch
+            ),
+            format!(
+                "frame {:>6}  {:6.1} ms  {:5.1} fps  gaze-to-present {}",
+                self.frame,
+                frame_ms,
+                if frame_ms > 0.0 { 1e3 / frame_ms } else { 0.0 },
+                latency
+            ),
+            format!(
+                "{} {}  per frame {}/{}/{} (1/{})  {:.2} M samples",
+                config,
+                if self.uniform { "uniform" } else { "foveated" },
+                frame_spp[0],
+                frame_spp[1],
+                frame_spp[2],
+                1u64 << shift.min(63),
+                stats.primary_samples as f64 * 1e-6
+            ),
+            format!(
+                "accumulated {} frames  effective spp {}/{}/{}",
+                self.accumulated, eff[0], eff[1], eff[2]
+            ),
+            format!(
+                "gaze {:.0},{:.0} ({})  speed {:.3}/s",
+                self.gaze[0],
+                self.gaze[1],
+                self.options.gaze.describe(),
+                self.fly.speed()
+            ),
+            "U uniform  O overlay  C config  Space pause  P shot  R reset  H hide".to_string(),
+        ]
+    }
+
+    fn screenshot(&mut self, record: &FrameRecord) -> Result<()> {
+        let renderer = self.renderer.as_mut().expect("the window is open");
+        let mean = renderer.mean_hdr()?;
+        let foveation = self.last_foveation.expect("a frame was rendered");
+        let details = json!({
+            "backend": renderer.backend_name,
+            "device": renderer.device,
+            "scene": self.options.scene,
+            "seed": self.options.seed,
+            "camera": {
+                "eye": self.fly.pose().eye.to_array(),
+                "forward": self.fly.pose().forward.to_array(),
+                "fov_y_degrees": self.fly.fov_y_degrees(),
+            },
+        });
+        let path = write_screenshot(
+            &self.options.screenshot_dir,
+            &mean,
+            self.options.exposure,
+            &foveation,
+            record,
+            details,
+        )?;
+        if !self.options.quiet {
+            eprintln!("screenshot: {}", path.display());
+        }
+        self.screenshots.push(path.display().to_string());
+        Ok(())
+    }
+
+    /// After the event loop: the run's error, or the stats file and a summary line.
+    fn finish(mut self) -> Result<()> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        let validation = self
+            .renderer
+            .as_ref()
+            .map(|r| r.validation_messages())
+            .unwrap_or_default();
+        if let Some(path) = &self.options.stats {
+            let renderer = self.renderer.as_ref();
+            let malformed = match &self.options.gaze {
+                GazeInput::Udp(u) => u.malformed_count(),
+                _ => 0,
+            };
+            let header = json!({
+                "backend": renderer.map(|r| r.backend_name),
+                "device": renderer.map(|r| r.device.clone()),
+                "present_device": renderer.map(|r| r.present_device.clone()),
+                "present_mode": self.present_mode,
+                "upload_ms": renderer.map(|r| r.upload_ms),
+                "scene": self.options.scene,
+                "triangles": self.scene.triangle_count,
+                "gaze_source": self.options.gaze.describe(),
+                "malformed_gaze_datagrams": malformed,
+                "malformed_gaze_messages": self.malformed_gaze,
+                "budget_ms": self.options.budget_ms,
+                "configurations": self.options.configs.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
+                "screenshots": self.screenshots,
+                "ticks": self.frame,
+            });
+            crate::stats::write_json(path, &stats_document(header, &self.records, &validation))?;
+        }
+        if !self.options.quiet {
+            let frame_ms: Vec<f64> = self.records.iter().map(|r| r.frame_ms).collect();
+            if let Some(m) = median(&frame_ms) {
+                eprintln!(
+                    "fovea view: {} frames, median {:.1} ms ({:.1} fps)",
+                    self.records.len(),
+                    m,
+                    1e3 / m.max(1e-9)
+                );
+            }
+        }
+        // The renderer (and its surface) goes before the window.
+        self.renderer = None;
+        self.window = None;
+        Ok(())
+    }
+
+    fn open_window(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let [w, h] = self.options.window_size;
+        let attributes = Window::default_attributes()
+            .with_title("fovea view")
+            .with_inner_size(PhysicalSize::new(w, h));
+        let window = event_loop
+            .create_window(attributes)
+            .map_err(|e| FoveaError::View(format!("cannot open a window: {e}")))?;
+        let handles = fovea_vulkan::WindowHandles {
+            display: window
+                .display_handle()
+                .map_err(|e| FoveaError::View(format!("the window has no display handle: {e}")))?
+                .as_raw(),
+            window: window
+                .window_handle()
+                .map_err(|e| FoveaError::View(format!("the window has no handle: {e}")))?
+                .as_raw(),
+        };
+        let size = window.inner_size();
+        self.window_size = [size.width, size.height];
+        let renderer = LiveRenderer::new(
+            handles,
+            self.options.device,
+            self.use_gpu,
+            self.options.threads,
+            &self.scene.packed,
+            self.options.specialize,
+        )?;
+        self.renderer = Some(renderer);
+        self.window = Some(window);
+        self.request_redraw();
+        Ok(())
+    }
+}
+
+/// The viewer's key for a physical key, if it has one.
+fn view_key(code: KeyCode) -> Option<ViewKey> {
+    Some(match code {
+        KeyCode::KeyW => ViewKey::W,
+        KeyCode::KeyA => ViewKey::A,
+        KeyCode::KeyS => ViewKey::S,
+        KeyCode::KeyD => ViewKey::D,
+        KeyCode::KeyQ => ViewKey::Q,
+        KeyCode::KeyE => ViewKey::E,
+        KeyCode::ShiftLeft | KeyCode::ShiftRight => ViewKey::Shift,
+        KeyCode::KeyU => ViewKey::U,
+        KeyCode::KeyO => ViewKey::O,
+        KeyCode::KeyC => ViewKey::C,
+        KeyCode::Space => ViewKey::Space,
+        KeyCode::KeyP => ViewKey::P,
+        KeyCode::KeyR => ViewKey::R,
+        KeyCode::KeyH => ViewKey::H,
+        KeyCode::Escape => ViewKey::Escape,
+        _ => return None,
+    })
+}
+
+impl ApplicationHandler for Viewer {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.window.is_none() {
+            if let Err(e) = self.open_window(event_loop) {
+                self.fail(event_loop, e);
+            }
+        }
+    }
+
+    fn new_events(&mut self, event_loop: &ActiveEventLoop, cause: StartCause) {
+        // A minimised or paused scripted run still advances its clock, so that its `restore` or
+        // `press Space` comes.
+        if matches!(cause, StartCause::ResumeTimeReached { .. })
+            && self.scripted()
+            && self.window.is_some()
+            && !self.wants_frame()
+            && !self.exit
+        {
+            self.next_idle_tick = Instant::now() + IDLE_TICK;
+            self.tick(event_loop);
+            self.request_redraw();
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        if self.exit {
+            return;
+        }
+        match event {
+            WindowEvent::CloseRequested => {
+                self.exit = true;
+                event_loop.exit();
+            }
+            WindowEvent::Resized(size) => {
+                self.minimized = size.width == 0 || size.height == 0;
+                if !self.minimized {
+                    self.window_size = [size.width, size.height];
+                }
+                self.request_redraw();
+            }
+            WindowEvent::Occluded(occluded) if !self.scripted() => {
+                self.minimized = occluded;
+                self.request_redraw();
+            }
+            WindowEvent::KeyboardInput { event, .. } => {
+                if let PhysicalKey::Code(code) = event.physical_key {
+                    if let Some(k) = view_key(code) {
+                        self.key(
+                            k,
+                            event.state == ElementState::Pressed,
+                            event.repeat,
+                            event_loop,
+                        );
+                        self.request_redraw();
+                    }
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                self.cursor_moved(position.x, position.y, Instant::now());
+            }
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Right,
+                ..
+            } => {
+                self.looking = state == ElementState::Pressed;
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let steps = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => (p.y / 40.0) as f32,
+                };
+                self.fly.scroll(steps);
+                self.request_redraw();
+            }
+            WindowEvent::RedrawRequested if self.wants_frame() => self.tick(event_loop),
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if self.exit {
+            return;
+        }
+        let live_gaze = !matches!(self.options.gaze, GazeInput::Mouse);
+        if live_gaze && !self.wants_frame() && !self.paused && !self.minimized {
+            // Converged: a new gaze sample starts a new mean.
+            self.poll_gaze();
+            if self.mean_key.is_some_and(|k| k.gaze != self.gaze) {
+                self.reset_requested = true;
+            }
+        }
+        if self.wants_frame() {
+            self.request_redraw();
+            event_loop.set_control_flow(ControlFlow::Wait);
+        } else if self.scripted() {
+            event_loop.set_control_flow(ControlFlow::WaitUntil(
+                self.next_idle_tick
+                    .max(Instant::now() + Duration::from_millis(1)),
+            ));
+        } else if live_gaze && !self.paused && !self.minimized {
+            // Converged: look for the eye tracker's next sample now and then.
+            event_loop.set_control_flow(ControlFlow::WaitUntil(
+                Instant::now() + Duration::from_millis(5),
+            ));
+        } else {
+            // Minimised, paused or converged: sleep until input arrives (no busy spin).
+            event_loop.set_control_flow(ControlFlow::Wait);
+        }
+    }
+}

@@ -1,0 +1,793 @@
+//! Live gaze sources for `fovea view`: gaze samples from an eye tracker over UDP
+//! (`--gaze-source udp:PORT`), and the replay of a recorded gaze trace (`--gaze-trace FILE`).
+//!
+//! # UDP protocol
+//!
+//! One UDP datagram per sample, ASCII text `t,x,y`, at most 512 bytes, optionally ending in a
+//! newline; spaces or tabs around the fields are allowed:
+//!
+//! ```text
+//! 12.5,0.4,0.6
+//! ```
+//!
+//! * `t` is the tracker's timestamp in seconds. It must be a finite number; it is used only for
+//!   logging and latency figures, never for timing, so any clock (or `0`) will do.
+//! * `x,y` is the gaze point, in one of two conventions (chosen on the command line):
+//!   * [`GazeConvention::Normalized`] (the default, as Tobii reports gaze): `0..1` across the
+//!     window, origin top-left, so `0.5,0.5` is the centre. Values beyond `-10..10` are rejected.
+//!   * [`GazeConvention::PixelsBottomLeft`] (as Pupil Labs exports surface gaze): window pixels,
+//!     origin bottom-left. Values beyond `±1e6` are rejected.
+//!
+//! The viewer drains every pending datagram each frame and uses the newest valid one. A datagram
+//! that is not valid UTF-8, is longer than 512 bytes, or does not match `t,x,y` is dropped, counted
+//! and reported; it never stops the viewer.
+//!
+//! A bridge from any eye tracker is a few lines, e.g. in Python:
+//!
+//! ```text
+//! import socket, time
+//! PORT = 4242  # the port given to `fovea view --gaze-source udp:PORT`
+//! sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+//!
+//! def on_gaze(x, y):  # called by your tracker's SDK; x, y in 0..1, origin top-left
+//!     sock.sendto(f"{time.time()},{x},{y}\n".encode(), ("127.0.0.1", PORT))
+//! ```
+//!
+//! # Gaze trace files
+//!
+//! A gaze trace is a CSV file of timed samples, one `t,x,y` per line, replayed in real time:
+//! `t` is seconds from the start of the replay (non-decreasing, not negative) and `x,y` use the
+//! same conventions as the UDP protocol. An optional header line whose first field is not a number
+//! (e.g. `t,x,y`) may come first; `#` starts a comment, and blank lines are ignored.
+//!
+//! ```text
+//! t,x,y
+//! # look from the centre to the top-left corner
+//! 0.0,0.5,0.5
+//! 0.5,0.1,0.1
+//! ```
+use std::fmt::Write as _;
+use std::net::{SocketAddr, UdpSocket};
+use std::path::Path;
+use std::time::Instant;
+
+/// The longest UDP gaze datagram accepted, in bytes.
+pub const MAX_DATAGRAM_BYTES: usize = 512;
+
+/// The largest magnitude of a normalised gaze coordinate (`0..1` spans the window).
+pub const MAX_NORMALIZED_COORDINATE: f64 = 10.0;
+
+/// The largest magnitude of a gaze coordinate in pixels.
+pub const MAX_PIXEL_COORDINATE: f64 = 1e6;
+
+/// At most this many malformed-datagram messages are returned by one [`UdpGazeSource::poll`]
+/// (all are counted in [`UdpGazeSource::malformed_count`]).
+pub const MAX_MESSAGES_PER_POLL: usize = 16;
+
+/// At most this many datagrams are drained by one [`UdpGazeSource::poll`], so that a flood of
+/// datagrams cannot stall a frame; the rest wait for the next poll.
+pub const MAX_DATAGRAMS_PER_POLL: usize = 4096;
+
+/// The longest datagram text quoted in an error message, in characters.
+const MAX_QUOTED_CHARS: usize = 64;
+
+/// How the gaze coordinates of a sample are expressed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum GazeConvention {
+    /// `0..1` across the window, origin top-left (as Tobii reports gaze).
+    #[default]
+    Normalized,
+    /// Window pixels, origin bottom-left (as Pupil Labs exports gaze).
+    PixelsBottomLeft,
+}
+
+impl GazeConvention {
+    /// An example `t,x,y` text in this convention, for error messages.
+    fn example(self) -> &'static str {
+        match self {
+            GazeConvention::Normalized => "12.5,0.4,0.6",
+            GazeConvention::PixelsBottomLeft => "12.5,640,360",
+        }
+    }
+}
+
+/// One gaze sample, in window pixels with the origin at the top-left, whatever its source's
+/// convention.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GazeSample {
+    /// The tracker's timestamp in seconds (for a trace, seconds from the start of the replay).
+    pub t: f64,
+    /// Horizontal window pixel, `0` = left edge.
+    pub x: f32,
+    /// Vertical window pixel, `0` = top edge.
+    pub y: f32,
+}
+
+/// Converts raw gaze coordinates in `convention` to window pixels with the origin top-left, for a
+/// window of `window = [width, height]` pixels.
+#[must_use]
+pub fn to_window_pixels(
+    convention: GazeConvention,
+    raw_x: f32,
+    raw_y: f32,
+    window: [u32; 2],
+) -> [f32; 2] {
+    let width = window[0] as f32;
+    let height = window[1] as f32;
+    match convention {
+        GazeConvention::Normalized => [raw_x * width, raw_y * height],
+        GazeConvention::PixelsBottomLeft => [raw_x, height - raw_y],
+    }
+}
+
+/// Parses one gaze datagram `t,x,y` in `convention` into a sample in window pixels (origin
+/// top-left) for a window of `window = [width, height]` pixels.
+///
+/// # Errors
+/// A message saying what is wrong with the text and showing the expected form.
+pub fn parse_sample(
+    text: &str,
+    convention: GazeConvention,
+    window: [u32; 2],
+) -> Result<GazeSample, String> {
+    let (t, x, y) = parse_fields(text, convention).map_err(|problem| {
+        format!(
+            "malformed gaze datagram {}: {problem}",
+            quote(text.trim_end())
+        )
+    })?;
+    let [x, y] = to_window_pixels(convention, x, y, window);
+    Ok(GazeSample { t, x, y })
+}
+
+/// Parses `t,x,y` into raw `(t, x, y)`; the error describes the problem (without saying where).
+fn parse_fields(text: &str, convention: GazeConvention) -> Result<(f64, f32, f32), String> {
+    let expected = format!(
+        "expected \"t,x,y\" with three numbers (e.g. \"{}\")",
+        convention.example()
+    );
+    let fields: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [t, x, y] = fields[..] else {
+        return Err(expected);
+    };
+    let number = |name: &str, field: &str| -> Result<f64, String> {
+        let value: f64 = field
+            .parse()
+            .map_err(|_| format!("{name} {} is not a number; {expected}", quote(field)))?;
+        if value.is_finite() {
+            Ok(value)
+        } else {
+            Err(format!(
+                "{name} {} is not a finite number; {expected}",
+                quote(field)
+            ))
+        }
+    };
+    let t = number("t", t)?;
+    let coordinate = |name: &str, field: &str| -> Result<f32, String> {
+        let value = number(name, field)?;
+        let (limit, what) = match convention {
+            GazeConvention::Normalized => (
+                MAX_NORMALIZED_COORDINATE,
+                "for normalised gaze (0..1 spans the window)",
+            ),
+            GazeConvention::PixelsBottomLeft => (MAX_PIXEL_COORDINATE, "pixels"),
+        };
+        if value.abs() > limit {
+            return Err(format!(
+                "{name} {} is outside -{limit}..{limit} {what}",
+                quote(field)
+            ));
+        }
+        Ok(value as f32)
+    };
+    let x = coordinate("x", x)?;
+    let y = coordinate("y", y)?;
+    Ok((t, x, y))
+}
+
+/// `text` in double quotes with escapes, cut to [`MAX_QUOTED_CHARS`] characters.
+fn quote(text: &str) -> String {
+    let mut shown: String = text.chars().take(MAX_QUOTED_CHARS).collect();
+    let cut = shown.len() < text.len();
+    shown = format!("{shown:?}");
+    if cut {
+        shown.push_str("...");
+    }
+    shown
+}
+
+/// What one [`UdpGazeSource::poll`] found.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct GazePoll {
+    /// The last valid sample in arrival order, with the instant it was drained; `None` if no valid
+    /// datagram was pending.
+    pub newest: Option<(GazeSample, Instant)>,
+    /// One message per dropped datagram (malformed, not UTF-8, or too long), naming the sender, and
+    /// one per receive error; at most [`MAX_MESSAGES_PER_POLL`].
+    pub malformed: Vec<String>,
+}
+
+/// A non-blocking UDP socket that receives gaze datagrams (see the [module documentation](self)).
+#[derive(Debug)]
+pub struct UdpGazeSource {
+    socket: UdpSocket,
+    local_addr: SocketAddr,
+    convention: GazeConvention,
+    malformed_count: u64,
+    buffer: Vec<u8>,
+}
+
+impl UdpGazeSource {
+    /// Binds a non-blocking UDP socket on `addr` (port 0 picks a free port; see
+    /// [`UdpGazeSource::local_addr`]).
+    ///
+    /// # Errors
+    /// A message naming the port and address, and what to do, if the socket cannot be bound.
+    pub fn bind(addr: SocketAddr, convention: GazeConvention) -> Result<Self, String> {
+        let socket = UdpSocket::bind(addr).map_err(|error| {
+            let port = addr.port();
+            let ip = addr.ip();
+            match error.kind() {
+                std::io::ErrorKind::AddrInUse => format!(
+                    "UDP port {port} on {ip} is in use by another program; \
+                     choose another with --gaze-source udp:PORT"
+                ),
+                std::io::ErrorKind::PermissionDenied => format!(
+                    "cannot listen for gaze on UDP port {port} on {ip}: permission denied \
+                     (ports below 1024 need privileges); choose another with --gaze-source udp:PORT"
+                ),
+                std::io::ErrorKind::AddrNotAvailable => format!(
+                    "cannot listen for gaze on UDP port {port} on {ip}: \
+                     {ip} is not an address of this machine"
+                ),
+                _ => format!("cannot listen for gaze on UDP port {port} on {ip}: {error}"),
+            }
+        })?;
+        socket.set_nonblocking(true).map_err(|error| {
+            format!("cannot make the gaze socket on UDP {addr} non-blocking: {error}")
+        })?;
+        let local_addr = socket.local_addr().map_err(|error| {
+            format!("cannot read the address of the gaze socket {addr}: {error}")
+        })?;
+        Ok(Self {
+            socket,
+            local_addr,
+            convention,
+            malformed_count: 0,
+            // Larger than the limit, so that an over-long datagram is seen as such.
+            buffer: vec![0; 4 * MAX_DATAGRAM_BYTES],
+        })
+    }
+
+    /// The address the socket is bound to (with the actual port when bound to port 0).
+    #[must_use]
+    pub fn local_addr(&self) -> SocketAddr {
+        self.local_addr
+    }
+
+    /// The convention the datagrams' coordinates are read in.
+    #[must_use]
+    #[cfg(test)]
+    pub fn convention(&self) -> GazeConvention {
+        self.convention
+    }
+
+    /// Drains every pending datagram without blocking (at most [`MAX_DATAGRAMS_PER_POLL`]),
+    /// converting valid samples to window pixels for a window of `window = [width, height]`.
+    pub fn poll(&mut self, window: [u32; 2]) -> GazePoll {
+        let mut result = GazePoll::default();
+        let report = |result: &mut GazePoll, message: String| {
+            if result.malformed.len() < MAX_MESSAGES_PER_POLL {
+                result.malformed.push(message);
+            }
+        };
+        for _ in 0..MAX_DATAGRAMS_PER_POLL {
+            let (length, sender) = match self.socket.recv_from(&mut self.buffer) {
+                Ok(received) => received,
+                Err(error) => match error.kind() {
+                    std::io::ErrorKind::WouldBlock => break,
+                    // An interrupted call, or (on Windows) an ICMP "port unreachable" for an
+                    // earlier send: neither says anything about pending datagrams.
+                    std::io::ErrorKind::Interrupted | std::io::ErrorKind::ConnectionReset => {
+                        continue
+                    }
+                    _ => {
+                        report(
+                            &mut result,
+                            format!("receiving gaze on UDP {} failed: {error}", self.local_addr),
+                        );
+                        break;
+                    }
+                },
+            };
+            let drained = Instant::now();
+            let outcome = if length > MAX_DATAGRAM_BYTES {
+                Err(format!(
+                    "gaze datagram is longer than {MAX_DATAGRAM_BYTES} bytes ({}{length} bytes); \
+                     send one \"t,x,y\" sample per datagram",
+                    if length >= self.buffer.len() {
+                        "at least "
+                    } else {
+                        ""
+                    }
+                ))
+            } else {
+                match std::str::from_utf8(&self.buffer[..length]) {
+                    Ok(text) => parse_sample(text, self.convention, window),
+                    Err(_) => Err(format!(
+                        "gaze datagram is not UTF-8 text; send ASCII \"t,x,y\" (e.g. \"{}\")",
+                        self.convention.example()
+                    )),
+                }
+            };
+            match outcome {
+                Ok(sample) => result.newest = Some((sample, drained)),
+                Err(message) => {
+                    self.malformed_count += 1;
+                    let mut message = message;
+                    let _ = write!(message, " (from {sender})");
+                    report(&mut result, message);
+                }
+            }
+        }
+        result
+    }
+
+    /// How many datagrams have been dropped as malformed since the socket was bound.
+    #[must_use]
+    pub fn malformed_count(&self) -> u64 {
+        self.malformed_count
+    }
+}
+
+/// One raw trace sample: seconds from the start of the replay and coordinates in the trace's
+/// convention.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct RawSample {
+    t: f64,
+    x: f32,
+    y: f32,
+}
+
+/// A recorded gaze trace for replay (`--gaze-trace FILE`; see the [module documentation](self)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GazeTrace {
+    samples: Vec<RawSample>,
+    convention: GazeConvention,
+}
+
+impl GazeTrace {
+    /// Parses trace text; `path_for_messages` names the file in error messages. Coordinates are
+    /// kept raw and converted to window pixels by [`GazeTrace::sample_at`].
+    ///
+    /// # Errors
+    /// A message naming the file and line and saying what is wrong (a malformed line, a decreasing
+    /// or negative timestamp), or that the trace has no samples.
+    pub fn parse(
+        path_for_messages: &str,
+        text: &str,
+        convention: GazeConvention,
+    ) -> Result<Self, String> {
+        let mut samples: Vec<RawSample> = Vec::new();
+        let mut previous_line = 0;
+        let mut seen_content = false;
+        for (index, raw) in text.lines().enumerate() {
+            let line = index + 1;
+            let content = raw.split('#').next().unwrap_or("").trim();
+            if content.is_empty() {
+                continue;
+            }
+            let first_content = !seen_content;
+            seen_content = true;
+            let first_field = content.split(',').next().unwrap_or("").trim();
+            if first_content && first_field.parse::<f64>().is_err() {
+                continue; // A header such as `t,x,y`.
+            }
+            let at = |problem: String| {
+                format!("gaze trace '{path_for_messages}' line {line}: {problem}")
+            };
+            let (t, x, y) = parse_fields(content, convention).map_err(at)?;
+            if t < 0.0 {
+                return Err(at(format!(
+                    "timestamp {t} is negative; trace timestamps are seconds from the start of the replay"
+                )));
+            }
+            if let Some(last) = samples.last() {
+                if t < last.t {
+                    return Err(at(format!(
+                        "timestamp {t} is earlier than {} on line {previous_line}; \
+                         timestamps must not decrease",
+                        last.t
+                    )));
+                }
+            }
+            samples.push(RawSample { t, x, y });
+            previous_line = line;
+        }
+        if samples.is_empty() {
+            return Err(format!(
+                "gaze trace '{path_for_messages}' has no samples; expected lines \"t,x,y\" \
+                 (e.g. \"{}\"), t in seconds from the start of the replay",
+                convention.example()
+            ));
+        }
+        Ok(Self {
+            samples,
+            convention,
+        })
+    }
+
+    /// Reads and parses a trace file.
+    ///
+    /// # Errors
+    /// A message naming the path and the OS error if the file cannot be read, or as
+    /// [`GazeTrace::parse`].
+    pub fn read(path: &Path, convention: GazeConvention) -> Result<Self, String> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|error| format!("gaze trace '{shown}': cannot read it: {error}"))?;
+        Self::parse(&shown, &text, convention)
+    }
+
+    /// The newest sample with `t <= seconds` (`None` before the first sample), converted to window
+    /// pixels (origin top-left) for a window of `window = [width, height]`.
+    #[must_use]
+    pub fn sample_at(&self, seconds: f64, window: [u32; 2]) -> Option<GazeSample> {
+        let count = self.samples.partition_point(|sample| sample.t <= seconds);
+        let sample = self.samples.get(count.checked_sub(1)?)?;
+        let [x, y] = to_window_pixels(self.convention, sample.x, sample.y, window);
+        Some(GazeSample { t: sample.t, x, y })
+    }
+
+    /// The timestamp of the last sample: seconds from the start of the replay to its end.
+    #[must_use]
+    #[cfg(test)]
+    pub fn duration(&self) -> f64 {
+        self.samples.last().map_or(0.0, |sample| sample.t)
+    }
+
+    /// The number of samples.
+    #[must_use]
+    #[cfg(test)]
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// Whether there are no samples (never true for a parsed trace).
+    #[must_use]
+    #[cfg(test)]
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+
+    /// The convention the trace's coordinates are read in.
+    #[must_use]
+    #[cfg(test)]
+    pub fn convention(&self) -> GazeConvention {
+        self.convention
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::net::{IpAddr, Ipv4Addr};
+    use std::time::Duration;
+
+    const WINDOW: [u32; 2] = [800, 600];
+
+    fn loopback() -> SocketAddr {
+        SocketAddr::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 0)
+    }
+
+    #[test]
+    fn conversion_to_window_pixels() {
+        assert_eq!(
+            to_window_pixels(GazeConvention::Normalized, 0.25, 0.5, WINDOW),
+            [200.0, 300.0]
+        );
+        assert_eq!(
+            to_window_pixels(GazeConvention::PixelsBottomLeft, 100.0, 150.0, WINDOW),
+            [100.0, 450.0]
+        );
+        assert_eq!(GazeConvention::default(), GazeConvention::Normalized);
+    }
+
+    #[test]
+    fn parses_sample_forms() {
+        let expected = GazeSample {
+            t: 12.5,
+            x: 320.0,
+            y: 360.0,
+        };
+        for text in [
+            "12.5,0.4,0.6",
+            "12.5,0.4,0.6\n",
+            "12.5,0.4,0.6\r\n",
+            " 12.5 , 0.4 ,\t0.6 \n",
+        ] {
+            assert_eq!(
+                parse_sample(text, GazeConvention::Normalized, WINDOW),
+                Ok(expected),
+                "{text:?}"
+            );
+        }
+        assert_eq!(
+            parse_sample("1e3,100,150\n", GazeConvention::PixelsBottomLeft, WINDOW),
+            Ok(GazeSample {
+                t: 1000.0,
+                x: 100.0,
+                y: 450.0
+            })
+        );
+        // Slightly outside the window is fine.
+        assert!(parse_sample("0,-0.5,1.5", GazeConvention::Normalized, WINDOW).is_ok());
+        assert!(parse_sample("0,-10,10", GazeConvention::Normalized, WINDOW).is_ok());
+        assert!(parse_sample("-3,-20,900", GazeConvention::PixelsBottomLeft, WINDOW).is_ok());
+    }
+
+    #[test]
+    fn rejects_malformed_samples() {
+        let message = parse_sample("abc", GazeConvention::Normalized, WINDOW).unwrap_err();
+        assert_eq!(
+            message,
+            "malformed gaze datagram \"abc\": expected \"t,x,y\" with three numbers \
+             (e.g. \"12.5,0.4,0.6\")"
+        );
+        for (text, word) in [
+            ("", "\"\""),
+            ("1,2", "\"1,2\""),
+            ("1,0.2,0.3,0.4", "\"1,0.2,0.3,0.4\""),
+            ("1 0.2 0.3", "\"1 0.2 0.3\""),
+            ("t,x,y", "\"t\""),
+            ("1,left,0.3", "\"left\""),
+            ("1,0.2,", "\"\""),
+            ("NaN,0.2,0.3", "\"NaN\""),
+            ("1,nan,0.3", "\"nan\""),
+            ("1,0.2,inf", "\"inf\""),
+            ("1,-inf,0.3", "\"-inf\""),
+            ("1,10.5,0.3", "\"10.5\""),
+            ("1,0.5,-11", "\"-11\""),
+        ] {
+            let message = parse_sample(text, GazeConvention::Normalized, WINDOW).unwrap_err();
+            assert!(message.starts_with("malformed gaze datagram "), "{message}");
+            assert!(message.contains(word), "{text:?}: {message}");
+            if !message.contains("outside") {
+                assert!(message.contains("expected \"t,x,y\""), "{message}");
+            }
+        }
+        let message =
+            parse_sample("1,2e6,3", GazeConvention::PixelsBottomLeft, WINDOW).unwrap_err();
+        assert!(
+            message.contains("\"2e6\"") && message.contains("pixels"),
+            "{message}"
+        );
+        let message = parse_sample("1,x,3", GazeConvention::PixelsBottomLeft, WINDOW).unwrap_err();
+        assert!(message.contains("12.5,640,360"), "{message}");
+        // Long junk is quoted only in part.
+        let junk = "x".repeat(1000);
+        let message = parse_sample(&junk, GazeConvention::Normalized, WINDOW).unwrap_err();
+        assert!(message.len() < 200, "{message}");
+    }
+
+    /// Polls until `done` or two seconds have passed, merging what each poll found.
+    fn poll_until(source: &mut UdpGazeSource, done: impl Fn(&GazePoll, u64) -> bool) -> GazePoll {
+        let deadline = Instant::now() + Duration::from_secs(2);
+        let mut all = GazePoll::default();
+        loop {
+            let poll = source.poll(WINDOW);
+            if poll.newest.is_some() {
+                all.newest = poll.newest;
+            }
+            all.malformed.extend(poll.malformed);
+            if done(&all, source.malformed_count()) || Instant::now() > deadline {
+                return all;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    #[test]
+    fn udp_round_trip() {
+        let mut source = UdpGazeSource::bind(loopback(), GazeConvention::Normalized).unwrap();
+        let target = source.local_addr();
+        assert_eq!(target.ip(), IpAddr::V4(Ipv4Addr::LOCALHOST));
+        assert_ne!(target.port(), 0);
+        assert_eq!(source.convention(), GazeConvention::Normalized);
+
+        // Nothing pending: returns at once with nothing.
+        let empty = source.poll(WINDOW);
+        assert_eq!(empty.newest, None);
+        assert!(empty.malformed.is_empty());
+
+        let sender = UdpSocket::bind(loopback()).unwrap();
+        let before = Instant::now();
+        for datagram in ["1.0,0.1,0.2\n", "garbage", " 2.0 , 0.5 , 0.25 \n"] {
+            sender.send_to(datagram.as_bytes(), target).unwrap();
+        }
+        let found = poll_until(&mut source, |poll, malformed| {
+            malformed == 1 && poll.newest.is_some_and(|(sample, _)| sample.t == 2.0)
+        });
+        let (sample, drained) = found.newest.unwrap();
+        assert_eq!(
+            sample,
+            GazeSample {
+                t: 2.0,
+                x: 400.0,
+                y: 150.0
+            }
+        );
+        assert!(drained >= before);
+        assert_eq!(found.malformed.len(), 1, "{:?}", found.malformed);
+        assert!(
+            found.malformed[0].contains("\"garbage\""),
+            "{:?}",
+            found.malformed
+        );
+        assert!(
+            found.malformed[0].contains(&sender.local_addr().unwrap().to_string()),
+            "{:?}",
+            found.malformed
+        );
+        assert_eq!(source.malformed_count(), 1);
+        assert_eq!(source.poll(WINDOW), GazePoll::default());
+    }
+
+    #[test]
+    fn udp_rejects_long_and_non_utf8_datagrams() {
+        let mut source = UdpGazeSource::bind(loopback(), GazeConvention::PixelsBottomLeft).unwrap();
+        let sender = UdpSocket::bind(loopback()).unwrap();
+        let target = source.local_addr();
+        let long = format!("1,2,3{}", " ".repeat(600));
+        sender.send_to(long.as_bytes(), target).unwrap();
+        sender.send_to(&[0xff, 0xfe, b',', b'1'], target).unwrap();
+        sender.send_to(b"5,100,150", target).unwrap();
+        let found = poll_until(&mut source, |poll, malformed| {
+            malformed == 2 && poll.newest.is_some()
+        });
+        assert_eq!(source.malformed_count(), 2);
+        assert!(
+            found.malformed[0].contains("longer than 512 bytes"),
+            "{found:?}"
+        );
+        assert!(found.malformed[1].contains("not UTF-8"), "{found:?}");
+        assert_eq!(
+            found.newest.map(|(sample, _)| sample),
+            Some(GazeSample {
+                t: 5.0,
+                x: 100.0,
+                y: 450.0
+            })
+        );
+    }
+
+    #[test]
+    fn udp_port_in_use() {
+        let first = UdpGazeSource::bind(loopback(), GazeConvention::Normalized).unwrap();
+        let taken = first.local_addr();
+        let message = UdpGazeSource::bind(taken, GazeConvention::Normalized).unwrap_err();
+        assert_eq!(
+            message,
+            format!(
+                "UDP port {} on 127.0.0.1 is in use by another program; \
+                 choose another with --gaze-source udp:PORT",
+                taken.port()
+            )
+        );
+    }
+
+    #[test]
+    fn trace_parses_and_looks_up() {
+        let text =
+            "t,x,y\n# start centred\n0.0,0.5,0.5\n\n0.5, 0.25, 0.75 # left\n0.5,0.1,0.1\n2,1,1\r\n";
+        let trace = GazeTrace::parse("f.csv", text, GazeConvention::Normalized).unwrap();
+        assert_eq!(trace.len(), 4);
+        assert!(!trace.is_empty());
+        assert_eq!(trace.duration(), 2.0);
+        assert_eq!(trace.sample_at(-0.1, WINDOW), None);
+        assert_eq!(trace.sample_at(f64::NAN, WINDOW), None);
+        let at = |seconds| trace.sample_at(seconds, WINDOW).unwrap();
+        assert_eq!(
+            at(0.0),
+            GazeSample {
+                t: 0.0,
+                x: 400.0,
+                y: 300.0
+            }
+        );
+        assert_eq!(at(0.49).t, 0.0);
+        // Equal timestamps: the later line wins.
+        assert_eq!(
+            at(0.5),
+            GazeSample {
+                t: 0.5,
+                x: 80.0,
+                y: 60.0
+            }
+        );
+        assert_eq!(at(1.99).t, 0.5);
+        assert_eq!(at(2.0).x, 800.0);
+        assert_eq!(at(100.0).y, 600.0);
+
+        // Without a header, in pixels with the origin bottom-left.
+        let trace = GazeTrace::parse(
+            "p.csv",
+            "0,10,20\n1,30,40\n",
+            GazeConvention::PixelsBottomLeft,
+        )
+        .unwrap();
+        assert_eq!(
+            trace.sample_at(1.0, WINDOW),
+            Some(GazeSample {
+                t: 1.0,
+                x: 30.0,
+                y: 560.0
+            })
+        );
+        assert_eq!(trace.convention(), GazeConvention::PixelsBottomLeft);
+    }
+
+    #[test]
+    fn trace_errors_name_file_and_line() {
+        let parse = |text: &str| GazeTrace::parse("f.csv", text, GazeConvention::Normalized);
+        for (text, line, word) in [
+            ("t,x,y\n0,0.5,0.5\n1,0.5\n", 3, "\"t,x,y\""),
+            ("0,0.5,0.5\n1,0.5,0.5,9\n", 2, "\"t,x,y\""),
+            ("0,0.5,0.5\nt,x,y\n", 2, "\"t\""),
+            ("# c\n\n0,0.5,0.5\n1,up,0.5\n", 4, "\"up\""),
+            ("0,0.5,NaN\n", 1, "\"NaN\""),
+            ("inf,0.5,0.5\n", 1, "\"inf\""),
+            ("0,0.5,0.5\n0,20,0.5\n", 2, "\"20\""),
+            ("-1,0.5,0.5\n", 1, "negative"),
+            (
+                "0,0.5,0.5\n2,0.5,0.5\n\n1.5,0.5,0.5\n",
+                4,
+                "earlier than 2 on line 2",
+            ),
+        ] {
+            let message = parse(text).unwrap_err();
+            assert!(
+                message.starts_with(&format!("gaze trace 'f.csv' line {line}: ")),
+                "{text:?}: {message}"
+            );
+            assert!(message.contains(word), "{text:?}: {message}");
+        }
+        for text in ["", "t,x,y\n", "# nothing\n\n"] {
+            let message = parse(text).unwrap_err();
+            assert!(
+                message.starts_with("gaze trace 'f.csv' has no samples"),
+                "{message}"
+            );
+        }
+    }
+
+    #[test]
+    fn trace_read_names_the_path() {
+        let dir = std::env::temp_dir().join(format!("fovea-gaze-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let good = dir.join("trace.csv");
+        std::fs::write(&good, "t,x,y\n0,0.5,0.5\n3,0.5,0.5\n").unwrap();
+        let trace = GazeTrace::read(&good, GazeConvention::Normalized).unwrap();
+        assert_eq!(trace.duration(), 3.0);
+
+        let bad = dir.join("bad.csv");
+        std::fs::write(&bad, "0,0.5,0.5\n0,0.5\n").unwrap();
+        let message = GazeTrace::read(&bad, GazeConvention::Normalized).unwrap_err();
+        assert!(
+            message.starts_with(&format!("gaze trace '{}' line 2: ", bad.display())),
+            "{message}"
+        );
+
+        let missing = dir.join("missing.csv");
+        let message = GazeTrace::read(&missing, GazeConvention::Normalized).unwrap_err();
+        assert!(
+            message.starts_with(&format!(
+                "gaze trace '{}': cannot read it: ",
+                missing.display()
+            )),
+            "{message}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

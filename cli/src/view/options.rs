@@ -1,0 +1,292 @@
+//! `fovea view`'s command line, parsed and checked before a window opens: every bad value, missing
+//! file or port in use fails here with a message that names the option.
+use std::net::{Ipv4Addr, SocketAddr};
+use std::path::{Path, PathBuf};
+
+use fovea_core::foveation::fill::{FILL_BILINEAR, FILL_REPLICATE};
+use fovea_core::integrator::IntegratorSettings;
+
+use crate::args::{Backend, Fill, GazeSourceArg, ViewArgs};
+use crate::error::{FoveaError, Result};
+use crate::parse::{self, MAX_SPP};
+use crate::scene_setup::Lighting;
+use crate::view::gaze::{GazeConvention, GazeTrace, UdpGazeSource};
+use crate::view::sampling::{configurations, SamplingConfig};
+use crate::view::script::Script;
+
+/// How region radii follow the window: fixed pixels (`--radii`), or eccentricity angles on the display
+/// model, which the window's width fills (so the radii scale with the window).
+#[derive(Clone, Copy, Debug)]
+pub enum RadiiRule {
+    Pixels([f32; 2]),
+    Eccentricity {
+        degrees: [f32; 2],
+        display_cm: [f32; 2],
+        distance_cm: f32,
+    },
+}
+
+impl RadiiRule {
+    /// The radii in pixels for a window of `size`.
+    #[must_use]
+    pub fn radii_px(&self, size: [u32; 2]) -> [f32; 2] {
+        match *self {
+            Self::Pixels(r) => r,
+            Self::Eccentricity {
+                degrees,
+                display_cm,
+                distance_cm,
+            } => {
+                let display = fovea_core::foveation::display::DisplayGeometry {
+                    width_cm: display_cm[0],
+                    height_cm: display_cm[1],
+                    distance_cm,
+                    resolution: size,
+                };
+                degrees
+                    .map(|e| fovea_core::foveation::display::eccentricity_to_radius_px(e, &display))
+            }
+        }
+    }
+}
+
+/// The live gaze source, opened.
+pub enum GazeInput {
+    Mouse,
+    Udp(UdpGazeSource),
+    Trace(GazeTrace),
+}
+
+impl GazeInput {
+    /// "mouse", "udp 127.0.0.1:PORT" or "trace".
+    pub fn describe(&self) -> String {
+        match self {
+            Self::Mouse => "mouse".into(),
+            Self::Udp(u) => format!("udp {}", u.local_addr()),
+            Self::Trace(_) => "trace".into(),
+        }
+    }
+}
+
+/// Everything the view needs, checked.
+pub struct ViewOptions {
+    pub scene: Option<PathBuf>,
+    pub mtl: Option<PathBuf>,
+    pub mtl_diffuse: fovea_scene::mesh::MtlDiffuse,
+    pub lighting: Lighting,
+    pub backend: Backend,
+    pub device: Option<usize>,
+    pub threads: Option<usize>,
+    pub specialize: bool,
+    pub window_size: [u32; 2],
+    pub gaze: GazeInput,
+    pub configs: Vec<SamplingConfig>,
+    pub radii: RadiiRule,
+    pub uniform: bool,
+    pub overlay: bool,
+    pub budget_ms: f64,
+    pub integrator: IntegratorSettings,
+    pub fill_mode: u32,
+    pub exposure: f32,
+    pub seed: u32,
+    pub camera: parse::CameraOptions,
+    pub fov: Option<f32>,
+    pub script: Option<Script>,
+    pub exit_after_frames: Option<u64>,
+    pub screenshot_frames: Vec<u64>,
+    pub screenshot_dir: PathBuf,
+    pub stats: Option<PathBuf>,
+    pub quiet: bool,
+}
+
+impl ViewOptions {
+    pub fn from_args(args: &ViewArgs) -> Result<Self> {
+        let spp: [u32; 3] = parse::list("--spp", &args.spp, ',')?;
+        if spp.iter().any(|&s| s == 0 || s > MAX_SPP) {
+            return Err(FoveaError::option(
+                "--spp",
+                format!("each value must be 1 to {MAX_SPP}, got {}", args.spp),
+            ));
+        }
+        let blocks: [u32; 3] = parse::list("--blocks", &args.blocks, ',')?;
+        if blocks.iter().any(|&b| b == 0 || b > 64)
+            || !blocks[1].is_multiple_of(blocks[0])
+            || !blocks[2].is_multiple_of(blocks[1])
+        {
+            return Err(FoveaError::option(
+                "--blocks",
+                format!(
+                    "each block edge must be 1 to 64 and divide the next, got {}",
+                    args.blocks
+                ),
+            ));
+        }
+        // The display model, checked as `render` checks it (the resolution only scales the radii).
+        let display =
+            parse::display_geometry(&args.display.display_cm, args.display.distance_cm, [1, 1])?;
+        let radii = match &args.radii {
+            Some(text) => {
+                let r: [f32; 2] = parse::floats("--radii", text, ',')?;
+                if !(r[0] >= 0.0 && r[1] >= r[0]) {
+                    return Err(FoveaError::option("--radii", "need 0 <= R1 <= R2"));
+                }
+                RadiiRule::Pixels(r)
+            }
+            None => {
+                // Checks the angles.
+                parse::eccentricity_radii(&args.display.eccentricity, &display)?;
+                RadiiRule::Eccentricity {
+                    degrees: parse::floats("--eccentricity", &args.display.eccentricity, ',')?,
+                    display_cm: [display.width_cm, display.height_cm],
+                    distance_cm: display.distance_cm,
+                }
+            }
+        };
+        let convention = if args.gaze_pixels {
+            GazeConvention::PixelsBottomLeft
+        } else {
+            GazeConvention::Normalized
+        };
+        let gaze = match (&args.gaze_source, &args.gaze_trace) {
+            (GazeSourceArg::Udp(_), Some(_)) => {
+                return Err(FoveaError::option(
+                    "--gaze-trace",
+                    "replays a trace; it cannot be combined with --gaze-source udp:PORT",
+                ))
+            }
+            (GazeSourceArg::Trace, None) => {
+                return Err(FoveaError::option(
+                    "--gaze-source",
+                    "`trace` needs --gaze-trace FILE.csv",
+                ))
+            }
+            (GazeSourceArg::Mouse | GazeSourceArg::Trace, Some(path)) => GazeInput::Trace(
+                GazeTrace::read(path, convention)
+                    .map_err(|e| FoveaError::option("--gaze-trace", e))?,
+            ),
+            (GazeSourceArg::Udp(port), None) => {
+                let addr = SocketAddr::from((Ipv4Addr::LOCALHOST, *port));
+                GazeInput::Udp(
+                    UdpGazeSource::bind(addr, convention)
+                        .map_err(|e| FoveaError::option("--gaze-source", e))?,
+                )
+            }
+            (GazeSourceArg::Mouse, None) => {
+                if args.gaze_pixels {
+                    return Err(FoveaError::option(
+                        "--gaze-pixels",
+                        "applies to --gaze-source udp:PORT and --gaze-trace, not to the mouse",
+                    ));
+                }
+                GazeInput::Mouse
+            }
+        };
+        if args.depth > 64 {
+            return Err(FoveaError::option(
+                "--depth",
+                format!("{} bounces is more than the 64 fovea allows", args.depth),
+            ));
+        }
+        if !args.exposure.is_finite() || args.exposure.abs() > 64.0 {
+            return Err(FoveaError::option(
+                "--exposure",
+                "must be a finite EV between -64 and 64",
+            ));
+        }
+        if !(args.budget_ms.is_finite() && (0.0..=60_000.0).contains(&args.budget_ms)) {
+            return Err(FoveaError::option(
+                "--budget-ms",
+                "must be 0 (no budget) to 60000 milliseconds",
+            ));
+        }
+        if args.backend == Backend::Cpu && args.device.is_some() {
+            // The device still presents, so it is allowed: say what it does.
+            eprintln!("note: --device selects the Vulkan device that presents the CPU's frames");
+        }
+        let script = args
+            .script
+            .as_deref()
+            .map(Script::read)
+            .transpose()
+            .map_err(|e| FoveaError::option("--script", e.to_string()))?;
+        if let Some(p) = &args.stats {
+            check_json_path(p, "--stats")?;
+        }
+        if args.exit_after_frames == Some(0) {
+            return Err(FoveaError::option(
+                "--exit-after-frames",
+                "must be at least 1",
+            ));
+        }
+        let camera = parse::camera_options(&args.camera)?;
+        if let Some(f) = args.camera.fov {
+            if !(f > 0.0 && f < 180.0) {
+                return Err(FoveaError::option(
+                    "--fov",
+                    format!("{f} is not in (0, 180) degrees"),
+                ));
+            }
+        }
+        Ok(Self {
+            scene: args.scene.clone(),
+            mtl: args.mtl.clone(),
+            mtl_diffuse: args.mtl_diffuse.into(),
+            lighting: Lighting::from_args(&args.lighting)?,
+            backend: args.backend,
+            device: args.device,
+            threads: args.threads,
+            specialize: !args.no_specialize,
+            window_size: args.size.0,
+            gaze,
+            configs: configurations(spp, blocks),
+            radii,
+            uniform: args.uniform,
+            overlay: args.overlay,
+            budget_ms: args.budget_ms,
+            integrator: IntegratorSettings {
+                max_bounces: args.depth,
+                russian_roulette_start: args.russian_roulette,
+                ..Default::default()
+            },
+            fill_mode: match args.fill {
+                Fill::Bilinear => FILL_BILINEAR,
+                Fill::Replicate => FILL_REPLICATE,
+            },
+            exposure: args.exposure,
+            seed: args.seed,
+            camera,
+            fov: args.camera.fov,
+            script,
+            exit_after_frames: args.exit_after_frames,
+            screenshot_frames: args.screenshot_at_frame.clone(),
+            screenshot_dir: args.screenshot_dir.clone(),
+            stats: args.stats.clone(),
+            quiet: args.quiet,
+        })
+    }
+}
+
+/// A `.json` output whose folder exists.
+fn check_json_path(p: &Path, option: &'static str) -> Result<()> {
+    let ext = p
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if ext.as_deref() != Some("json") {
+        return Err(FoveaError::option(
+            option,
+            format!("'{}' must end in .json", p.display()),
+        ));
+    }
+    let dir = p
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        return Err(FoveaError::option(
+            option,
+            format!("the folder '{}' does not exist", dir.display()),
+        ));
+    }
+    Ok(())
+}

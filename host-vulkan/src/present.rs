@@ -1,0 +1,841 @@
+//! Presenting frames to a window (the live view, `fovea view`).
+//!
+//! The context is created with the window's surface ([`crate::ContextOptions::window`]) and a compute
+//! queue that can present to it. [`VulkanContext::present`] then shows a frame without a read-back: the
+//! RGBA8 image (the kernel's `tonemap`/`overlay_regions` output, still on the device, or a frame the CPU
+//! host rendered, uploaded) is copied into a frame-sized `R8G8B8A8` image, the on-screen figures (a small
+//! RGBA8 image) are copied over its corner, and the result is blitted to the acquired swapchain image,
+//! which converts to the swapchain's format (BGRA on most X11 drivers) and scales to the window's size
+//! while a resize is in flight. One submission per present, waited on with a fence: the live view
+//! renders and presents one frame at a time, so nothing more elaborate is needed.
+//!
+//! Present mode: `MAILBOX` where the driver has it (no tearing, no waiting for vertical blank), else
+//! `FIFO`, which every driver has. A window with a zero-sized surface (minimised) is not presented to:
+//! [`PresentOutcome::presented`] is false and the viewer waits for events instead of spinning.
+use std::ffi::CStr;
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
+
+use crate::buffer::GpuBuffer;
+use crate::context::{VulkanContext, CHUNK_TIMEOUT};
+use crate::error::{Result, VkContext, VulkanError};
+use crate::instance::{InstanceHandle, Shared};
+
+/// The raw handles of the window to present to. The window must outlive the context.
+#[derive(Clone, Copy, Debug)]
+pub struct WindowHandles {
+    pub display: RawDisplayHandle,
+    pub window: RawWindowHandle,
+}
+
+/// What to present.
+#[derive(Clone, Copy, Debug)]
+pub enum PresentSource<'a> {
+    /// The last frame rendered on this context (its RGBA8 image on the device).
+    LastFrame,
+    /// An RGBA8 image from the host (the CPU backend's frame), `width · height` pixels, R in the low
+    /// byte.
+    Host {
+        pixels: &'a [u32],
+        width: u32,
+        height: u32,
+    },
+}
+
+/// A small RGBA8 image drawn over the frame's top-left corner at (`x`, `y`) (the on-screen figures),
+/// clipped to the frame.
+#[derive(Clone, Copy, Debug)]
+pub struct HudOverlay<'a> {
+    pub pixels: &'a [u32],
+    pub width: u32,
+    pub height: u32,
+    pub x: u32,
+    pub y: u32,
+}
+
+/// What a present did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PresentOutcome {
+    /// False when nothing was shown: the window is minimised (zero-sized surface).
+    pub presented: bool,
+    /// The swapchain's size.
+    pub extent: [u32; 2],
+    /// "mailbox" or "fifo".
+    pub present_mode: &'static str,
+    /// Whether the swapchain was (re-)created for this present (first frame, resize).
+    pub recreated: bool,
+}
+
+/// The instance extensions a surface of this display needs.
+pub(crate) fn surface_extensions(window: &WindowHandles) -> Result<Vec<&'static CStr>> {
+    let names = ash_window::enumerate_required_extensions(window.display).map_err(|r| {
+        VulkanError::NoPresentation(format!(
+            "this window system has no Vulkan surface support ({r})"
+        ))
+    })?;
+    Ok(names
+        .iter()
+        // SAFETY: ash-window returns pointers to ash's static, NUL-terminated extension names.
+        .map(|&p| unsafe { CStr::from_ptr(p) })
+        .collect())
+}
+
+/// Creates the window's surface and stores it in `instance` (destroyed with it).
+pub(crate) fn create_surface(instance: &mut InstanceHandle, window: &WindowHandles) -> Result<()> {
+    // SAFETY: the handles come from a live window, which the caller keeps alive until the context (and
+    // so the surface) is dropped.
+    let surface = unsafe {
+        ash_window::create_surface(
+            &instance.entry,
+            &instance.instance,
+            window.display,
+            window.window,
+            None,
+        )
+    }
+    .map_err(|r| VulkanError::NoPresentation(format!("vkCreate*SurfaceKHR failed: {r}")))?;
+    let loader = ash::khr::surface::Instance::new(&instance.entry, &instance.instance);
+    instance.surface = Some((loader, surface));
+    Ok(())
+}
+
+/// The first queue family of `pd` with compute that can present to the instance's surface.
+pub(crate) fn present_queue_family(
+    instance: &InstanceHandle,
+    pd: vk::PhysicalDevice,
+) -> Option<u32> {
+    let (loader, surface) = instance.surface.as_ref()?;
+    // SAFETY: `pd` belongs to this instance.
+    let families = unsafe {
+        instance
+            .instance
+            .get_physical_device_queue_family_properties(pd)
+    };
+    (0..families.len() as u32).find(|&i| {
+        families[i as usize]
+            .queue_flags
+            .contains(vk::QueueFlags::COMPUTE)
+            // SAFETY: valid device, family index and surface of this instance.
+            && unsafe { loader.get_physical_device_surface_support(pd, i, *surface) }
+                .unwrap_or(false)
+    })
+}
+
+/// Fails unless `pd` has `VK_KHR_swapchain`.
+pub(crate) fn check_swapchain_extension(
+    instance: &InstanceHandle,
+    pd: vk::PhysicalDevice,
+    device_name: &str,
+) -> Result<()> {
+    // SAFETY: `pd` belongs to this instance.
+    let extensions = unsafe { instance.instance.enumerate_device_extension_properties(pd) }
+        .during("vkEnumerateDeviceExtensionProperties")?;
+    if extensions
+        .iter()
+        .any(|e| e.extension_name_as_c_str().ok() == Some(ash::khr::swapchain::NAME))
+    {
+        Ok(())
+    } else {
+        Err(VulkanError::NoPresentation(format!(
+            "device '{device_name}' has no VK_KHR_swapchain"
+        )))
+    }
+}
+
+/// An image with its own allocation (the frame-sized blit source).
+struct OwnedImage {
+    shared: Arc<Shared>,
+    image: vk::Image,
+    allocation: Option<Allocation>,
+    size: [u32; 2],
+}
+
+impl OwnedImage {
+    fn new(shared: &Arc<Shared>, size: [u32; 2], format: vk::Format) -> Result<Self> {
+        let device = &shared.device;
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D {
+                width: size[0],
+                height: size[1],
+                depth: 1,
+            })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: valid device and create info.
+        let image = unsafe { device.create_image(&info, None) }.during("vkCreateImage")?;
+        let mut out = Self {
+            shared: shared.clone(),
+            image,
+            allocation: None,
+            size,
+        };
+        // SAFETY: the image was just created on this device.
+        let requirements = unsafe { device.get_image_memory_requirements(image) };
+        let allocation = shared
+            .allocator
+            .lock()
+            .map_err(|_| VulkanError::Allocator("allocator lock poisoned".into()))?
+            .allocate(&AllocationCreateDesc {
+                name: "presented frame",
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|e| VulkanError::Allocator(format!("presented frame: {e}")))?;
+        out.allocation = Some(allocation);
+        let a = out.allocation.as_ref().expect("allocation was just set");
+        // SAFETY: the allocation satisfies the image's requirements, is alive while `out` is and is bound
+        // once; on failure `out`'s Drop destroys the image and frees the allocation.
+        unsafe { device.bind_image_memory(image, a.memory(), a.offset()) }
+            .during("vkBindImageMemory")?;
+        Ok(out)
+    }
+}
+
+impl Drop for OwnedImage {
+    fn drop(&mut self) {
+        // SAFETY: every submission using the image was waited on before the presenter drops it.
+        unsafe { self.shared.device.destroy_image(self.image, None) };
+        if let Some(a) = self.allocation.take() {
+            if let Ok(mut alloc) = self.shared.allocator.lock() {
+                let _ = alloc.free(a);
+            }
+        }
+    }
+}
+
+/// The swapchain and what presenting through it needs.
+pub(crate) struct Presenter {
+    shared: Arc<Shared>,
+    loader: ash::khr::swapchain::Device,
+    swapchain: vk::SwapchainKHR,
+    images: Vec<vk::Image>,
+    extent: [u32; 2],
+    format: vk::Format,
+    present_mode: vk::PresentModeKHR,
+    /// Signalled by the acquire, waited on by the copy submission.
+    acquired: vk::Semaphore,
+    /// One per swapchain image: signalled by the copy submission, waited on by its present.
+    copied: Vec<vk::Semaphore>,
+    /// The frame as an image of the frame's size, in the format that matches the swapchain's encoding.
+    frame: Option<OwnedImage>,
+    /// Host pixels (CPU frames) and the on-screen figures, uploaded per present.
+    staging: Option<GpuBuffer>,
+    /// The swapchain reported itself out of date or suboptimal: re-create before the next acquire.
+    stale: bool,
+}
+
+impl Presenter {
+    fn destroy_swapchain(&mut self) {
+        let device = &self.shared.device;
+        // SAFETY: the device is idle (every submission was waited on, and presents finish before the
+        // device-wait below); the semaphores and the swapchain are not in use.
+        unsafe {
+            let _ = device.device_wait_idle();
+            for s in self.copied.drain(..) {
+                device.destroy_semaphore(s, None);
+            }
+            if self.swapchain != vk::SwapchainKHR::null() {
+                self.loader.destroy_swapchain(self.swapchain, None);
+                self.swapchain = vk::SwapchainKHR::null();
+            }
+        }
+        self.images.clear();
+    }
+}
+
+impl Drop for Presenter {
+    fn drop(&mut self) {
+        self.destroy_swapchain();
+        self.frame = None;
+        self.staging = None;
+        // SAFETY: the device is idle (see `destroy_swapchain`).
+        unsafe { self.shared.device.destroy_semaphore(self.acquired, None) };
+    }
+}
+
+/// The `R8G8B8A8` format whose encoding matches `swapchain_format`, so that the blit copies the
+/// kernel's sRGB-encoded bytes unchanged: UNORM for a UNORM swapchain, SRGB (decoded and re-encoded,
+/// which is the identity) for an SRGB one.
+fn frame_format_for(swapchain_format: vk::Format) -> vk::Format {
+    match swapchain_format {
+        vk::Format::B8G8R8A8_SRGB
+        | vk::Format::R8G8B8A8_SRGB
+        | vk::Format::A8B8G8R8_SRGB_PACK32 => vk::Format::R8G8B8A8_SRGB,
+        _ => vk::Format::R8G8B8A8_UNORM,
+    }
+}
+
+/// Prefers 8-bit UNORM BGRA/RGBA in the sRGB colour space (the kernel's bytes are already sRGB-encoded),
+/// then their SRGB twins, then whatever comes first.
+fn choose_format(formats: &[vk::SurfaceFormatKHR]) -> Option<vk::SurfaceFormatKHR> {
+    let preference = [
+        vk::Format::B8G8R8A8_UNORM,
+        vk::Format::R8G8B8A8_UNORM,
+        vk::Format::B8G8R8A8_SRGB,
+        vk::Format::R8G8B8A8_SRGB,
+    ];
+    preference
+        .iter()
+        .find_map(|&f| {
+            formats
+                .iter()
+                .find(|s| s.format == f && s.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR)
+        })
+        .or_else(|| formats.first())
+        .copied()
+}
+
+impl VulkanContext {
+    /// Presents `source` with `hud` over its corner to the window, at `window_size` (the window's inner
+    /// size in pixels, used where the surface leaves the size to the application). Creates the swapchain
+    /// on first use and re-creates it after a resize. A minimised window presents nothing.
+    pub fn present(
+        &mut self,
+        source: PresentSource<'_>,
+        hud: Option<HudOverlay<'_>>,
+        window_size: [u32; 2],
+    ) -> Result<PresentOutcome> {
+        self.check_usable()?;
+        let (frame_w, frame_h) = match source {
+            PresentSource::LastFrame => {
+                let (_, w, h) = self.last_ldr_buffer().ok_or_else(|| {
+                    VulkanError::Invalid("present: no frame has been rendered yet".into())
+                })?;
+                (w, h)
+            }
+            PresentSource::Host {
+                pixels,
+                width,
+                height,
+            } => {
+                if pixels.len() as u64 != u64::from(width) * u64::from(height) || width == 0 {
+                    return Err(VulkanError::Invalid(format!(
+                        "present: {} pixels are not a {width}x{height} image",
+                        pixels.len()
+                    )));
+                }
+                (width, height)
+            }
+        };
+        let (loader, surface) = match self.shared.instance.surface.as_ref() {
+            Some((l, s)) => (l.clone(), *s),
+            None => {
+                return Err(VulkanError::NoPresentation(
+                    "this context was created without a window".into(),
+                ))
+            }
+        };
+        let pd = self.shared.physical_device;
+        // SAFETY: valid device and surface of this instance.
+        let caps = unsafe { loader.get_physical_device_surface_capabilities(pd, surface) }
+            .during("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")?;
+        let extent = if caps.current_extent.width != u32::MAX {
+            [caps.current_extent.width, caps.current_extent.height]
+        } else {
+            [
+                window_size[0].clamp(caps.min_image_extent.width, caps.max_image_extent.width),
+                window_size[1].clamp(caps.min_image_extent.height, caps.max_image_extent.height),
+            ]
+        };
+        if extent[0] == 0 || extent[1] == 0 {
+            return Ok(PresentOutcome {
+                presented: false,
+                extent,
+                present_mode: self.present_mode_name(),
+                recreated: false,
+            });
+        }
+        let mut recreated = false;
+        let needs_swapchain = match &self.presenter {
+            None => true,
+            Some(p) => p.stale || p.extent != extent || p.swapchain == vk::SwapchainKHR::null(),
+        };
+        if needs_swapchain {
+            self.create_swapchain(&loader, surface, &caps, extent)?;
+            recreated = true;
+        }
+        self.ensure_present_resources([frame_w, frame_h], source, hud)?;
+
+        let presenter = self.presenter.as_ref().expect("swapchain was created");
+        let (swap_loader, swapchain, acquired) = (
+            presenter.loader.clone(),
+            presenter.swapchain,
+            presenter.acquired,
+        );
+        // SAFETY: valid swapchain; the semaphore is unsignalled (its last signal was waited on by the
+        // previous copy submission, which finished before this call).
+        let acquire = unsafe {
+            swap_loader.acquire_next_image(swapchain, 5_000_000_000, acquired, vk::Fence::null())
+        };
+        let index = match acquire {
+            Ok((index, suboptimal)) => {
+                if suboptimal {
+                    self.presenter.as_mut().expect("presenter exists").stale = true;
+                }
+                index
+            }
+            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => {
+                // Resized between the capability query and the acquire: try again next frame.
+                self.presenter.as_mut().expect("presenter exists").stale = true;
+                return Ok(PresentOutcome {
+                    presented: false,
+                    extent,
+                    present_mode: self.present_mode_name(),
+                    recreated,
+                });
+            }
+            Err(r) => return Err(VulkanError::vk("vkAcquireNextImageKHR", r)),
+        };
+        self.record_and_submit_copy(index, source, hud)?;
+
+        let presenter = self.presenter.as_ref().expect("presenter exists");
+        let waits = [presenter.copied[index as usize]];
+        let swapchains = [presenter.swapchain];
+        let indices = [index];
+        let info = vk::PresentInfoKHR::default()
+            .wait_semaphores(&waits)
+            .swapchains(&swapchains)
+            .image_indices(&indices);
+        // SAFETY: the image was acquired and its copy submitted, signalling the semaphore waited on here.
+        let result = unsafe { swap_loader.queue_present(self.queue, &info) };
+        match result {
+            Ok(false) => {}
+            Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => {
+                self.presenter.as_mut().expect("presenter exists").stale = true;
+            }
+            Err(r) => return Err(self.poison_on_fatal(VulkanError::vk("vkQueuePresentKHR", r))),
+        }
+        Ok(PresentOutcome {
+            presented: true,
+            extent,
+            present_mode: self.present_mode_name(),
+            recreated,
+        })
+    }
+
+    fn present_mode_name(&self) -> &'static str {
+        match self.presenter.as_ref().map(|p| p.present_mode) {
+            Some(vk::PresentModeKHR::MAILBOX) => "mailbox",
+            Some(vk::PresentModeKHR::IMMEDIATE) => "immediate",
+            _ => "fifo",
+        }
+    }
+
+    /// (Re-)creates the swapchain at `extent`, handing the old one over as `oldSwapchain`.
+    fn create_swapchain(
+        &mut self,
+        loader: &ash::khr::surface::Instance,
+        surface: vk::SurfaceKHR,
+        caps: &vk::SurfaceCapabilitiesKHR,
+        extent: [u32; 2],
+    ) -> Result<()> {
+        let pd = self.shared.physical_device;
+        if !caps
+            .supported_usage_flags
+            .contains(vk::ImageUsageFlags::TRANSFER_DST)
+        {
+            return Err(VulkanError::NoPresentation(
+                "the surface's images cannot be copied to (no TRANSFER_DST usage)".into(),
+            ));
+        }
+        // SAFETY: valid device and surface.
+        let formats = unsafe { loader.get_physical_device_surface_formats(pd, surface) }
+            .during("vkGetPhysicalDeviceSurfaceFormatsKHR")?;
+        let format = choose_format(&formats).ok_or_else(|| {
+            VulkanError::NoPresentation("the surface offers no image format".into())
+        })?;
+        // SAFETY: as above.
+        let modes = unsafe { loader.get_physical_device_surface_present_modes(pd, surface) }
+            .during("vkGetPhysicalDeviceSurfacePresentModesKHR")?;
+        let present_mode = if modes.contains(&vk::PresentModeKHR::MAILBOX) {
+            vk::PresentModeKHR::MAILBOX
+        } else {
+            vk::PresentModeKHR::FIFO
+        };
+        let mut image_count = caps.min_image_count + 1;
+        if caps.max_image_count > 0 {
+            image_count = image_count.min(caps.max_image_count);
+        }
+        let composite = [
+            vk::CompositeAlphaFlagsKHR::OPAQUE,
+            vk::CompositeAlphaFlagsKHR::INHERIT,
+            vk::CompositeAlphaFlagsKHR::PRE_MULTIPLIED,
+            vk::CompositeAlphaFlagsKHR::POST_MULTIPLIED,
+        ]
+        .into_iter()
+        .find(|&c| caps.supported_composite_alpha.contains(c))
+        .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE);
+
+        if self.presenter.is_none() {
+            let swap_loader = ash::khr::swapchain::Device::new(
+                &self.shared.instance.instance,
+                &self.shared.device,
+            );
+            // SAFETY: valid device and create info.
+            let acquired = unsafe {
+                self.shared
+                    .device
+                    .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)
+            }
+            .during("vkCreateSemaphore")?;
+            self.presenter = Some(Presenter {
+                shared: self.shared.clone(),
+                loader: swap_loader,
+                swapchain: vk::SwapchainKHR::null(),
+                images: Vec::new(),
+                extent: [0, 0],
+                format: format.format,
+                present_mode,
+                acquired,
+                copied: Vec::new(),
+                frame: None,
+                staging: None,
+                stale: false,
+            });
+        }
+        let p = self.presenter.as_mut().expect("presenter was just created");
+        let old = p.swapchain;
+        let info = vk::SwapchainCreateInfoKHR::default()
+            .surface(surface)
+            .min_image_count(image_count)
+            .image_format(format.format)
+            .image_color_space(format.color_space)
+            .image_extent(vk::Extent2D {
+                width: extent[0],
+                height: extent[1],
+            })
+            .image_array_layers(1)
+            .image_usage(vk::ImageUsageFlags::TRANSFER_DST)
+            .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .pre_transform(caps.current_transform)
+            .composite_alpha(composite)
+            .present_mode(present_mode)
+            .clipped(true)
+            .old_swapchain(old);
+        // SAFETY: valid device, surface and create info; the old swapchain (retired by this call) is
+        // destroyed below, after the device is idle.
+        let swapchain =
+            unsafe { p.loader.create_swapchain(&info, None) }.during("vkCreateSwapchainKHR")?;
+        p.destroy_swapchain();
+        p.swapchain = swapchain;
+        // SAFETY: the swapchain was just created.
+        p.images = unsafe { p.loader.get_swapchain_images(swapchain) }
+            .during("vkGetSwapchainImagesKHR")?;
+        for _ in 0..p.images.len() {
+            // SAFETY: valid device and create info; stored at once so Drop destroys it.
+            let s = unsafe {
+                p.shared
+                    .device
+                    .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)
+            }
+            .during("vkCreateSemaphore")?;
+            p.copied.push(s);
+        }
+        p.extent = extent;
+        p.format = format.format;
+        p.present_mode = present_mode;
+        p.stale = false;
+        Ok(())
+    }
+
+    /// The frame image of the frame's size and a staging buffer for host pixels and the HUD.
+    fn ensure_present_resources(
+        &mut self,
+        frame_size: [u32; 2],
+        source: PresentSource<'_>,
+        hud: Option<HudOverlay<'_>>,
+    ) -> Result<()> {
+        let shared = self.shared.clone();
+        let p = self.presenter.as_mut().expect("swapchain was created");
+        let format = frame_format_for(p.format);
+        if p.frame.as_ref().map(|f| f.size) != Some(frame_size) {
+            p.frame = None;
+            p.frame = Some(OwnedImage::new(&shared, frame_size, format)?);
+        }
+        let host_bytes = match source {
+            PresentSource::Host { pixels, .. } => pixels.len() as u64 * 4,
+            PresentSource::LastFrame => 0,
+        };
+        let hud_bytes = hud.map_or(0, |h| h.pixels.len() as u64 * 4);
+        let needed = host_bytes + hud_bytes;
+        if needed > 0 && p.staging.as_ref().is_none_or(|s| s.size < needed) {
+            p.staging = None;
+            p.staging = Some(GpuBuffer::new(
+                &shared,
+                "present staging",
+                needed,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+            )?);
+        }
+        if let Some(staging) = p.staging.as_mut() {
+            let mut parts: Vec<(u64, &[u8])> = Vec::new();
+            if let PresentSource::Host { pixels, .. } = source {
+                parts.push((0, bytemuck::cast_slice(pixels)));
+            }
+            if let Some(h) = hud {
+                parts.push((host_bytes, bytemuck::cast_slice(h.pixels)));
+            }
+            if !parts.is_empty() {
+                staging.write_parts(&parts)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Records and submits the copies of one present into swapchain image `index`: source → frame image,
+    /// HUD → frame image corner, frame image → swapchain image (blit), then the layout for presenting.
+    fn record_and_submit_copy(
+        &mut self,
+        index: u32,
+        source: PresentSource<'_>,
+        hud: Option<HudOverlay<'_>>,
+    ) -> Result<()> {
+        let p = self.presenter.as_ref().expect("presenter exists");
+        let frame = p.frame.as_ref().expect("frame image exists");
+        let (frame_image, [fw, fh]) = (frame.image, frame.size);
+        let swap_image = p.images[index as usize];
+        let extent = p.extent;
+        let staging = p.staging.as_ref().map(|s| s.buffer);
+        let (acquired, copied) = (p.acquired, p.copied[index as usize]);
+        let (src_buffer, src_offset) = match source {
+            PresentSource::LastFrame => {
+                (self.last_ldr_buffer().expect("checked by present").0, 0u64)
+            }
+            PresentSource::Host { .. } => (staging.expect("staging holds the host frame"), 0),
+        };
+        let hud_offset = match source {
+            PresentSource::Host { pixels, .. } => pixels.len() as u64 * 4,
+            PresentSource::LastFrame => 0,
+        };
+        let hud_copy = hud.and_then(|h| {
+            let w = h.width.min(fw.saturating_sub(h.x));
+            let hh = h.height.min(fh.saturating_sub(h.y));
+            (w > 0 && hh > 0 && h.pixels.len() as u64 >= u64::from(h.width) * u64::from(h.height))
+                .then_some((h, w, hh))
+        });
+        let color = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(1);
+        let layers = vk::ImageSubresourceLayers::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .layer_count(1);
+        let transition = |image: vk::Image,
+                          from: vk::ImageLayout,
+                          to: vk::ImageLayout,
+                          src_access: vk::AccessFlags,
+                          dst_access: vk::AccessFlags| {
+            vk::ImageMemoryBarrier::default()
+                .image(image)
+                .old_layout(from)
+                .new_layout(to)
+                .src_access_mask(src_access)
+                .dst_access_mask(dst_access)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .subresource_range(color)
+        };
+        self.submit_and_wait_with(
+            "a present copy",
+            CHUNK_TIMEOUT,
+            Some((acquired, vk::PipelineStageFlags::TRANSFER)),
+            Some(copied),
+            |device, cb| {
+                // SAFETY (whole closure): recording into a command buffer in the recording state; every
+                // buffer and image is alive until the submission's fence is waited on, and the regions
+                // lie inside them (the HUD copy is clipped to the frame).
+                unsafe {
+                    // The kernel's writes (an earlier submission) and host writes before the copies.
+                    let memory = [vk::MemoryBarrier::default()
+                        .src_access_mask(
+                            vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::HOST_WRITE,
+                        )
+                        .dst_access_mask(vk::AccessFlags::TRANSFER_READ)];
+                    let to_dst = [transition(
+                        frame_image,
+                        vk::ImageLayout::UNDEFINED,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        vk::AccessFlags::empty(),
+                        vk::AccessFlags::TRANSFER_WRITE,
+                    )];
+                    device.cmd_pipeline_barrier(
+                        cb,
+                        vk::PipelineStageFlags::COMPUTE_SHADER
+                            | vk::PipelineStageFlags::HOST
+                            | vk::PipelineStageFlags::TRANSFER,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::DependencyFlags::empty(),
+                        &memory,
+                        &[],
+                        &to_dst,
+                    );
+                    let full = [vk::BufferImageCopy::default()
+                        .buffer_offset(src_offset)
+                        .image_subresource(layers)
+                        .image_extent(vk::Extent3D {
+                            width: fw,
+                            height: fh,
+                            depth: 1,
+                        })];
+                    device.cmd_copy_buffer_to_image(
+                        cb,
+                        src_buffer,
+                        frame_image,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &full,
+                    );
+                    if let (Some((h, w, hh)), Some(staging)) = (hud_copy, staging) {
+                        let again = [transition(
+                            frame_image,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            vk::AccessFlags::TRANSFER_WRITE,
+                            vk::AccessFlags::TRANSFER_WRITE,
+                        )];
+                        device.cmd_pipeline_barrier(
+                            cb,
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::DependencyFlags::empty(),
+                            &[],
+                            &[],
+                            &again,
+                        );
+                        let region = [vk::BufferImageCopy::default()
+                            .buffer_offset(hud_offset)
+                            .buffer_row_length(h.width)
+                            .image_subresource(layers)
+                            .image_offset(vk::Offset3D {
+                                x: h.x as i32,
+                                y: h.y as i32,
+                                z: 0,
+                            })
+                            .image_extent(vk::Extent3D {
+                                width: w,
+                                height: hh,
+                                depth: 1,
+                            })];
+                        device.cmd_copy_buffer_to_image(
+                            cb,
+                            staging,
+                            frame_image,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            &region,
+                        );
+                    }
+                    let to_blit = [
+                        transition(
+                            frame_image,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            vk::AccessFlags::TRANSFER_WRITE,
+                            vk::AccessFlags::TRANSFER_READ,
+                        ),
+                        transition(
+                            swap_image,
+                            vk::ImageLayout::UNDEFINED,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            vk::AccessFlags::empty(),
+                            vk::AccessFlags::TRANSFER_WRITE,
+                        ),
+                    ];
+                    device.cmd_pipeline_barrier(
+                        cb,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::DependencyFlags::empty(),
+                        &[],
+                        &[],
+                        &to_blit,
+                    );
+                    let corner = |w: u32, h: u32| {
+                        [
+                            vk::Offset3D::default(),
+                            vk::Offset3D {
+                                x: w as i32,
+                                y: h as i32,
+                                z: 1,
+                            },
+                        ]
+                    };
+                    let blit = [vk::ImageBlit::default()
+                        .src_subresource(layers)
+                        .src_offsets(corner(fw, fh))
+                        .dst_subresource(layers)
+                        .dst_offsets(corner(extent[0], extent[1]))];
+                    let filter = if [fw, fh] == extent {
+                        vk::Filter::NEAREST
+                    } else {
+                        vk::Filter::LINEAR
+                    };
+                    device.cmd_blit_image(
+                        cb,
+                        frame_image,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                        swap_image,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &blit,
+                        filter,
+                    );
+                    let to_present = [transition(
+                        swap_image,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        vk::ImageLayout::PRESENT_SRC_KHR,
+                        vk::AccessFlags::TRANSFER_WRITE,
+                        vk::AccessFlags::empty(),
+                    )];
+                    device.cmd_pipeline_barrier(
+                        cb,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                        vk::DependencyFlags::empty(),
+                        &[],
+                        &[],
+                        &to_present,
+                    );
+                }
+            },
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unorm_swapchains_are_preferred_and_the_frame_format_matches_their_encoding() {
+        let f = |format| vk::SurfaceFormatKHR {
+            format,
+            color_space: vk::ColorSpaceKHR::SRGB_NONLINEAR,
+        };
+        let offered = [f(vk::Format::B8G8R8A8_SRGB), f(vk::Format::B8G8R8A8_UNORM)];
+        assert_eq!(
+            choose_format(&offered).unwrap().format,
+            vk::Format::B8G8R8A8_UNORM
+        );
+        assert_eq!(
+            frame_format_for(vk::Format::B8G8R8A8_UNORM),
+            vk::Format::R8G8B8A8_UNORM
+        );
+        assert_eq!(
+            frame_format_for(vk::Format::B8G8R8A8_SRGB),
+            vk::Format::R8G8B8A8_SRGB
+        );
+        assert!(choose_format(&[]).is_none());
+    }
+}
