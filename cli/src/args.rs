@@ -98,6 +98,10 @@ pub struct ViewArgs {
     /// Initial window size (the frame is rendered at the window's size).
     #[arg(long, default_value = "1280x720", value_name = "WxH")]
     pub size: WindowSize,
+    /// Render at this fraction of the window's size (0.1 to 1); the presenter scales the frame up.
+    /// Trades sharpness for speed where the per-pixel passes alone exceed the budget.
+    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    pub render_scale: f32,
     /// Where the gaze comes from: `mouse` (the pointer), `udp:PORT` (an eye tracker sending `t,x,y`
     /// datagrams to 127.0.0.1:PORT; see README, "Eye-tracker protocol") or `trace` (--gaze-trace).
     #[arg(long, default_value = "mouse", value_name = "SOURCE")]

@@ -3,10 +3,10 @@
 //! The context is created with the window's surface ([`crate::ContextOptions::window`]) and a compute
 //! queue that can present to it. [`VulkanContext::present`] then shows a frame without a read-back: the
 //! RGBA8 image (the kernel's `tonemap`/`overlay_regions` output, still on the device, or a frame the CPU
-//! host rendered, uploaded) is copied into a frame-sized `R8G8B8A8` image, the on-screen figures (a small
-//! RGBA8 image) are copied over its corner, and the result is blitted to the acquired swapchain image,
-//! which converts to the swapchain's format (BGRA on most X11 drivers) and scales to the window's size
-//! while a resize is in flight. One submission per present, waited on with a fence: the live view
+//! host rendered, uploaded) is copied into a frame-sized `R8G8B8A8` image and blitted to the acquired
+//! swapchain image, which converts to the swapchain's format (BGRA on most X11 drivers) and scales to
+//! the window's size (a render scale below 1, or a resize in flight); the on-screen figures (a small
+//! RGBA8 image) are then copied over the swapchain image's corner. One submission per present, waited on with a fence: the live view
 //! renders and presents one frame at a time, so nothing more elaborate is needed.
 //!
 //! Present mode: `MAILBOX` where the driver has it (no tearing, no waiting for vertical blank), else
@@ -46,8 +46,8 @@ pub enum PresentSource<'a> {
     },
 }
 
-/// A small RGBA8 image drawn over the frame's top-left corner at (`x`, `y`) (the on-screen figures),
-/// clipped to the frame.
+/// A small RGBA8 image drawn over the window's top-left corner at (`x`, `y`) (the on-screen figures),
+/// clipped to the window; grey pixels (it is copied into BGRA swapchains unswizzled).
 #[derive(Clone, Copy, Debug)]
 pub struct HudOverlay<'a> {
     pub pixels: &'a [u32],
@@ -621,9 +621,19 @@ impl VulkanContext {
             PresentSource::Host { pixels, .. } => pixels.len() as u64 * 4,
             PresentSource::LastFrame => 0,
         };
-        let hud_copy = hud.and_then(|h| {
-            let w = h.width.min(fw.saturating_sub(h.x));
-            let hh = h.height.min(fh.saturating_sub(h.y));
+        // The HUD goes straight onto the swapchain image, after the (possibly scaling) blit, so its text
+        // stays sharp at any render scale. Its pixels are grey, so RGBA and BGRA read the same; other
+        // swapchain formats get no HUD.
+        let byte_format = matches!(
+            p.format,
+            vk::Format::B8G8R8A8_UNORM
+                | vk::Format::R8G8B8A8_UNORM
+                | vk::Format::B8G8R8A8_SRGB
+                | vk::Format::R8G8B8A8_SRGB
+        );
+        let hud_copy = hud.filter(|_| byte_format).and_then(|h| {
+            let w = h.width.min(extent[0].saturating_sub(h.x));
+            let hh = h.height.min(extent[1].saturating_sub(h.y));
             (w > 0 && hh > 0 && h.pixels.len() as u64 >= u64::from(h.width) * u64::from(h.height))
                 .then_some((h, w, hh))
         });
@@ -698,45 +708,6 @@ impl VulkanContext {
                         vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                         &full,
                     );
-                    if let (Some((h, w, hh)), Some(staging)) = (hud_copy, staging) {
-                        let again = [transition(
-                            frame_image,
-                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                            vk::AccessFlags::TRANSFER_WRITE,
-                            vk::AccessFlags::TRANSFER_WRITE,
-                        )];
-                        device.cmd_pipeline_barrier(
-                            cb,
-                            vk::PipelineStageFlags::TRANSFER,
-                            vk::PipelineStageFlags::TRANSFER,
-                            vk::DependencyFlags::empty(),
-                            &[],
-                            &[],
-                            &again,
-                        );
-                        let region = [vk::BufferImageCopy::default()
-                            .buffer_offset(hud_offset)
-                            .buffer_row_length(h.width)
-                            .image_subresource(layers)
-                            .image_offset(vk::Offset3D {
-                                x: h.x as i32,
-                                y: h.y as i32,
-                                z: 0,
-                            })
-                            .image_extent(vk::Extent3D {
-                                width: w,
-                                height: hh,
-                                depth: 1,
-                            })];
-                        device.cmd_copy_buffer_to_image(
-                            cb,
-                            staging,
-                            frame_image,
-                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                            &region,
-                        );
-                    }
                     let to_blit = [
                         transition(
                             frame_image,
@@ -791,6 +762,45 @@ impl VulkanContext {
                         &blit,
                         filter,
                     );
+                    if let (Some((h, w, hh)), Some(staging)) = (hud_copy, staging) {
+                        let again = [transition(
+                            swap_image,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            vk::AccessFlags::TRANSFER_WRITE,
+                            vk::AccessFlags::TRANSFER_WRITE,
+                        )];
+                        device.cmd_pipeline_barrier(
+                            cb,
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::DependencyFlags::empty(),
+                            &[],
+                            &[],
+                            &again,
+                        );
+                        let region = [vk::BufferImageCopy::default()
+                            .buffer_offset(hud_offset)
+                            .buffer_row_length(h.width)
+                            .image_subresource(layers)
+                            .image_offset(vk::Offset3D {
+                                x: h.x as i32,
+                                y: h.y as i32,
+                                z: 0,
+                            })
+                            .image_extent(vk::Extent3D {
+                                width: w,
+                                height: hh,
+                                depth: 1,
+                            })];
+                        device.cmd_copy_buffer_to_image(
+                            cb,
+                            staging,
+                            swap_image,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            &region,
+                        );
+                    }
                     let to_present = [transition(
                         swap_image,
                         vk::ImageLayout::TRANSFER_DST_OPTIMAL,

@@ -3,8 +3,9 @@
 //! fraction of one) into the running mean, presents it with the on-screen figures, and records it.
 //!
 //! **Accumulation** restarts when the camera moves, the gaze moves by half a pixel or more (foveated
-//! only: a uniform frame does not depend on the gaze), the window's size, the configuration, the
-//! uniform toggle or the budget shift changes, or on `R`. A moving gaze restarts the whole mean rather
+//! only: a uniform frame does not depend on the gaze), the window's size, the configuration or the
+//! uniform toggle changes, or on `R` (not when the budget changes the samples per frame: see
+//! [`crate::view::sampling`]). A moving gaze restarts the whole mean rather
 //! than only where the regions changed: every pixel's owning block and sample jitter depend on the
 //! gaze, so a partial restart would need per-pixel sample counts on both backends; the budget keeps
 //! restarts cheap, and the eye, once it rests, sees the image converge from there.
@@ -136,6 +137,8 @@ struct Viewer {
 
     // Accumulation: frames in the mean, and what the mean was rendered with.
     accumulated: u32,
+    /// Samples per pixel / block summed over the frames of the mean (the effective spp).
+    effective_spp: [u64; 3],
     mean_key: Option<MeanKey>,
     reset_requested: bool,
 
@@ -159,7 +162,6 @@ struct MeanKey {
     size: [u32; 2],
     config_index: usize,
     uniform: bool,
-    shift: u32,
     gaze: [f32; 2],
 }
 
@@ -210,6 +212,7 @@ impl Viewer {
             hud_on: true,
             paused: false,
             accumulated: 0,
+            effective_spp: [0; 3],
             mean_key: None,
             reset_requested: false,
             frame: 0,
@@ -492,7 +495,14 @@ impl Viewer {
         }
         self.tapped.clear();
 
-        let size = self.window_size;
+        let window = self.window_size;
+        let scale = self.options.render_scale;
+        let size = window.map(|w| ((w as f32 * scale).round() as u32).max(1));
+        // The gaze in rendered pixels.
+        let gaze = [
+            self.gaze[0] * size[0] as f32 / window[0] as f32,
+            self.gaze[1] * size[1] as f32 / window[1] as f32,
+        ];
         let config = self.options.configs[self.config_index].clone();
         let radii = self.options.radii.radii_px(size);
         // A new mean? (The budget shift may only change on such frames.)
@@ -500,7 +510,6 @@ impl Viewer {
             size,
             config_index: self.config_index,
             uniform: self.uniform,
-            shift: self.budget.shift(),
             gaze: self.gaze,
         };
         let restart = match self.mean_key {
@@ -511,7 +520,6 @@ impl Viewer {
                     || old.size != key.size
                     || old.config_index != key.config_index
                     || old.uniform != key.uniform
-                    || old.shift != key.shift
                     || (!self.uniform
                         && ((old.gaze[0] - key.gaze[0]).abs() >= 0.5
                             || (old.gaze[1] - key.gaze[1]).abs() >= 0.5))
@@ -522,7 +530,7 @@ impl Viewer {
         self.camera_moved = false;
 
         let shift = self.budget.shift();
-        let foveation = frame_foveation(&config, self.uniform, shift, self.gaze, radii);
+        let foveation = frame_foveation(&config, self.uniform, shift, gaze, radii);
         if foveation.validate() != FOVEATION_OK {
             return Err(FoveaError::option(
                 "--spp/--blocks/--radii",
@@ -569,6 +577,12 @@ impl Viewer {
         } else {
             frame_spp(config.spp, shift)
         };
+        if before == 0 {
+            self.effective_spp = [0; 3];
+        }
+        for (e, s) in self.effective_spp.iter_mut().zip(frame_spp) {
+            *e += u64::from(s);
+        }
         let lines = self.hud_lines(&config.name, frame_spp, shift, &stats, render_ms);
         let hud = self.hud_on.then(|| render_hud(&lines, 1));
         let present_start = Instant::now();
@@ -581,7 +595,7 @@ impl Viewer {
                 x: HUD_CORNER[0],
                 y: HUD_CORNER[1],
             }),
-            size,
+            window,
         )?;
         let presented_at = Instant::now();
         self.present_mode = outcome.present_mode;
@@ -594,8 +608,12 @@ impl Viewer {
         let frame_ms = tick_start.elapsed().as_secs_f64() * 1e3;
         // The first frame compiles the driver's pipelines (lavapipe: LLVM): not a measure of the budget.
         if !self.records.is_empty() {
-            self.budget
-                .observe(frame_ms, config.spp, accumulated_before == 0);
+            let spp = if self.uniform {
+                [config.spp[0]; 3]
+            } else {
+                config.spp
+            };
+            self.budget.observe(frame_ms, spp);
         }
         let record = FrameRecord {
             frame: self.frame,
@@ -606,11 +624,13 @@ impl Viewer {
             budget_shift: shift,
             render: stats,
             accumulated_frames: self.accumulated,
+            effective_spp: self.effective_spp,
             render_ms,
             present_ms: presented_at.duration_since(present_start).as_secs_f64() * 1e3,
             frame_ms,
             latency_ms,
-            window: size,
+            window,
+            rendered: size,
             presented: outcome.presented,
             eye: pose.eye.to_array(),
             radii_px: [
@@ -661,12 +681,21 @@ impl Viewer {
             .rev()
             .find_map(|r| r.latency_ms)
             .map_or("-".to_string(), |l| format!("{l:.1} ms"));
-        let eff = frame_spp.map(|s| u64::from(s) * u64::from(self.accumulated));
+        let eff = self.effective_spp;
         let [cw, ch] = self.window_size;
-        vec![
+        let scale = self.options.render_scale;
+        let mut lines = vec![
             format!(
-                "fovea view  {}: {}  {}x{}",
-                renderer.backend_name, renderer.device, cw, ch
+                "fovea view  {}: {}  {}x{}{}",
+                renderer.backend_name,
+                renderer.device,
+                cw,
+                ch,
+                if scale < 1.0 {
+                    format!(" (rendered at x{scale})")
+                } else {
+                    String::new()
+                }
             ),
             format!(
                 "frame {:>6}  {:6.1} ms  {:5.1} fps  gaze-to-present {}",
@@ -697,7 +726,15 @@ impl Viewer {
                 self.fly.speed()
             ),
             "U uniform  O overlay  C config  Space pause  P shot  R reset  H hide".to_string(),
-        ]
+        ];
+        let budget = self.options.budget_ms;
+        if budget > 0.0 && frame_spp == [1, 1, 1] && frame_ms > 1.2 * budget {
+            lines.push(format!(
+                "over the {budget:.0} ms budget at one sample per block: the per-pixel passes \
+                 dominate; try --render-scale 0.5"
+            ));
+        }
+        lines
     }
 
     fn screenshot(&mut self, record: &FrameRecord) -> Result<()> {

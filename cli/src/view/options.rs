@@ -79,6 +79,8 @@ pub struct ViewOptions {
     pub threads: Option<usize>,
     pub specialize: bool,
     pub window_size: [u32; 2],
+    /// Frames are rendered at this fraction of the window's size.
+    pub render_scale: f32,
     pub gaze: GazeInput,
     pub configs: Vec<SamplingConfig>,
     pub radii: RadiiRule,
@@ -212,6 +214,12 @@ impl ViewOptions {
         if let Some(p) = &args.stats {
             check_json_path(p, "--stats")?;
         }
+        if !(args.render_scale.is_finite() && (0.1..=1.0).contains(&args.render_scale)) {
+            return Err(FoveaError::option(
+                "--render-scale",
+                format!("{} is not between 0.1 and 1", args.render_scale),
+            ));
+        }
         if args.exit_after_frames == Some(0) {
             return Err(FoveaError::option(
                 "--exit-after-frames",
@@ -237,6 +245,7 @@ impl ViewOptions {
             threads: args.threads,
             specialize: !args.no_specialize,
             window_size: args.size.0,
+            render_scale: args.render_scale,
             gaze,
             configs: configurations(spp, blocks),
             radii,

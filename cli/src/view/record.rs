@@ -24,6 +24,8 @@ pub struct FrameRecord {
     pub render: RenderStats,
     /// Frames in the running mean, this one included.
     pub accumulated_frames: u32,
+    /// Samples per pixel / block in the running mean (summed over its frames).
+    pub effective_spp: [u64; 3],
     pub render_ms: f64,
     pub present_ms: f64,
     /// Wall time of the whole frame (input, render, present).
@@ -31,6 +33,8 @@ pub struct FrameRecord {
     /// Time from the gaze sample this frame used to the present call's return, when the sample was new.
     pub latency_ms: Option<f64>,
     pub window: [u32; 2],
+    /// The rendered size (the window's times `--render-scale`).
+    pub rendered: [u32; 2],
     pub presented: bool,
     pub eye: [f32; 3],
     pub radii_px: [f32; 2],
@@ -38,9 +42,6 @@ pub struct FrameRecord {
 
 impl FrameRecord {
     pub fn to_json(&self) -> Value {
-        let eff = self
-            .frame_spp
-            .map(|s| u64::from(s) * u64::from(self.accumulated_frames));
         json!({
             "frame": self.frame,
             "gaze": self.gaze,
@@ -51,12 +52,13 @@ impl FrameRecord {
             "primary_samples": self.render.primary_samples,
             "samples_per_region": self.render.samples_per_region,
             "accumulated_frames": self.accumulated_frames,
-            "effective_spp": eff,
+            "effective_spp": self.effective_spp,
             "render_ms": self.render_ms,
             "present_ms": self.present_ms,
             "frame_ms": self.frame_ms,
             "latency_ms": self.latency_ms,
             "window": self.window,
+            "rendered": self.rendered,
             "presented": self.presented,
             "eye": self.eye,
             "radii_px": self.radii_px,

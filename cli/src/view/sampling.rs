@@ -2,13 +2,14 @@
 //! toggle, and the frame-time budget that renders a fraction of a configuration's samples per frame.
 //!
 //! **Budget.** A configuration asks for `spp = [F, I, P]` samples per fovea pixel, intermediate block and
-//! periphery block. When a frame at full `spp` takes longer than the budget (default 33 ms), each frame
-//! renders `spp >> k` (at least 1 each) for the smallest `k` that fits, so the regions keep their ratios
-//! until the periphery is down to one sample, after which the fovea keeps the most ("fovea first").
-//! Accumulation while the eye and the camera rest completes the configuration: after `2^k` frames each
-//! region has at least its configured samples. `k` adapts only on frames that start a new mean (the eye
-//! or the camera moved), so that the frames of one mean have equal sample counts and their plain
-//! average is the right estimate.
+//! periphery block. When a frame at full `spp` takes longer than the budget (default 33 ms), frames render
+//! `spp >> k` (at least 1 each), so the regions keep their ratios until the periphery is down to one
+//! sample, after which the fovea keeps the most ("fovea first"). Accumulation while the eye and the camera
+//! rest completes the configuration: after `2^k` frames each region has at least its configured samples.
+//! `k` follows the measured frame time on every frame: up by `log2` of the overshoot at once (a 1.3 s
+//! frame against 33 ms jumps five steps, not one per frame), down one step when twice the work would
+//! still fit. A change of `k` does not restart the running mean: each frame is an unbiased estimate of
+//! the pixel, so their plain mean stays unbiased, and the effective samples are counted frame by frame.
 use fovea_core::foveation::regions::FoveationParams;
 
 /// One sampling configuration of the live view.
@@ -122,16 +123,18 @@ impl BudgetController {
         self.shift
     }
 
-    /// Learns from a frame that took `frame_ms` at the current shift for `spp`. Only frames that start
-    /// a new mean may change the shift (`may_adapt`). Halving the samples roughly halves the time, so
-    /// the shift grows while a frame is over budget and shrinks when twice the work would still fit.
-    pub fn observe(&mut self, frame_ms: f64, spp: [u32; 3], may_adapt: bool) {
-        if !may_adapt || self.budget_ms <= 0.0 || !frame_ms.is_finite() {
+    /// Learns from a frame that took `frame_ms` at the current shift for `spp`.
+    pub fn observe(&mut self, frame_ms: f64, spp: [u32; 3]) {
+        if self.budget_ms <= 0.0 || !frame_ms.is_finite() || frame_ms <= 0.0 {
             return;
         }
-        let at_floor = frame_spp(spp, self.shift) == [1, 1, 1];
-        if frame_ms > self.budget_ms * 1.2 && !at_floor && self.shift < MAX_SHIFT {
-            self.shift += 1;
+        // The shift beyond which every region is at one sample.
+        let floor = (0..MAX_SHIFT)
+            .find(|&k| frame_spp(spp, k) == [1, 1, 1])
+            .unwrap_or(MAX_SHIFT);
+        if frame_ms > self.budget_ms * 1.2 {
+            let steps = (frame_ms / self.budget_ms).log2().ceil().max(1.0) as u32;
+            self.shift = (self.shift + steps).min(floor);
         } else if frame_ms * 2.0 < self.budget_ms * 0.8 && self.shift > 0 {
             self.shift -= 1;
         }
@@ -168,22 +171,19 @@ mod tests {
     }
 
     #[test]
-    fn the_controller_backs_off_over_budget_and_only_on_fresh_frames() {
+    fn the_controller_jumps_by_the_overshoot_and_creeps_back() {
         let mut b = BudgetController::new(33.0);
-        b.observe(100.0, [32, 16, 8], false);
-        assert_eq!(b.shift(), 0);
-        b.observe(100.0, [32, 16, 8], true);
-        b.observe(60.0, [32, 16, 8], true);
+        b.observe(100.0, [32, 16, 8]); // 3x over: log2 -> 2 steps
         assert_eq!(b.shift(), 2);
-        b.observe(5.0, [32, 16, 8], true);
+        b.observe(30.0, [32, 16, 8]);
+        assert_eq!(b.shift(), 2, "within budget: stays");
+        b.observe(5.0, [32, 16, 8]);
         assert_eq!(b.shift(), 1);
-        for _ in 0..30 {
-            b.observe(1000.0, [32, 16, 8], true);
-        }
+        b.observe(1.0e6, [32, 16, 8]);
         assert_eq!(frame_spp([32, 16, 8], b.shift()), [1, 1, 1]);
-        assert_eq!(b.shift(), 5);
+        assert_eq!(b.shift(), 5, "no further than every region at one sample");
         let mut off = BudgetController::new(0.0);
-        off.observe(1000.0, [32, 16, 8], true);
+        off.observe(1000.0, [32, 16, 8]);
         assert_eq!(off.shift(), 0);
     }
 
