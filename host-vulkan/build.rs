@@ -1,12 +1,12 @@
-//! Builds the SPIR-V kernel and hands its path to the crate as `FOVEA_KERNEL_SPV`
-//! (`include_bytes!(env!("FOVEA_KERNEL_SPV"))`).
+//! Builds the SPIR-V kernel's two modules and hands their paths to the crate as `FOVEA_KERNEL_SPV`
+//! (software traversal) and `FOVEA_KERNEL_RQ_SPV` (ray queries; `include_bytes!(env!(..))`).
 //!
 //! The kernel (`gpu-kernel/`, calling into `core/`) is compiled by rust-gpu, which needs a pinned nightly,
 //! so this script runs `gpu-builder/` (its own workspace, pinned to that nightly) in a nested cargo:
 //!
 //! ```text
 //! cargo +nightly-2026-08-15 run --release --manifest-path gpu-builder/Cargo.toml \
-//!     --target-dir target/gpu-builder -- $OUT_DIR/fovea-kernel.spv
+//!     --target-dir target/gpu-builder -- $OUT_DIR/fovea-kernel.spv $OUT_DIR/fovea-kernel-ray-query.spv
 //! ```
 //!
 //! with an environment cleaned of everything the outer cargo set for this script. The first build compiles
@@ -15,7 +15,9 @@
 //! one line naming `bash scripts/setup.sh`.
 //!
 //! `FOVEA_KERNEL_SPV_PREBUILT=/path/to/fovea-kernel.spv` skips the nested build and uses that module (for
-//! machines without the nightly, e.g. a GPU box that only runs a module built elsewhere).
+//! machines without the nightly, e.g. a GPU box that only runs a module built elsewhere), with
+//! `FOVEA_KERNEL_RQ_SPV_PREBUILT` as its ray-query twin (without it, the binary has software traversal
+//! only).
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -38,6 +40,7 @@ fn main() {
         .expect("host-vulkan lives in the repository root")
         .to_path_buf();
     let out = PathBuf::from(env("OUT_DIR")).join("fovea-kernel.spv");
+    let out_rq = PathBuf::from(env("OUT_DIR")).join("fovea-kernel-ray-query.spv");
 
     for dir in [
         "core/src",
@@ -53,7 +56,9 @@ fn main() {
         println!("cargo:rerun-if-changed={}", repo.join(dir).display());
     }
     println!("cargo:rerun-if-env-changed=FOVEA_KERNEL_SPV_PREBUILT");
+    println!("cargo:rerun-if-env-changed=FOVEA_KERNEL_RQ_SPV_PREBUILT");
     println!("cargo:rustc-env=FOVEA_KERNEL_SPV={}", out.display());
+    println!("cargo:rustc-env=FOVEA_KERNEL_RQ_SPV={}", out_rq.display());
 
     if let Some(prebuilt) = std::env::var_os("FOVEA_KERNEL_SPV_PREBUILT") {
         let prebuilt = PathBuf::from(prebuilt);
@@ -64,6 +69,14 @@ fn main() {
                 prebuilt.display(),
                 out.display()
             ));
+        }
+        // The ray-query twin, if given; else none (hardware traversal then says so at run time).
+        let copied = match std::env::var_os("FOVEA_KERNEL_RQ_SPV_PREBUILT") {
+            Some(rq) => std::fs::copy(&rq, &out_rq).map(|_| ()),
+            None => std::fs::write(&out_rq, []),
+        };
+        if let Err(e) = copied {
+            fail(&format!("writing {}: {e}", out_rq.display()));
         }
         return;
     }
@@ -82,6 +95,7 @@ fn main() {
         .arg(repo.join("target").join("gpu-builder"))
         .arg("--")
         .arg(&out)
+        .arg(&out_rq)
         .current_dir(repo.join("gpu-builder"));
     sanitise_env(&mut cmd);
 
@@ -101,7 +115,7 @@ fn main() {
     let log_path = out.with_file_name("gpu-build.log");
     let _ = std::fs::write(&log_path, &log);
 
-    if !output.status.success() || !out.is_file() {
+    if !output.status.success() || !out.is_file() || !out_rq.is_file() {
         let lines: Vec<&str> = log.lines().filter(|l| !l.trim().is_empty()).collect();
         let start = lines.len().saturating_sub(FAILURE_TAIL_LINES);
         for line in &lines[start..] {

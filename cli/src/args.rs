@@ -95,6 +95,9 @@ pub struct ViewArgs {
     /// Vulkan device index (see `fovea devices`).
     #[arg(long, value_name = "N")]
     pub device: Option<usize>,
+    /// Ray traversal on a Vulkan device (as for `render`).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub traversal: Traversal,
     /// Initial window size (the frame is rendered at the window's size).
     #[arg(long, default_value = "1280x720", value_name = "WxH")]
     pub size: WindowSize,
@@ -201,6 +204,28 @@ pub enum Backend {
     Vulkan,
 }
 
+/// How rays find triangles on a Vulkan device.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Traversal {
+    /// Hardware on a GPU with ray queries, else software.
+    Auto,
+    /// The kernel's own BVH traversal.
+    Software,
+    /// The driver's acceleration structures (VK_KHR_ray_query); an error without them.
+    Hardware,
+}
+
+#[cfg(feature = "vulkan")]
+impl From<Traversal> for fovea_vulkan::Traversal {
+    fn from(t: Traversal) -> Self {
+        match t {
+            Traversal::Auto => Self::Auto,
+            Traversal::Software => Self::Software,
+            Traversal::Hardware => Self::Hardware,
+        }
+    }
+}
+
 /// How an OBJ scene's purely diffuse MTL materials (`Ks 0 0 0`, no PBR keys) reflect.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MtlDiffuse {
@@ -239,6 +264,10 @@ pub struct RenderArgs {
     /// Vulkan device index (see `fovea devices`); default: the first discrete, else integrated GPU.
     #[arg(long, value_name = "N")]
     pub device: Option<usize>,
+    /// Ray traversal on a Vulkan device: `hardware` uses the driver's acceleration structures
+    /// (VK_KHR_ray_query), `software` the kernel's BVH, `auto` hardware on a GPU that has ray queries.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub traversal: Traversal,
     /// Image size WxH in pixels.
     #[arg(long, default_value = "1920x1080", value_name = "WxH")]
     pub resolution: String,
@@ -364,6 +393,9 @@ pub struct ReportArgs {
     /// Vulkan device index (see `fovea devices`).
     #[arg(long, value_name = "N")]
     pub device: Option<usize>,
+    /// Ray traversal on a Vulkan device (as for `render`).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub traversal: Traversal,
     /// Worker threads of the CPU backend (default: all cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,

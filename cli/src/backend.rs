@@ -82,9 +82,16 @@ impl Renderer {
     pub fn new(
         choice: Backend,
         device: Option<usize>,
+        traversal: crate::args::Traversal,
         threads: Option<usize>,
         quiet: bool,
     ) -> Result<Self> {
+        if choice == Backend::Cpu && traversal == crate::args::Traversal::Hardware {
+            return Err(FoveaError::option(
+                "--traversal",
+                "hardware traversal runs on a Vulkan device; use it with --backend vulkan or auto",
+            ));
+        }
         if choice == Backend::Cpu && device.is_some() {
             return Err(FoveaError::option(
                 "--device",
@@ -116,7 +123,7 @@ impl Renderer {
                 features: fovea_core::scene::FeatureFlags::ALL,
             }));
         }
-        Self::vulkan(device, choice == Backend::Auto, threads, quiet)
+        Self::vulkan(device, choice == Backend::Auto, traversal, threads, quiet)
     }
 
     #[cfg(feature = "vulkan")]
@@ -135,6 +142,7 @@ impl Renderer {
     fn vulkan(
         device: Option<usize>,
         auto: bool,
+        traversal: crate::args::Traversal,
         threads: Option<usize>,
         quiet: bool,
     ) -> Result<Self> {
@@ -142,13 +150,19 @@ impl Renderer {
             device_index: device,
             validation: fovea_vulkan::validation_requested(),
             window: None,
+            traversal: traversal.into(),
         };
         match fovea_vulkan::VulkanContext::new(&options) {
-            Ok(ctx) => Ok(Self::Vulkan(Box::new(VulkanRenderer {
-                scene: None,
-                ctx,
-                upload_ms: 0.0,
-            }))),
+            Ok(ctx) => {
+                if let (Some(note), false) = (&ctx.traversal_note, quiet) {
+                    eprintln!("note: {note}");
+                }
+                Ok(Self::Vulkan(Box::new(VulkanRenderer {
+                    scene: None,
+                    ctx,
+                    upload_ms: 0.0,
+                })))
+            }
             // `auto` without an explicit device falls back; anything explicit is an error.
             Err(e) if auto && device.is_none() => {
                 if !quiet {
@@ -164,7 +178,13 @@ impl Renderer {
     }
 
     #[cfg(not(feature = "vulkan"))]
-    fn vulkan(_: Option<usize>, _: bool, _: Option<usize>, _: bool) -> Result<Self> {
+    fn vulkan(
+        _: Option<usize>,
+        _: bool,
+        _: crate::args::Traversal,
+        _: Option<usize>,
+        _: bool,
+    ) -> Result<Self> {
         Err(FoveaError::Backend(
             "this build of fovea has no Vulkan backend (built without the `vulkan` feature); use --backend cpu"
                 .into(),
@@ -283,6 +303,17 @@ impl Renderer {
                         "warmup_ms": stats.warmup_ms,
                         "upload_ms": v.upload_ms,
                         "scene_upload_bytes": scene.bytes,
+                        "traversal": if v.ctx.hardware_traversal() { "hardware" } else { "software" },
+                        "traversal_note": v.ctx.traversal_note,
+                        "acceleration_structures": scene.hardware.as_ref().map(|h| serde_json::json!({
+                            "build_ms": h.stats.build_ms,
+                            "blas_bytes": h.stats.blas_bytes,
+                            "blas_bytes_uncompacted": h.stats.blas_bytes_uncompacted,
+                            "tlas_bytes": h.stats.tlas_bytes,
+                            "triangle_map_bytes": h.stats.map_bytes,
+                            "opaque_triangles": h.stats.opaque_triangles,
+                            "cutout_triangles": h.stats.cutout_triangles,
+                        })),
                         "validation_messages": messages,
                     })),
                     stats: stats.render,

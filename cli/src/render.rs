@@ -213,7 +213,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let wall = Instant::now();
     let plan = plan(args)?;
     // The backend first: a bad `--device` fails before the scene loads.
-    let mut renderer = Renderer::new(args.backend, args.device, args.threads, args.quiet)?;
+    let mut renderer = Renderer::new(
+        args.backend,
+        args.device,
+        args.traversal,
+        args.threads,
+        args.quiet,
+    )?;
     let backend_name = renderer.name();
 
     let parse::CameraOptions { eye, target, up } = parse::camera_options(&args.camera)?;

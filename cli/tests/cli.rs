@@ -224,3 +224,80 @@ fn gaze_trace_writes_one_numbered_image_per_frame() {
     );
     assert!(dir.join("f_00000.png").is_file() && dir.join("f_00001.png").is_file());
 }
+
+/// `--traversal hardware` renders through the driver's acceleration structures (lavapipe has them) and
+/// reports them in the stats; `auto` on a CPU device keeps software and says why; the CPU backend
+/// refuses hardware traversal.
+#[test]
+fn hardware_traversal_renders_and_reports_its_acceleration_structures() {
+    let dir = temp_dir("traversal");
+    let e = fovea()
+        .args(["render", "--backend", "cpu", "--traversal", "hardware"])
+        .output()
+        .unwrap();
+    assert!(!e.status.success());
+    assert!(String::from_utf8_lossy(&e.stderr).contains("--traversal"));
+    let stats = dir.join("hw.json");
+    let out = fovea()
+        .arg("render")
+        .arg(cornell())
+        .args(CAMERA)
+        .args(["--backend", "vulkan", "--traversal", "hardware"])
+        .args([
+            "--resolution",
+            "64x48",
+            "--spp",
+            "4,2,1",
+            "--radii",
+            "8,16",
+            "-q",
+        ])
+        .arg("-o")
+        .arg(dir.join("hw.png"))
+        .arg("--stats")
+        .arg(&stats)
+        .env("FOVEA_VULKAN_VALIDATION", "1")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success()
+        && stderr.contains("Vulkan")
+        && std::env::var("CI").as_deref() != Ok("true")
+    {
+        eprintln!("skipping: no usable Vulkan device here: {stderr}");
+        return;
+    }
+    assert!(out.status.success(), "{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let details = &json["backend_details"];
+    assert_eq!(details["traversal"], "hardware");
+    let accel = &details["acceleration_structures"];
+    assert_eq!(
+        accel["opaque_triangles"].as_u64().unwrap() + accel["cutout_triangles"].as_u64().unwrap(),
+        36
+    );
+    assert!(accel["blas_bytes"].as_u64().unwrap() > 0 && accel["build_ms"].is_number());
+    assert_eq!(details["validation_messages"], serde_json::json!([]));
+    // `auto` on lavapipe (a CPU device): software, with a note.
+    let out = fovea()
+        .arg("render")
+        .arg(cornell())
+        .args([
+            "--backend",
+            "vulkan",
+            "--resolution",
+            "32x24",
+            "--spp",
+            "1,1,1",
+        ])
+        .arg("-o")
+        .arg(dir.join("auto.png"))
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if stderr.contains("llvmpipe") || json["device"].as_str().unwrap_or("").contains("llvmpipe") {
+        assert!(stderr.contains("software traversal"), "{stderr}");
+    }
+}

@@ -61,8 +61,12 @@ pub const BINDING_TRIANGLE_BLOCKS: u32 = 23;
 /// The live view's running mean of the filled HDR frames since the last reset (`[f32; 4]` per pixel,
 /// read and written by `accumulate`; [`crate::post::accumulate`]).
 pub const BINDING_ACCUMULATION: u32 = 24;
+/// Hardware traversal (the ray-query kernel module only): the top-level acceleration structure's
+/// device address and the map from its triangles to the scene's (`u32` words;
+/// `crate::bvh::hardware`). The host binds a placeholder for the software module.
+pub const BINDING_HARDWARE_TRAVERSAL: u32 = 25;
 /// Number of bindings.
-pub const BINDING_COUNT: u32 = 25;
+pub const BINDING_COUNT: u32 = 26;
 
 /// Specialization constant id of `render_samples`' feature mask (`FEATURE_*` bits; default every
 /// feature). The host sets it per scene when it creates the pipeline.

@@ -14,6 +14,11 @@
 //! the CPU and rust-gpu).
 #![no_std]
 #![deny(unsafe_code)]
+// spirv-std's `ray_query!` (hardware traversal, `bvh::hardware`) declares its query with inline SPIR-V.
+#![cfg_attr(
+    all(target_arch = "spirv", feature = "ray-query"),
+    feature(asm_experimental_arch)
+)]
 #![allow(clippy::too_many_arguments)]
 // `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it is also true for NaN, so it guards
 // inputs against NaN as well as against zero and negative values.

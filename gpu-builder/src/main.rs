@@ -1,5 +1,9 @@
-//! `fovea-gpu-builder OUT.spv`: compiles the rust-gpu kernel crate (`gpu-kernel/`, which calls into
-//! `fovea-core`) to one SPIR-V module for Vulkan 1.2 and copies it to `OUT.spv`.
+//! `fovea-gpu-builder OUT.spv OUT-RAY-QUERY.spv`: compiles the rust-gpu kernel crate (`gpu-kernel/`,
+//! which calls into `fovea-core`) to two SPIR-V modules for Vulkan 1.2: `OUT.spv`, which traverses the
+//! software BVH, and `OUT-RAY-QUERY.spv`, built with the `RayQueryKHR` capability and
+//! `SPV_KHR_ray_query`, whose traversal asks the driver's acceleration structures (`--traversal
+//! hardware`). Capabilities are module-wide, so a device without ray queries could not even load a
+//! module that declares them: hence two modules rather than one.
 //!
 //! spirv-builder runs a nested `cargo` with the pinned nightly and the `rustc_codegen_spirv` backend, then
 //! runs spirv-opt and spirv-val on the result (the Debian `spirv-tools` through `use-installed-tools`).
@@ -10,7 +14,7 @@
 //!
 //! ```text
 //! cargo +nightly-2026-08-15 run --release --manifest-path gpu-builder/Cargo.toml \
-//!     --target-dir target/gpu-builder -- /tmp/fovea-kernel.spv
+//!     --target-dir target/gpu-builder -- /tmp/fovea-kernel.spv /tmp/fovea-kernel-rq.spv
 //! ```
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -30,14 +34,35 @@ fn repo_root() -> PathBuf {
     root.canonicalize().unwrap_or_else(|_| root.to_path_buf())
 }
 
-fn run(out: &Path) -> Result<(), String> {
+/// The kernel's two builds: the plain module (software traversal) and the one with ray queries.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Variant {
+    Software,
+    RayQuery,
+}
+
+/// Builds one variant of the kernel into `out`.
+fn build(variant: Variant, out: &Path) -> Result<(), String> {
     let root = repo_root();
     let kernel = root.join("gpu-kernel");
-    let target_dir = root.join("target").join("spirv");
+    // Separate target folders: the variants differ in their target features (rustflags), and sharing one
+    // folder would rebuild `fovea-core` at every switch.
+    let target_dir = root.join("target").join(match variant {
+        Variant::Software => "spirv",
+        Variant::RayQuery => "spirv-ray-query",
+    });
 
     // ImageBuffer: the scene texel buffer core reads its large arrays from (core's `scene::source`).
     let mut builder =
         SpirvBuilder::new(&kernel, TARGET).capability(spirv_builder::Capability::ImageBuffer);
+    if variant == Variant::RayQuery {
+        // The kernel's `ray-query` feature turns on core's `bvh::hardware` (rust-gpu 0.11 does not make
+        // capabilities visible as `cfg(target_feature)`, although its documentation says so).
+        builder = builder
+            .capability(spirv_builder::Capability::RayQueryKHR)
+            .extension("SPV_KHR_ray_query")
+            .shader_crate_features(["ray-query".to_string()]);
+    }
     builder.toolchain_overwrite = Some(NIGHTLY.into());
     builder.target_dir_path = Some(target_dir);
     let result = builder
@@ -67,11 +92,13 @@ fn run(out: &Path) -> Result<(), String> {
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.len() != 1 || args[0].starts_with('-') {
-        eprintln!("usage: fovea-gpu-builder OUT.spv");
+    if args.len() != 2 || args.iter().any(|a| a.starts_with('-')) {
+        eprintln!("usage: fovea-gpu-builder OUT.spv OUT-RAY-QUERY.spv");
         return ExitCode::from(2);
     }
-    match run(Path::new(&args[0])) {
+    let result = build(Variant::Software, Path::new(&args[0]))
+        .and_then(|()| build(Variant::RayQuery, Path::new(&args[1])));
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("fovea-gpu-builder: {e}");

@@ -7,6 +7,11 @@
 //! sums). The live view adds `accumulate` (between `fill` and `tonemap`) and `overlay_regions` (after
 //! `tonemap`). `probe` evaluates single core functions for the cross-backend tests.
 //!
+//! Built twice: the plain module traverses the software BVH; the module built with the `RayQueryKHR`
+//! capability and the crate feature `ray-query` (`--traversal hardware`) also binds [`kernel_abi::BINDING_HARDWARE_TRAVERSAL`] in the
+//! entry points that trace rays, and core's traversal asks the driver's acceleration structures instead
+//! (`fovea_core::bvh::hardware`).
+//!
 //! All entry points run [`WORKGROUP_SIZE`] = 64 invocations per workgroup. The invocation index is
 //! `id.x + id.y · (num_workgroups.x · 64)`, so a host may dispatch up to 65535 workgroups in x and more
 //! rows in y; invocations past the item count return at once.
@@ -65,6 +70,7 @@ const _: () = {
     assert!(kernel_abi::BINDING_SCENE_TEXELS == 22);
     assert!(kernel_abi::BINDING_TRIANGLE_BLOCKS == 23);
     assert!(kernel_abi::BINDING_ACCUMULATION == 24);
+    assert!(kernel_abi::BINDING_HARDWARE_TRAVERSAL == 25);
     assert!(kernel_abi::BINDING_PROBE_INPUT == 15);
     assert!(kernel_abi::BINDING_PROBE_OUTPUT == 16);
     assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
@@ -112,6 +118,9 @@ pub fn render_samples(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
     #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 23)] triangle_blocks: &[TriangleBlock],
+    #[cfg(feature = "ray-query")]
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 25)]
+    hardware: &[u32],
 ) {
     let i = invocation_index(id, num_workgroups);
     if pc.spp == 0 {
@@ -121,6 +130,8 @@ pub fn render_samples(
         features: FeatureFlags(features),
         globals: *globals,
         nodes,
+        #[cfg(feature = "ray-query")]
+        hardware,
         triangle_lanes,
         blocks: triangle_blocks,
         triangle_info,
@@ -349,6 +360,9 @@ pub fn probe_scene(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] outputs: &mut [[f32; 4]],
     #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 23)] triangle_blocks: &[TriangleBlock],
+    #[cfg(feature = "ray-query")]
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 25)]
+    hardware: &[u32],
 ) {
     let i = invocation_index(id, num_workgroups);
     if i >= pc.item_count {
@@ -358,6 +372,8 @@ pub fn probe_scene(
         features: FeatureFlags(FEATURES_ALL),
         globals: *globals,
         nodes,
+        #[cfg(feature = "ray-query")]
+        hardware,
         triangle_lanes,
         blocks: triangle_blocks,
         triangle_info,

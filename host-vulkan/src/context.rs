@@ -19,6 +19,60 @@ use crate::frame::FrameResources;
 use crate::instance::{choose_device, DeviceInfo, InstanceHandle, MessageLog, Shared};
 use crate::spirv::{self, capability, ENTRY_POINTS};
 
+/// How rays find triangles on the device.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Traversal {
+    /// Hardware where the device has ray queries and is a GPU, else software (see
+    /// [`resolve_traversal`]).
+    #[default]
+    Auto,
+    /// The kernel's own BVH traversal (core's `bvh::traverse`), on any device.
+    Software,
+    /// The driver's acceleration structures through `VK_KHR_ray_query` (core's `bvh::hardware`); an
+    /// error where the device has no ray queries.
+    Hardware,
+}
+
+/// What a device offers for hardware traversal: `None` if it has everything, else what it lacks.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RayQuerySupport {
+    pub missing: Option<String>,
+}
+
+/// The traversal a context uses for `requested` on a device of `device_type` ("discrete", "cpu", ...)
+/// with `support`, and a note when `Auto` fell back or chose for a reason worth saying.
+///
+/// `Auto` takes hardware only on GPUs: lavapipe (a CPU device) has ray queries, but its acceleration
+/// structures are traversed by the same CPU cores, slower than the kernel's own BVH (README, "Hardware
+/// traversal"), so `Auto` keeps software there.
+pub fn resolve_traversal(
+    requested: Traversal,
+    device_type: &str,
+    support: &RayQuerySupport,
+) -> std::result::Result<(bool, Option<String>), String> {
+    match (requested, &support.missing) {
+        (Traversal::Software, _) => Ok((false, None)),
+        (Traversal::Hardware, None) => Ok((true, None)),
+        (Traversal::Hardware, Some(why)) => Err(format!(
+            "--traversal hardware needs ray queries, and this device lacks {why}; use --traversal \
+             software or auto"
+        )),
+        (Traversal::Auto, Some(why)) => Ok((
+            false,
+            Some(format!("software traversal: the device lacks {why}")),
+        )),
+        (Traversal::Auto, None) if device_type == "cpu" => Ok((
+            false,
+            Some(
+                "software traversal: this CPU device's ray queries are slower than fovea's own BVH \
+                 (--traversal hardware forces them)"
+                    .into(),
+            ),
+        )),
+        (Traversal::Auto, None) => Ok((true, None)),
+    }
+}
+
 /// How to set up a context.
 #[derive(Clone, Debug, Default)]
 pub struct ContextOptions {
@@ -31,6 +85,8 @@ pub struct ContextOptions {
     /// the device must present to the window's surface from its compute queue, and `VK_KHR_swapchain` is
     /// enabled.
     pub window: Option<crate::present::WindowHandles>,
+    /// Software or hardware traversal (the latter loads the ray-query kernel module).
+    pub traversal: Traversal,
 }
 
 impl ContextOptions {
@@ -41,6 +97,7 @@ impl ContextOptions {
             device_index: None,
             validation: validation_requested(),
             window: None,
+            traversal: Traversal::Auto,
         }
     }
 }
@@ -126,6 +183,12 @@ pub struct VulkanContext {
     /// Whether every frame pipeline has been dispatched once (the first frame does it before its own
     /// dispatches, so that its `render_ms` excludes a driver's lazy shader compilation).
     pub(crate) warmed_up: bool,
+    /// Whether the kernel is the ray-query module (scenes get acceleration structures).
+    pub(crate) hardware_traversal: bool,
+    /// Why `Traversal::Auto` chose software, if it did.
+    pub traversal_note: Option<String>,
+    /// `minAccelerationStructureScratchOffsetAlignment` (hardware traversal).
+    pub(crate) hardware_scratch_alignment: u32,
 }
 
 impl VulkanContext {
@@ -172,6 +235,30 @@ impl VulkanContext {
         let pd = physical[index];
         let info = infos[index].clone();
         let vk_instance = &instance.instance;
+
+        let support = crate::hardware::ray_query_support(&instance, pd);
+        let (hardware, traversal_note) =
+            resolve_traversal(options.traversal, info.device_type, &support).map_err(|reason| {
+                VulkanError::UnsuitableDevice {
+                    device: info.name.clone(),
+                    reason,
+                }
+            })?;
+        let code = if hardware {
+            let rq = spirv::load_ray_query_kernel()?;
+            let rq_info = spirv::module_info(&rq);
+            for name in ENTRY_POINTS {
+                if !rq_info.entry_points.iter().any(|e| e == name) {
+                    return Err(VulkanError::KernelNotBuilt(format!(
+                        "the ray-query SPIR-V module has no entry point '{name}'"
+                    )));
+                }
+            }
+            rq
+        } else {
+            code
+        };
+        let module_info = spirv::module_info(&code);
 
         // SAFETY (this block and the queries below): `pd` belongs to `vk_instance`.
         let queue_families = unsafe { vk_instance.get_physical_device_queue_family_properties(pd) };
@@ -272,6 +359,14 @@ impl VulkanContext {
             });
         }
 
+        let mut device_extensions = Vec::new();
+        if hardware {
+            // Device addresses: the acceleration structures' inputs and the kernel's TLAS address.
+            want12.buffer_device_address = vk::TRUE;
+        }
+        let mut want_accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
+            .acceleration_structure(true);
+        let mut want_ray_query = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
         let priorities = [1.0f32];
         let queue_info = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(family)
@@ -280,7 +375,12 @@ impl VulkanContext {
             .features(want)
             .push_next(&mut want11)
             .push_next(&mut want12);
-        let mut device_extensions = Vec::new();
+        if hardware {
+            enabled = enabled
+                .push_next(&mut want_accel)
+                .push_next(&mut want_ray_query);
+            device_extensions.extend(crate::hardware::DEVICE_EXTENSIONS.map(|e| e.as_ptr()));
+        }
         if instance.surface.is_some() {
             crate::present::check_swapchain_extension(&instance, pd, &info.name)?;
             device_extensions.push(ash::khr::swapchain::NAME.as_ptr());
@@ -297,7 +397,7 @@ impl VulkanContext {
             device: device.clone(),
             physical_device: pd,
             debug_settings: AllocatorDebugSettings::default(),
-            buffer_device_address: false,
+            buffer_device_address: hardware,
             allocation_sizes: AllocationSizes::default(),
         }) {
             Ok(a) => a,
@@ -314,6 +414,7 @@ impl VulkanContext {
             instance,
         });
         let limits = query_limits(&shared);
+        let hardware_scratch_alignment = crate::hardware::scratch_alignment(&shared.instance, pd);
         // SAFETY: `pd` belongs to the instance.
         let props = unsafe { shared.instance.instance.get_physical_device_properties(pd) };
 
@@ -352,6 +453,9 @@ impl VulkanContext {
             },
             pipeline_create_ms: 0.0,
             warmed_up: false,
+            hardware_traversal: hardware,
+            traversal_note,
+            hardware_scratch_alignment,
         };
         // From here on, `ctx`'s Drop cleans up whatever was created if a step fails.
         ctx.create_objects(family, &code, timestamp_bits > 0)?;
@@ -476,6 +580,12 @@ impl VulkanContext {
             }
         }
         Ok(())
+    }
+
+    /// Whether rays are traced by the device's acceleration structures (`--traversal hardware`).
+    #[must_use]
+    pub fn hardware_traversal(&self) -> bool {
+        self.hardware_traversal
     }
 
     /// The chosen device.
@@ -850,5 +960,39 @@ impl Drop for VulkanContext {
             device.destroy_fence(self.fence, None);
             device.destroy_command_pool(self.command_pool, None);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn traversal_is_resolved_from_the_request_the_device_and_its_support() {
+        let yes = RayQuerySupport { missing: None };
+        let no = RayQuerySupport {
+            missing: Some("VK_KHR_ray_query".into()),
+        };
+        assert_eq!(
+            resolve_traversal(Traversal::Auto, "discrete", &yes),
+            Ok((true, None))
+        );
+        let (hw, note) = resolve_traversal(Traversal::Auto, "discrete", &no).unwrap();
+        assert!(
+            !hw && note.unwrap().contains("VK_KHR_ray_query"),
+            "falls back with a note"
+        );
+        let (hw, note) = resolve_traversal(Traversal::Auto, "cpu", &yes).unwrap();
+        assert!(!hw && note.unwrap().contains("--traversal hardware"));
+        assert_eq!(
+            resolve_traversal(Traversal::Hardware, "cpu", &yes),
+            Ok((true, None))
+        );
+        let e = resolve_traversal(Traversal::Hardware, "discrete", &no).unwrap_err();
+        assert!(e.contains("VK_KHR_ray_query") && e.contains("--traversal software"));
+        assert_eq!(
+            resolve_traversal(Traversal::Software, "discrete", &yes),
+            Ok((false, None))
+        );
     }
 }

@@ -25,6 +25,7 @@ mod buffer;
 pub mod context;
 pub mod error;
 pub mod frame;
+pub mod hardware;
 pub mod instance;
 pub mod present;
 pub mod probe;
@@ -33,7 +34,10 @@ pub mod spirv;
 
 /// The `ash` Vulkan types (result codes for [`VulkanContext::inject_fault`]).
 pub use ash::vk;
-pub use context::{validation_requested, ContextOptions, VulkanContext};
+pub use context::{
+    resolve_traversal, validation_requested, ContextOptions, RayQuerySupport, Traversal,
+    VulkanContext,
+};
 pub use error::VulkanError;
 pub use frame::{GpuFrame, GpuRenderStats};
 pub use instance::{list_devices, DeviceInfo};

@@ -4,9 +4,10 @@ use std::sync::Arc;
 use ash::vk;
 use fovea_core::kernel_abi::{
     BINDING_ENVIRONMENT_CONDITIONAL, BINDING_ENVIRONMENT_MARGINAL, BINDING_ENVIRONMENT_TEXELS,
-    BINDING_GLOBALS, BINDING_LIGHTS, BINDING_LIGHT_CDF, BINDING_MATERIALS, BINDING_NODES,
-    BINDING_NORMALS, BINDING_TEXELS, BINDING_TEXTURES, BINDING_TRIANGLE_BLOCKS,
-    BINDING_TRIANGLE_INFO, BINDING_TRIANGLE_LANES, BINDING_TRIANGLE_LIGHT, BINDING_UVS,
+    BINDING_GLOBALS, BINDING_HARDWARE_TRAVERSAL, BINDING_LIGHTS, BINDING_LIGHT_CDF,
+    BINDING_MATERIALS, BINDING_NODES, BINDING_NORMALS, BINDING_TEXELS, BINDING_TEXTURES,
+    BINDING_TRIANGLE_BLOCKS, BINDING_TRIANGLE_INFO, BINDING_TRIANGLE_LANES, BINDING_TRIANGLE_LIGHT,
+    BINDING_UVS,
 };
 use fovea_core::scene::{FeatureFlags, SceneGlobals, TexelOffsets, INVALID_INDEX};
 use fovea_scene::pack::PackedScene;
@@ -16,9 +17,9 @@ use crate::context::VulkanContext;
 use crate::error::{Result, VkContext, VulkanError};
 use crate::instance::Shared;
 
-/// Number of scene bindings (`BINDING_GLOBALS` ..= `BINDING_ENVIRONMENT_CONDITIONAL` and
-/// `BINDING_TRIANGLE_BLOCKS`).
-pub const SCENE_BINDINGS: usize = 16;
+/// Number of scene bindings (`BINDING_GLOBALS` ..= `BINDING_ENVIRONMENT_CONDITIONAL`,
+/// `BINDING_TRIANGLE_BLOCKS` and `BINDING_HARDWARE_TRAVERSAL`).
+pub const SCENE_BINDINGS: usize = 17;
 
 /// Descriptor range of an empty array: 4 bytes, so the kernel's `OpArrayLength` is 0 for every element type
 /// of 8 bytes or more (an empty array must look empty: core tests `normals.is_empty()`, `uvs.is_empty()`,
@@ -52,6 +53,8 @@ pub struct GpuScene {
     /// The features `render_samples` is specialised for when rendering this scene: the scene's own
     /// (`PackedScene::features`) after upload; set [`FeatureFlags::ALL`] for the general kernel.
     pub features: FeatureFlags,
+    /// The acceleration structures, on a context with hardware traversal.
+    pub hardware: Option<crate::hardware::HardwareScene>,
 }
 
 /// A buffer view, destroyed on drop.
@@ -89,10 +92,16 @@ impl GpuScene {
         self.bindings
             .iter()
             .map(|(b, r)| {
-                let info = vk::DescriptorBufferInfo::default()
-                    .buffer(self.buffers[r.buffer].buffer)
-                    .offset(r.offset)
-                    .range(r.range);
+                let info = match (&self.hardware, *b == BINDING_HARDWARE_TRAVERSAL) {
+                    (Some(h), true) => vk::DescriptorBufferInfo::default()
+                        .buffer(h.map.buffer)
+                        .offset(0)
+                        .range(vk::WHOLE_SIZE),
+                    _ => vk::DescriptorBufferInfo::default()
+                        .buffer(self.buffers[r.buffer].buffer)
+                        .offset(r.offset)
+                        .range(r.range),
+                };
                 (*b, info)
             })
             .collect()
@@ -291,6 +300,20 @@ impl GpuScene {
             buffers.push(ctx.upload(what, &[(0, data)], size, vk::BufferUsageFlags::empty())?);
         }
 
+        // Hardware traversal's map (the ray-query module reads it); the software module does not read
+        // the binding, which then points at the globals.
+        let hardware = if ctx.hardware_traversal {
+            Some(ctx.build_hardware_scene(packed)?)
+        } else {
+            None
+        };
+        let globals_range = bindings
+            .iter()
+            .find(|(b, _)| *b == BINDING_GLOBALS)
+            .map(|(_, r)| *r)
+            .expect("the globals are bound");
+        bindings.push((BINDING_HARDWARE_TRAVERSAL, globals_range));
+
         let info = vk::BufferViewCreateInfo::default()
             .buffer(buffers[0].buffer)
             .format(vk::Format::R32G32B32A32_UINT)
@@ -309,6 +332,7 @@ impl GpuScene {
             },
             bytes: total,
             features: packed.features(),
+            hardware,
         })
     }
 }

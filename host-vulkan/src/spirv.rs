@@ -3,6 +3,9 @@ use crate::error::{Result, VulkanError};
 
 /// The kernel module built by `host-vulkan/build.rs` (rust-gpu), embedded in the binary.
 pub static EMBEDDED_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_SPV"));
+/// The same kernel built with ray queries (`--traversal hardware`; core's `bvh::hardware`); empty
+/// where the build had none (a prebuilt software module without its twin).
+pub static EMBEDDED_RAY_QUERY_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_RQ_SPV"));
 
 /// Entry points the host creates a pipeline for, in [`crate::context`]'s pipeline order.
 pub const ENTRY_POINTS: [&str; 7] = [
@@ -37,6 +40,30 @@ pub fn load_kernel() -> Result<Vec<u32>> {
         }
         None => words_from_bytes(EMBEDDED_KERNEL).map_err(|e| {
             VulkanError::KernelNotBuilt(format!("the embedded kernel is unusable: {e}"))
+        }),
+    }
+}
+
+/// The ray-query kernel's words: the embedded module, or the file named by `FOVEA_KERNEL_RQ_SPV` at run
+/// time.
+pub fn load_ray_query_kernel() -> Result<Vec<u32>> {
+    match std::env::var("FOVEA_KERNEL_RQ_SPV")
+        .ok()
+        .filter(|p| !p.is_empty())
+    {
+        Some(path) => {
+            let bytes = std::fs::read(&path)
+                .map_err(|e| VulkanError::KernelNotBuilt(format!("cannot read '{path}': {e}")))?;
+            words_from_bytes(&bytes)
+                .map_err(|e| VulkanError::KernelNotBuilt(format!("'{path}': {e}")))
+        }
+        None if EMBEDDED_RAY_QUERY_KERNEL.is_empty() => Err(VulkanError::KernelNotBuilt(
+            "this binary has no ray-query kernel (it was built from a prebuilt software module); \
+             use --traversal software"
+                .into(),
+        )),
+        None => words_from_bytes(EMBEDDED_RAY_QUERY_KERNEL).map_err(|e| {
+            VulkanError::KernelNotBuilt(format!("the embedded ray-query kernel is unusable: {e}"))
         }),
     }
 }

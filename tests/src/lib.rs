@@ -183,12 +183,22 @@ pub fn rgba8_to_rgb8(pixels: &[u32]) -> Vec<u8> {
 /// A validating Vulkan context on the default device, or `None` (the caller skips its test with a message)
 /// where there is no Vulkan loader or device and `CI` is not `true`; under `CI=true` a missing device fails.
 pub fn vulkan_context_or_skip(what: &str) -> Option<fovea_vulkan::VulkanContext> {
+    vulkan_context_with_or_skip(what, fovea_vulkan::Traversal::Software)
+}
+
+/// [`vulkan_context_or_skip`] with the given traversal (`Hardware` fails the test where the device has
+/// no ray queries: lavapipe has them).
+pub fn vulkan_context_with_or_skip(
+    what: &str,
+    traversal: fovea_vulkan::Traversal,
+) -> Option<fovea_vulkan::VulkanContext> {
     use fovea_vulkan::{ContextOptions, VulkanContext, VulkanError};
     std::env::set_var("FOVEA_VULKAN_VALIDATION", "1");
     let options = ContextOptions {
         device_index: None,
         validation: fovea_vulkan::validation_requested(),
         window: None,
+        traversal,
     };
     match VulkanContext::new(&options) {
         Ok(ctx) => Some(ctx),

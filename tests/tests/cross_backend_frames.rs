@@ -22,6 +22,10 @@ use glam::Vec3;
 
 const W: u32 = 96;
 const H: u32 = 72;
+/// Hardware traversal against the CPU: fraction of pixels within 1e-3 and mean FLIP (see the assertions).
+/// Measured: 100 % on every scene but the Lost Empire crop (99.32 %, mean FLIP 3.7e-4).
+const HARDWARE_MIN_WITHIN: f64 = 0.99;
+const HARDWARE_MAX_FLIP: f64 = 1e-3;
 
 /// The paper's three regions around the image centre, with few samples (4 / 2 / 1 on 1×1 / 2×2 / 4×4
 /// blocks) to keep lavapipe fast.
@@ -224,9 +228,21 @@ fn compare(
 
 #[test]
 fn small_scenes_render_alike_on_cpu_and_vulkan() {
-    let Some(mut ctx) = vulkan_context_or_skip("the Vulkan frame test") else {
+    small_scenes_render_alike(fovea_vulkan::Traversal::Software);
+}
+
+/// The same frames with the driver's acceleration structures (`--traversal hardware`) on the device.
+#[test]
+fn small_scenes_render_alike_with_hardware_traversal() {
+    small_scenes_render_alike(fovea_vulkan::Traversal::Hardware);
+}
+
+/// Renders every small scene on the CPU and on the device with `traversal` and compares them.
+fn small_scenes_render_alike(traversal: fovea_vulkan::Traversal) {
+    let Some(mut ctx) = vulkan_context_with_or_skip("the Vulkan frame test", traversal) else {
         return;
     };
+    let hardware = ctx.hardware_traversal();
     let log = ctx.validation_log();
     let device = ctx.device_description();
     let mut rows = Vec::new();
@@ -287,7 +303,10 @@ fn small_scenes_render_alike_on_cpu_and_vulkan() {
         ));
     }
 
-    eprintln!("\nCPU vs {device}, {W}x{H} foveated (4/2/1 spp), seed 7");
+    eprintln!(
+        "\nCPU vs {device} ({} traversal), {W}x{H} foveated (4/2/1 spp), seed 7",
+        if hardware { "hardware" } else { "software" }
+    );
     eprintln!(
         "| {:<24} | {:>12} | {:>10} | {:>10} | {:>9} | {:>6} | {:>8} | {:>12} |",
         "scene", "within 1e-3", "max abs", "mean FLIP", "CPU mean", "s", "features", "spec==gen"
@@ -321,13 +340,20 @@ fn small_scenes_render_alike_on_cpu_and_vulkan() {
         // Every scene, the Lost Empire crop included, measured 100 % within 1e-3 since core computes
         // sin, cos, atan2, exp and ln with its own polynomials (`math::transcendental`) instead of
         // `libm` on the CPU and GLSL.std.450 on the GPU (one ulp apart, which flipped a few paths:
-        // the crop was 99.09-99.41 % before). The task's 99.9 % is asserted.
+        // the crop was 99.09-99.41 % before). The task's 99.9 % is asserted. Hardware traversal
+        // finds the same triangles but computes hit distances and barycentrics its own way, so a path
+        // that grazes an edge may go elsewhere: its bound is looser (measured figures in the README).
+        let (min_within, max_flip) = if hardware {
+            (HARDWARE_MIN_WITHIN, HARDWARE_MAX_FLIP)
+        } else {
+            (0.999, 1e-3)
+        };
         assert!(
-            f.within >= 0.999,
+            f.within >= min_within,
             "{name}: {:.4} % within",
             100.0 * f.within
         );
-        assert!(f.mean_flip <= 1e-3, "{name}: mean FLIP {}", f.mean_flip);
+        assert!(f.mean_flip <= max_flip, "{name}: mean FLIP {}", f.mean_flip);
     }
 }
 

@@ -184,6 +184,7 @@ fn bad_device_index_is_a_clear_error() {
         device_index: Some(devices.len() + 3),
         validation: false,
         window: None,
+        traversal: fovea_vulkan::Traversal::Software,
     })
     .err()
     .expect("an out-of-range index fails");

@@ -219,7 +219,13 @@ fn create_dir(dir: &Path) -> Result<()> {
 pub fn run(args: &ReportArgs) -> Result<()> {
     let wall = Instant::now();
     let plan = plan(args)?;
-    let mut renderer = Renderer::new(args.backend, args.device, args.threads, args.quiet)?;
+    let mut renderer = Renderer::new(
+        args.backend,
+        args.device,
+        args.traversal,
+        args.threads,
+        args.quiet,
+    )?;
     let lighting = Lighting::from_args(&args.lighting)?;
     create_dir(&args.out)?;
 

@@ -841,6 +841,7 @@ impl Viewer {
         let renderer = LiveRenderer::new(
             handles,
             self.options.device,
+            self.options.traversal,
             self.use_gpu,
             self.options.threads,
             &self.scene.packed,

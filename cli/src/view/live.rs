@@ -28,7 +28,7 @@ enum LiveBackend {
         rgba: Vec<u32>,
     },
     /// The Vulkan kernel; everything stays on the device.
-    Vulkan { scene: GpuScene },
+    Vulkan { scene: Box<GpuScene> },
 }
 
 /// A renderer that presents to one window.
@@ -56,6 +56,7 @@ impl LiveRenderer {
     pub fn new(
         window: WindowHandles,
         device_index: Option<usize>,
+        traversal: crate::args::Traversal,
         use_gpu: bool,
         threads: Option<usize>,
         packed: &PackedScene,
@@ -65,6 +66,12 @@ impl LiveRenderer {
             device_index,
             validation: fovea_vulkan::validation_requested(),
             window: Some(window),
+            // The CPU backend only presents: no acceleration structures for it.
+            traversal: if use_gpu {
+                traversal.into()
+            } else {
+                fovea_vulkan::Traversal::Software
+            },
         };
         let mut ctx = VulkanContext::new(&options).map_err(|e| {
             FoveaError::View(format!(
@@ -80,7 +87,9 @@ impl LiveRenderer {
                 scene.features = FeatureFlags::ALL;
             }
             Ok(Self {
-                backend: LiveBackend::Vulkan { scene },
+                backend: LiveBackend::Vulkan {
+                    scene: Box::new(scene),
+                },
                 ctx,
                 backend_name: "vulkan",
                 device: present_device.clone(),

@@ -493,7 +493,8 @@ fn traverse<F: Features, S: SceneSource>(
 
 /// The closest hit of `ray` with `0 < t < t_max` over the scene's BVH, skipping alpha cut-out holes;
 /// [`Hit::miss`] if there is none or the scene has no nodes. On the CPU, the scene's 8-wide tree is
-/// traversed where it has one ([`super::wide`]).
+/// traversed where it has one ([`super::wide`]); in the ray-query kernel module, the driver's
+/// acceleration structures (`super::hardware`).
 #[must_use]
 pub fn closest_hit<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32) -> Hit {
     closest_hit_with(scene, &SceneSlices, ray, t_max)
@@ -507,10 +508,13 @@ pub fn closest_hit_with<F: Features, S: SceneSource>(
     ray: &Ray,
     t_max: f32,
 ) -> Hit {
+    #[cfg(all(target_arch = "spirv", feature = "ray-query"))]
+    return super::hardware::closest_hit(scene, source, ray, t_max);
     #[cfg(not(target_arch = "spirv"))]
     if !scene.wide_nodes.is_empty() {
         return super::wide::closest_hit_wide(scene, source, ray, t_max);
     }
+    #[allow(unreachable_code)]
     traverse(scene, source, ray, t_max, false)
 }
 
@@ -529,10 +533,13 @@ pub fn any_hit_with<F: Features, S: SceneSource>(
     ray: &Ray,
     t_max: f32,
 ) -> bool {
+    #[cfg(all(target_arch = "spirv", feature = "ray-query"))]
+    return super::hardware::any_hit(scene, source, ray, t_max);
     #[cfg(not(target_arch = "spirv"))]
     if !scene.wide_nodes.is_empty() {
         return super::wide::any_hit_wide(scene, source, ray, t_max);
     }
+    #[allow(unreachable_code)]
     traverse(scene, source, ray, t_max, true).is_hit()
 }
 

@@ -23,6 +23,10 @@ pub struct SceneView<'a, F: Features = FeatureFlags> {
     /// when it is not empty, traversal uses it instead of `nodes`. The GPU has only `nodes`.
     #[cfg(not(target_arch = "spirv"))]
     pub wide_nodes: &'a [Bvh8Node],
+    /// The ray-query kernel module's hardware traversal: the top-level acceleration structure's address
+    /// and the map from its triangles to the scene's (`crate::bvh::hardware`). Only in that module.
+    #[cfg(all(target_arch = "spirv", feature = "ray-query"))]
+    pub hardware: &'a [u32],
     /// Where each triangle's positions are (BVH leaf order): `4 * block + lane` of the [`TriangleBlock`]
     /// lane that holds them ([`super::triangle_lane`]). The blocks are the only copy of the positions.
     pub triangle_lanes: &'a [u32],
@@ -65,6 +69,8 @@ impl SceneView<'_> {
             nodes: &[],
             #[cfg(not(target_arch = "spirv"))]
             wide_nodes: &[],
+            #[cfg(all(target_arch = "spirv", feature = "ray-query"))]
+            hardware: &[],
             triangle_lanes: &[],
             blocks: &[],
             triangle_info: &[],
@@ -94,6 +100,8 @@ impl<'a, F: Features> SceneView<'a, F> {
             nodes: self.nodes,
             #[cfg(not(target_arch = "spirv"))]
             wide_nodes: self.wide_nodes,
+            #[cfg(all(target_arch = "spirv", feature = "ray-query"))]
+            hardware: self.hardware,
             triangle_lanes: self.triangle_lanes,
             blocks: self.blocks,
             triangle_info: self.triangle_info,
