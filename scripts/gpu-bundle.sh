@@ -16,6 +16,7 @@ echo "gpu-bundle: building the release binary for x86-64-v3 (target/portable)"
 # RUSTFLAGS replaces the repository's `target-cpu=native`; the kernel's nested build ignores both.
 RUSTFLAGS="-C target-cpu=x86-64-v3" cargo build --release -q -p fovea-cli --target-dir target/portable
 cp target/portable/release/fovea gpu/fovea
+strip --strip-debug gpu/fovea  # line tables are not needed there; keeps the carried tree small
 echo "gpu-bundle: downloading the Vulkan loader (libvulkan1, amd64)"
 apt_opts=(-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/fovea-amd64-lists)
 mkdir -p /tmp/fovea-amd64-lists/partial

@@ -476,3 +476,21 @@ fn bad_input_fails_with_a_clear_message() {
     assert_eq!(leftovers, ["bad.txt", "trace.csv"]);
     let _ = std::io::stderr().flush();
 }
+
+/// A machine whose Vulkan loader finds no driver: the view says so and exits 1 (no panic).
+#[test]
+fn no_vulkan_driver_is_a_clear_error() {
+    let _guard = DISPLAY_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut c) = view_under_xvfb() else {
+        return;
+    };
+    c.arg(cornell())
+        .args(["--backend", "cpu", "--size", "64x48", "--exit-after-frames", "1"])
+        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json");
+    let out = run_bounded(&mut c, Duration::from_secs(120));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.contains("needs a Vulkan driver"), "{stderr}");
+}
