@@ -481,6 +481,10 @@ impl Viewer {
 
     fn render_frame(&mut self) -> Result<()> {
         let tick_start = Instant::now();
+        if self.records.is_empty() {
+            // A gaze trace replays from the first frame, not from before the window opened.
+            self.started = tick_start;
+        }
         self.poll_gaze();
         let dt = if self.scripted() {
             SCRIPT_DT
