@@ -4,7 +4,7 @@
 # - for the Vulkan backend: the SPIR-V tools (spirv-val, spirv-opt), a Vulkan loader, Mesa's drivers (lavapipe
 #   runs the kernel on the CPU where there is no GPU), vulkaninfo and the validation layers;
 # - for `fovea view`'s tests: Xvfb (an X server without a screen) and xauth, which xvfb-run needs;
-# - the pinned nightly that rust-gpu builds the kernel with (see README, "GPU build").
+# - the pinned nightly that rust-gpu builds the kernel with (see docs/architecture.md, "GPU build").
 set -euo pipefail
 
 NIGHTLY=nightly-2026-08-15
@@ -42,7 +42,7 @@ fi
 # --- lavapipe from Mesa 25 on Debian 12 -------------------------------------------------------------------
 # Debian 12's own lavapipe (Mesa 22.3) masks every branch, both sides of every `if` always run, and renders
 # fovea's kernel about 3x slower than Mesa 25.0 from bookworm-backports, which skips branches no lane takes
-# (README, "lavapipe against the CPU host"). So on bookworm, lavapipe comes from backports (it needs only a
+# (docs/performance.md, "lavapipe against the CPU host"). So on bookworm, lavapipe comes from backports (it needs only a
 # newer libdrm; other Mesa packages are left alone). FOVEA_SYSTEM_LAVAPIPE=1 keeps the distribution's version.
 if [ "${FOVEA_SYSTEM_LAVAPIPE:-0}" != 1 ] && command -v apt-get >/dev/null 2>&1 &&
   grep -q '^VERSION_CODENAME=bookworm' /etc/os-release 2>/dev/null; then

@@ -3,6 +3,11 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+use crate::values::{
+    BlockTriple, DisplayCm, Eccentricity, PixelPoint, Point3, PointLight, RadiiPx, Resolution, Rgb,
+    SppTriple,
+};
+
 /// fovea: a foveated real-time path tracer (after Mohanto, Kluge and Staadt 2023).
 #[derive(Parser, Debug)]
 #[command(name = "fovea", version, about, long_about = None)]
@@ -21,7 +26,7 @@ pub enum Command {
     Report(Box<ReportArgs>),
     /// Benchmarks: BVH build throughput, ray traversal throughput, and a generated 10 M-triangle scene
     /// (load, build, render, peak memory).
-    Bench(crate::bench::BenchArgs),
+    Bench(BenchArgs),
     /// Live view: a window whose fovea follows the gaze (mouse, an eye tracker over UDP, or a trace),
     /// with fly controls, accumulation while the eye rests and a frame-time budget.
     View(Box<ViewArgs>),
@@ -106,7 +111,7 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 1.0, value_name = "S")]
     pub render_scale: f32,
     /// Where the gaze comes from: `mouse` (the pointer), `udp:PORT` (an eye tracker sending `t,x,y`
-    /// datagrams to 127.0.0.1:PORT; see README, "Eye-tracker protocol") or `trace` (--gaze-trace).
+    /// datagrams to 127.0.0.1:PORT; see docs/view.md, "Eye-tracker protocol") or `trace` (--gaze-trace).
     #[arg(long, default_value = "mouse", value_name = "SOURCE")]
     pub gaze_source: GazeSourceArg,
     /// Gaze trace to replay with its timestamps: lines `t,x,y` (seconds since the start, coordinates
@@ -123,13 +128,13 @@ pub struct ViewArgs {
     /// Samples per pixel (fovea) and per block (intermediate, periphery); the first configuration C
     /// cycles through.
     #[arg(long, default_value = "32,16,8", value_name = "F,I,P")]
-    pub spp: String,
+    pub spp: SppTriple,
     /// Block edge in pixels per region; each must divide the next.
     #[arg(long, default_value = "1,2,4", value_name = "F,I,P")]
-    pub blocks: String,
+    pub blocks: BlockTriple,
     /// Region radii in pixels (instead of eccentricity angles).
     #[arg(long, value_name = "R1,R2")]
-    pub radii: Option<String>,
+    pub radii: Option<RadiiPx>,
     #[command(flatten)]
     pub display: DisplayArgs,
     /// Frame-time budget in milliseconds: frames that would take longer render a fraction of the
@@ -175,7 +180,7 @@ pub struct ViewArgs {
     /// Start with the region overlay on (toggle with O).
     #[arg(long)]
     pub overlay: bool,
-    /// Replay timed input events from FILE (see README, "Scripted runs").
+    /// Replay timed input events from FILE (see docs/view.md, "Scripted runs").
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
     /// Exit (status 0) after this many frames.
@@ -270,10 +275,10 @@ pub struct RenderArgs {
     pub traversal: Traversal,
     /// Image size WxH in pixels.
     #[arg(long, default_value = "1920x1080", value_name = "WxH")]
-    pub resolution: String,
+    pub resolution: Resolution,
     /// Fixation in pixels X,Y (default: the image centre). A gaze off the image is allowed.
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
-    pub gaze: Option<String>,
+    pub gaze: Option<PixelPoint>,
     /// CSV gaze trace with lines `frame,x,y`; one output image per line.
     #[arg(long, value_name = "FILE.csv")]
     pub gaze_trace: Option<PathBuf>,
@@ -282,13 +287,13 @@ pub struct RenderArgs {
     pub uniform: bool,
     /// Samples per pixel (fovea) and per block (intermediate, periphery).
     #[arg(long, default_value = "32,16,8", value_name = "F,I,P")]
-    pub spp: String,
+    pub spp: SppTriple,
     /// Block edge in pixels per region; each must divide the next.
     #[arg(long, default_value = "1,2,4", value_name = "F,I,P")]
-    pub blocks: String,
+    pub blocks: BlockTriple,
     /// Region radii in pixels (instead of eccentricity angles).
     #[arg(long, value_name = "R1,R2")]
-    pub radii: Option<String>,
+    pub radii: Option<RadiiPx>,
     #[command(flatten)]
     pub display: DisplayArgs,
     /// Bounces per path (3: camera -> x1 -> x2 -> x3 -> light).
@@ -360,10 +365,20 @@ pub struct ReportArgs {
     pub out: PathBuf,
     /// Image size WxH in pixels (default 3840x2160, the paper's; 320x180 with --quick).
     #[arg(long, value_name = "WxH")]
-    pub resolution: Option<String>,
+    pub resolution: Option<Resolution>,
     /// Fixation in pixels X,Y (default: the image centre).
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
-    pub gaze: Option<String>,
+    pub gaze: Option<PixelPoint>,
+    /// Your own samples per pixel / block, measured as one more configuration (with --blocks,
+    /// --radii, --eccentricity; the others default to the paper's).
+    #[arg(long, value_name = "F,I,P")]
+    pub spp: Option<SppTriple>,
+    /// Block edges of your own configuration.
+    #[arg(long, value_name = "F,I,P")]
+    pub blocks: Option<BlockTriple>,
+    /// Region radii in pixels of your own configuration (instead of --eccentricity).
+    #[arg(long, value_name = "R1,R2")]
+    pub radii: Option<RadiiPx>,
     /// Timed runs per configuration; the median render time is reported (default 3; 1 with --quick).
     #[arg(long, value_name = "N")]
     pub runs: Option<u32>,
@@ -436,10 +451,10 @@ pub struct ReportArgs {
 pub struct CameraArgs {
     /// Camera position (with --target).
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
-    pub eye: Option<String>,
+    pub eye: Option<Point3>,
     /// Camera target point (with --eye).
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
-    pub target: Option<String>,
+    pub target: Option<Point3>,
     /// Camera up vector.
     #[arg(
         long,
@@ -447,10 +462,18 @@ pub struct CameraArgs {
         value_name = "X,Y,Z",
         allow_hyphen_values = true
     )]
-    pub up: String,
+    pub up: Point3,
     /// Vertical field of view in degrees.
     #[arg(long, value_name = "DEG")]
     pub fov: Option<f32>,
+}
+
+impl CameraArgs {
+    /// `--eye`, `--target` and `--up` (their consistency is checked where the camera is made).
+    #[must_use]
+    pub fn points(&self) -> (Option<[f32; 3]>, Option<[f32; 3]>, [f32; 3]) {
+        (self.eye.map(|p| p.0), self.target.map(|p| p.0), self.up.0)
+    }
 }
 
 /// Light added on the command line (`render` and `report`; `report` applies it to every scene).
@@ -459,7 +482,7 @@ pub struct LightingArgs {
     /// Constant environment ("sky") radiance (default: the bundled scene's sky for Lost Empire, none
     /// for other scenes).
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true)]
-    pub sky: Option<String>,
+    pub sky: Option<Rgb>,
     /// Adds a point light at X,Y,Z with intensity R,G,B in W/sr (repeat for several), e.g. to light a
     /// scene that has no emitters.
     #[arg(
@@ -467,7 +490,7 @@ pub struct LightingArgs {
         value_name = "X,Y,Z,R,G,B",
         allow_hyphen_values = true
     )]
-    pub point_lights: Vec<String>,
+    pub point_lights: Vec<PointLight>,
     /// Equirectangular HDR environment map (.hdr or .exr), importance-sampled.
     #[arg(long, value_name = "FILE")]
     pub env_map: Option<PathBuf>,
@@ -486,11 +509,63 @@ pub struct LightingArgs {
 pub struct DisplayArgs {
     /// Eccentricity angles in degrees bounding the fovea and the intermediate region.
     #[arg(long, default_value = "5.2,17", value_name = "E1,E2")]
-    pub eccentricity: String,
+    pub eccentricity: Eccentricity,
     /// Physical display size in centimetres (the image fills it, whatever --resolution is).
     #[arg(long, default_value = "70.848x39.852", value_name = "WxH")]
-    pub display_cm: String,
+    pub display_cm: DisplayCm,
     /// Viewing distance in centimetres.
     #[arg(long, default_value_t = 60.0, value_name = "D")]
     pub distance_cm: f32,
+}
+
+/// `fovea bench`: build, traversal and scale benchmarks (see `crate::bench`).
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    pub what: BenchCommand,
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Also write the figures as JSON to this file.
+    #[arg(long, global = true, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Subcommand, Debug, Clone)]
+pub enum BenchCommand {
+    /// BVH build throughput on a scene (default: the bundled Lost Empire).
+    Build {
+        /// Scene file (.gltf, .glb or .obj).
+        scene: Option<PathBuf>,
+        /// Builds to time; the median is reported.
+        #[arg(long, default_value_t = 5)]
+        runs: u32,
+    },
+    /// Ray-traversal throughput alone: closest-hit and occlusion queries, no shading.
+    Rays {
+        /// Scene file (.gltf, .glb or .obj); default: the bundled Lost Empire.
+        scene: Option<PathBuf>,
+        /// Ray file: little-endian f32 records of origin xyz, direction xyz, t_max (inf: none) and
+        /// kind (0 closest hit, 1 occlusion). Default: `--count` rays generated in the scene's bounds.
+        #[arg(long, value_name = "FILE")]
+        rays: Option<PathBuf>,
+        /// Rays to generate (half closest-hit, half occlusion) when no ray file is given.
+        #[arg(long, default_value_t = 1 << 21)]
+        count: usize,
+        /// Seed of the generated rays.
+        #[arg(long, default_value_t = 1)]
+        seed: u32,
+        /// Timed passes over all rays; the median is reported (after one untimed warm-up pass).
+        #[arg(long, default_value_t = 5)]
+        runs: u32,
+    },
+    /// Generate, build and render a procedural scene of N triangles; report times and peak memory.
+    Scale {
+        /// Triangles to generate.
+        #[arg(long, default_value_t = 10_000_000)]
+        triangles: u64,
+        /// Image size WxH.
+        #[arg(long, default_value = "3840x2160", value_name = "WxH")]
+        resolution: Resolution,
+    },
 }

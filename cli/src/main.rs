@@ -4,12 +4,12 @@ mod backend;
 mod bench;
 mod error;
 mod output;
-mod parse;
 mod render;
 mod report;
 mod scene_setup;
 mod stats;
 mod trace;
+mod values;
 mod view;
 
 use clap::Parser;

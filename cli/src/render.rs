@@ -15,10 +15,10 @@ use crate::error::{FoveaError, Result};
 use crate::output::{
     check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png, ImageFormat,
 };
-use crate::parse::{self, MAX_SPP};
 use crate::scene_setup::{choose_camera, prepare_scene, Lighting};
 use crate::stats::FrameStats;
 use crate::trace::{read_gaze_trace, GazeSample};
+use crate::values;
 
 /// Everything `render` needs, parsed and checked before any work starts.
 struct Plan {
@@ -31,52 +31,37 @@ struct Plan {
     per_frame_outputs: bool,
     fill_mode: u32,
     lighting: Lighting,
+    /// Options that are accepted but do not do what a user may expect (printed unless `--quiet`).
+    warnings: Vec<String>,
 }
 
 fn plan(args: &RenderArgs) -> Result<Plan> {
-    let resolution = parse::resolution(&args.resolution)?;
+    let resolution = args.resolution.0;
     let [w, h] = resolution;
-    let spp: [u32; 3] = parse::list("--spp", &args.spp, ',')?;
-    if spp.iter().any(|&s| s == 0 || s > MAX_SPP) {
-        return Err(FoveaError::option(
-            "--spp",
-            format!("each value must be 1 to {MAX_SPP}, got {}", args.spp),
-        ));
-    }
-    let blocks: [u32; 3] = parse::list("--blocks", &args.blocks, ',')?;
-    if blocks.iter().any(|&b| b == 0 || b > 64) {
-        return Err(FoveaError::option(
-            "--blocks",
-            format!("each block edge must be 1 to 64, got {}", args.blocks),
-        ));
-    }
-    if !blocks[1].is_multiple_of(blocks[0]) || !blocks[2].is_multiple_of(blocks[1]) {
-        return Err(FoveaError::option(
-            "--blocks",
-            format!(
-                "each block edge must divide the next (fovea | intermediate | periphery), got {}",
-                args.blocks
-            ),
-        ));
-    }
+    let (spp, blocks) = (args.spp.0, args.blocks.0);
+    let mut warnings = Vec::new();
     // The image fills the display, so pixels per centimetre come from the rendered width.
-    let display = parse::display_geometry(
-        &args.display.display_cm,
+    let (display, aspect_warning) = values::display_geometry(
+        args.display.display_cm,
         args.display.distance_cm,
         resolution,
     )?;
-    let radii_px = match &args.radii {
-        Some(text) => {
-            let r: [f32; 2] = parse::floats("--radii", text, ',')?;
-            if r[0] < 0.0 || r[1] < r[0] {
-                return Err(FoveaError::option("--radii", "need 0 <= R1 <= R2"));
-            }
-            r
+    let radii_px = match args.radii {
+        Some(r) => r.0,
+        None => {
+            warnings.extend(aspect_warning);
+            values::eccentricity_radii(args.display.eccentricity, &display)
         }
-        None => parse::eccentricity_radii(&args.display.eccentricity, &display)?,
     };
 
     let mut foveation_template = if args.uniform {
+        if spp[1..] != [16, 8] || blocks != [1, 2, 4] || args.radii.is_some() {
+            warnings.push(format!(
+                "--uniform renders every pixel at --spp's first value ({}); the other --spp values, \
+                 --blocks and --radii are not used",
+                spp[0]
+            ));
+        }
         FoveationParams::uniform(spp[0])
     } else {
         FoveationParams {
@@ -87,30 +72,32 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
             block_size: [blocks[0], blocks[1], blocks[2], 0],
         }
     };
-    let gazes = match (&args.gaze_trace, &args.gaze) {
-        (Some(_), Some(_)) => {
+    let gazes =
+        match (&args.gaze_trace, args.gaze) {
+            (Some(_), Some(_)) => {
+                return Err(FoveaError::option(
+                    "--gaze-trace",
+                    "give either --gaze or --gaze-trace, not both",
+                ))
+            }
+            (Some(_), None) if args.frame != 0 => return Err(FoveaError::option(
+                "--frame",
+                "numbers a single frame; a --gaze-trace numbers its own frames (its first column)",
+            )),
+            (Some(path), None) => read_gaze_trace(path)?,
+            (None, Some(g)) => vec![GazeSample {
+                frame: args.frame,
+                gaze: g.0,
+            }],
+            (None, None) => vec![GazeSample {
+                frame: args.frame,
+                gaze: [0.5 * w as f32, 0.5 * h as f32],
+            }],
+        };
+    for g in &gazes {
+        if g.gaze.iter().any(|v| v.abs() > values::MAX_GAZE_OFFSET) {
             return Err(FoveaError::option(
                 "--gaze-trace",
-                "give either --gaze or --gaze-trace, not both",
-            ))
-        }
-        (Some(path), None) => read_gaze_trace(path)?,
-        (None, Some(text)) => {
-            let g: [f32; 2] = parse::floats("--gaze", text, ',')?;
-            vec![GazeSample {
-                frame: args.frame,
-                gaze: g,
-            }]
-        }
-        (None, None) => vec![GazeSample {
-            frame: args.frame,
-            gaze: [0.5 * w as f32, 0.5 * h as f32],
-        }],
-    };
-    for g in &gazes {
-        if g.gaze.iter().any(|v| v.abs() > 1.0e6) {
-            return Err(FoveaError::option(
-                "--gaze",
                 format!("{:?} is absurdly far off the image", g.gaze),
             ));
         }
@@ -178,6 +165,13 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
     }
 
     let lighting = Lighting::from_args(&args.lighting)?;
+    let only_exr = output_format == ImageFormat::Exr && args.regions_overlay.is_none();
+    if args.exposure != 0.0 && only_exr {
+        warnings.push(
+            "--exposure applies to tone-mapped images (PNG, --regions-overlay); the --output EXR is linear"
+                .into(),
+        );
+    }
 
     Ok(Plan {
         resolution,
@@ -192,6 +186,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
             Fill::Replicate => FILL_REPLICATE,
         },
         lighting,
+        warnings,
     })
 }
 
@@ -212,6 +207,11 @@ fn frame_path(path: &Path, frame: u32) -> PathBuf {
 pub fn run(args: &RenderArgs) -> Result<()> {
     let wall = Instant::now();
     let plan = plan(args)?;
+    if !args.quiet {
+        for w in &plan.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
     // The backend first: a bad `--device` fails before the scene loads.
     let mut renderer = Renderer::new(
         args.backend,
@@ -222,7 +222,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     )?;
     let backend_name = renderer.name();
 
-    let parse::CameraOptions { eye, target, up } = parse::camera_options(&args.camera)?;
+    let (eye, target, up) = args.camera.points();
 
     let scene = prepare_scene(
         args.scene.as_deref(),

@@ -12,7 +12,6 @@ use glam::Vec3;
 
 use crate::args::LightingArgs;
 use crate::error::{FoveaError, Result};
-use crate::parse;
 
 /// The bundled default scene: the paper's Lost Empire (CC BY 3.0, see assets/lost_empire/SOURCE.md).
 pub fn default_scene_path() -> PathBuf {
@@ -186,23 +185,20 @@ impl Lighting {
                 "give either --sky or --env-map",
             ));
         }
-        let sky = match &args.sky {
-            Some(text) => {
-                let c: [f32; 3] = parse::floats("--sky", text, ',')?;
-                if c.iter().any(|&v| v < 0.0) {
-                    return Err(FoveaError::option("--sky", "radiance must not be negative"));
-                }
-                Some(c)
-            }
-            None => None,
-        };
+        let sky = args.sky.map(|c| c.0);
         if !(args.env_scale.is_finite() && args.env_scale >= 0.0) {
             return Err(FoveaError::option(
                 "--env-scale",
                 "must be a finite, non-negative number",
             ));
         }
-        let point_lights = parse::point_lights(&args.point_lights)?;
+        if args.env_scale != 1.0 && args.env_map.is_none() {
+            return Err(FoveaError::option(
+                "--env-scale",
+                "scales --env-map, and none is given (for a constant sky, scale --sky R,G,B)",
+            ));
+        }
+        let point_lights = args.point_lights.iter().map(|l| l.0).collect();
         let map = match &args.env_map {
             Some(path) => Some((
                 Environment::load_map(path, [args.env_scale; 3])?,

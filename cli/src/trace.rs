@@ -17,6 +17,8 @@ pub const MAX_TRACE_FRAMES: usize = 1_000_000;
 /// Parses a gaze trace; errors name the file and the line.
 pub fn parse_gaze_trace(path: &Path, text: &str) -> Result<Vec<GazeSample>> {
     let mut out = Vec::new();
+    // Frame number -> the line that gave it: two lines for one frame would write the same image twice.
+    let mut seen = std::collections::HashMap::new();
     for (i, line) in text.lines().enumerate() {
         let line_no = i + 1;
         let line = line.trim();
@@ -44,6 +46,15 @@ pub fn parse_gaze_trace(path: &Path, text: &str) -> Result<Vec<GazeSample>> {
             .map_err(|_| bad(format!("'{}' is not a number", fields[2])))?;
         if !x.is_finite() || !y.is_finite() {
             return Err(bad(format!("non-finite gaze '{line}'")));
+        }
+        if let Some(first) = seen.insert(frame, line_no) {
+            return Err(FoveaError::file(
+                path,
+                format!(
+                    "lines {first} and {line_no} both give frame {frame}, whose image would be \
+                     written twice; give each frame once"
+                ),
+            ));
         }
         out.push(GazeSample {
             frame,
@@ -92,5 +103,19 @@ mod tests {
         assert!(err.contains("line 1"), "{err}");
         assert!(parse_gaze_trace(p, "").is_err());
         assert!(parse_gaze_trace(p, "0,nan,1").is_err());
+    }
+
+    #[test]
+    fn a_frame_given_twice_is_refused_with_both_lines() {
+        let e = parse_gaze_trace(Path::new("t.csv"), "frame,x,y\n0,1,2\n1,1,2\n0,3,4\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("lines 2 and 4") && e.contains("frame 0"), "{e}");
+        assert_eq!(
+            parse_gaze_trace(Path::new("t.csv"), "0,1,2\n1,1,2\n")
+                .unwrap()
+                .len(),
+            2
+        );
     }
 }

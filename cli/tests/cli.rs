@@ -301,3 +301,57 @@ fn hardware_traversal_renders_and_reports_its_acceleration_structures() {
         assert!(stderr.contains("software traversal"), "{stderr}");
     }
 }
+
+/// Options that would be silently ignored are refused, or warned about, naming both options.
+#[test]
+fn ignored_option_combinations_are_refused_or_warned() {
+    let dir = temp_dir("combos");
+    let png = dir.join("x.png");
+    let scene = cornell();
+    let scene = scene.to_str().unwrap();
+    let trace = dir.join("trace.csv");
+    std::fs::write(&trace, "0,1,2\n1,3,4\n").unwrap();
+    expect_failure(
+        &[
+            scene,
+            "--gaze-trace",
+            trace.to_str().unwrap(),
+            "--frame",
+            "3",
+        ],
+        "--frame",
+        &png,
+    );
+    expect_failure(&[scene, "--env-scale", "2"], "--env-map", &png);
+    std::fs::write(&trace, "frame,x,y\n0,1,2\n1,3,4\n0,5,6\n").unwrap();
+    expect_failure(
+        &[scene, "--gaze-trace", trace.to_str().unwrap()],
+        "lines 2 and 4",
+        &png,
+    );
+    let exr = dir.join("x.exr");
+    let out = fovea()
+        .args(["render", scene, "--backend", "cpu", "--resolution", "32x24"])
+        .args(["--uniform", "--spp", "2,4,4", "--exposure", "1", "-o"])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("--uniform") && stderr.contains("--spp"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("--exposure") && stderr.contains("EXR"),
+        "{stderr}"
+    );
+    let out = fovea()
+        .args(["render", scene, "--backend", "cpu", "--resolution", "32x32"])
+        .args(["--spp", "2,1,1", "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--display-cm"));
+}

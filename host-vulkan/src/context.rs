@@ -43,7 +43,7 @@ pub struct RayQuerySupport {
 /// with `support`, and a note when `Auto` fell back or chose for a reason worth saying.
 ///
 /// `Auto` takes hardware only on GPUs: lavapipe (a CPU device) has ray queries, but its acceleration
-/// structures are traversed by the same CPU cores, slower than the kernel's own BVH (README, "Hardware
+/// structures are traversed by the same CPU cores, slower than the kernel's own BVH (docs/architecture.md, "Hardware
 /// traversal"), so `Auto` keeps software there.
 pub fn resolve_traversal(
     requested: Traversal,
@@ -260,7 +260,7 @@ impl VulkanContext {
         };
         let module_info = spirv::module_info(&code);
 
-        // SAFETY (this block and the queries below): `pd` belongs to `vk_instance`.
+        // SAFETY: (this block and the queries below) `pd` belongs to `vk_instance`.
         let queue_families = unsafe { vk_instance.get_physical_device_queue_family_properties(pd) };
         // Prefer a compute-only queue family (async compute), else any with compute; with a window, the
         // first compute family that presents to it.
@@ -465,7 +465,7 @@ impl VulkanContext {
     /// Queue, command buffer, fence, descriptor layout and set, pipelines and the timestamp pool.
     fn create_objects(&mut self, family: u32, code: &[u32], timestamps: bool) -> Result<()> {
         let device = &self.shared.device;
-        // SAFETY (whole function): every create call gets a valid create info whose pointers live until
+        // SAFETY: (whole function) every create call gets a valid create info whose pointers live until
         // the call returns; the handles are stored in `self` at once, so Drop destroys them.
         unsafe {
             self.queue = device.get_device_queue(family, 0);

@@ -393,8 +393,8 @@ impl VulkanContext {
                 },
             );
             let mut compacted = [0u64; 1];
-            // SAFETY: the query was written by the submission just waited on (if it succeeded).
             let read = built.and_then(|()| {
+                // SAFETY: the query was written by the submission just waited on.
                 unsafe {
                     self.shared.device.get_query_pool_results(
                         pool,

@@ -665,7 +665,7 @@ impl VulkanContext {
             Some((acquired, vk::PipelineStageFlags::TRANSFER)),
             Some(copied),
             |device, cb| {
-                // SAFETY (whole closure): recording into a command buffer in the recording state; every
+                // SAFETY: (whole closure) recording into a command buffer in the recording state; every
                 // buffer and image is alive until the submission's fence is waited on, and the regions
                 // lie inside them (the HUD copy is clipped to the frame).
                 unsafe {

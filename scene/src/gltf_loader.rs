@@ -44,6 +44,10 @@ use crate::mesh::{CameraDesc, LoadOptions, LoadedScene};
 use crate::source::{FileSource, Filesystem};
 use crate::texture::{decode_texture_bytes, load_texture_from, TextureLimits, TextureRole};
 
+/// The glTF extensions the loader reads.
+pub const SUPPORTED_EXTENSIONS: [&str; 2] =
+    ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+
 /// Loads a `.gltf` or `.glb` file.
 pub fn load_gltf(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
     load_gltf_from(&Filesystem, path, options)
@@ -90,6 +94,20 @@ pub fn load_gltf_from(
     };
     loader.walk()?;
     let mut scene = loader.scene;
+    // An optional extension fovea does not read changes how the asset should look: say so (a required
+    // one is refused by the glTF validation above).
+    let unsupported: Vec<&str> = document
+        .extensions_used()
+        .filter(|e| !SUPPORTED_EXTENSIONS.contains(e))
+        .collect();
+    if !unsupported.is_empty() {
+        scene.warnings.push(format!(
+            "{}: glTF extension(s) {} not supported; what they describe is left out (e.g. a \
+             transmissive material renders opaque)",
+            path.display(),
+            unsupported.join(", ")
+        ));
+    }
     for w in early_warnings.into_iter().rev() {
         scene.warnings.insert(0, format!("{}: {w}", path.display()));
     }
@@ -1075,6 +1093,33 @@ mod tests {
         assert!(s.positions.iter().any(|p| p[0] == -1.0));
         assert_eq!(s.materials[0].base_color, [1.0, 0.5, 0.25, 1.0]);
         assert!(s.normals.is_empty() && s.uvs.is_empty());
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn an_unsupported_optional_extension_is_warned_about_and_a_required_one_refused() {
+        let dir = temp_dir("extensions");
+        let file = dir.join("t.gltf");
+        let base = triangle_gltf(TRI, None, "");
+        let used = base.replace(
+            r#""nodes":[{"mesh":0}]"#,
+            r#""nodes":[{"mesh":0}],"extensionsUsed":["KHR_materials_transmission"]"#,
+        );
+        std::fs::write(&file, used).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.contains("KHR_materials_transmission") && w.contains("not supported")),
+            "{:?}",
+            s.warnings
+        );
+        let required = base.replace(
+            r#""nodes":[{"mesh":0}]"#,
+            r#""nodes":[{"mesh":0}],"extensionsUsed":["KHR_materials_transmission"],"extensionsRequired":["KHR_materials_transmission"]"#,
+        );
+        std::fs::write(&file, required).unwrap();
+        assert!(load_scene(&file, &LoadOptions::default()).is_err());
         std::fs::remove_dir_all(dir).ok();
     }
 

@@ -342,7 +342,7 @@ fn small_scenes_render_alike(traversal: fovea_vulkan::Traversal) {
         // `libm` on the CPU and GLSL.std.450 on the GPU (one ulp apart, which flipped a few paths:
         // the crop was 99.09-99.41 % before). The task's 99.9 % is asserted. Hardware traversal
         // finds the same triangles but computes hit distances and barycentrics its own way, so a path
-        // that grazes an edge may go elsewhere: its bound is looser (measured figures in the README).
+        // that grazes an edge may go elsewhere: its bound is looser (measured figures in docs/architecture.md, "Hardware traversal").
         let (min_within, max_flip) = if hardware {
             (HARDWARE_MIN_WITHIN, HARDWARE_MAX_FLIP)
         } else {

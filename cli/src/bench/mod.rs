@@ -12,10 +12,9 @@
 //! CPU-vs-Vulkan comparison in `scripts/bench-vulkan.sh`. No test asserts any of these timings.
 mod rays;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
-use clap::{Args, Subcommand};
 use fovea_core::camera::Camera;
 use fovea_core::foveation::display::{paper_params_for_display, DisplayGeometry};
 use fovea_core::integrator::{FrameParams, IntegratorSettings};
@@ -27,59 +26,9 @@ use fovea_scene::procedural::city_scene;
 use glam::Vec3;
 use serde_json::json;
 
+use crate::args::{BenchArgs, BenchCommand};
 use crate::error::{FoveaError, Result};
 use crate::scene_setup::default_scene_path;
-
-#[derive(Args, Debug, Clone)]
-pub struct BenchArgs {
-    #[command(subcommand)]
-    pub what: BenchCommand,
-    /// Worker threads (default: all cores).
-    #[arg(long, global = true, value_name = "N")]
-    pub threads: Option<usize>,
-    /// Also write the figures as JSON to this file.
-    #[arg(long, global = true, value_name = "FILE")]
-    pub json: Option<PathBuf>,
-}
-
-#[derive(Subcommand, Debug, Clone)]
-pub enum BenchCommand {
-    /// BVH build throughput on a scene (default: the bundled Lost Empire).
-    Build {
-        /// Scene file (.gltf, .glb or .obj).
-        scene: Option<PathBuf>,
-        /// Builds to time; the median is reported.
-        #[arg(long, default_value_t = 5)]
-        runs: u32,
-    },
-    /// Ray-traversal throughput alone: closest-hit and occlusion queries, no shading.
-    Rays {
-        /// Scene file (.gltf, .glb or .obj); default: the bundled Lost Empire.
-        scene: Option<PathBuf>,
-        /// Ray file: little-endian f32 records of origin xyz, direction xyz, t_max (inf: none) and
-        /// kind (0 closest hit, 1 occlusion). Default: `--count` rays generated in the scene's bounds.
-        #[arg(long, value_name = "FILE")]
-        rays: Option<PathBuf>,
-        /// Rays to generate (half closest-hit, half occlusion) when no ray file is given.
-        #[arg(long, default_value_t = 1 << 21)]
-        count: usize,
-        /// Seed of the generated rays.
-        #[arg(long, default_value_t = 1)]
-        seed: u32,
-        /// Timed passes over all rays; the median is reported (after one untimed warm-up pass).
-        #[arg(long, default_value_t = 5)]
-        runs: u32,
-    },
-    /// Generate, build and render a procedural scene of N triangles; report times and peak memory.
-    Scale {
-        /// Triangles to generate.
-        #[arg(long, default_value_t = 10_000_000)]
-        triangles: u64,
-        /// Image size WxH.
-        #[arg(long, default_value = "3840x2160", value_name = "WxH")]
-        resolution: String,
-    },
-}
 
 /// Runs `fovea bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -96,7 +45,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         BenchCommand::Scale {
             triangles,
             resolution,
-        } => bench_scale(*triangles, resolution),
+        } => bench_scale(*triangles, resolution.0),
     })?;
     let threads = pool.current_num_threads();
     let mut figures = figures;
@@ -228,11 +177,11 @@ fn peak_memory_bytes() -> Option<u64> {
 }
 
 /// The 10 M-triangle scale run: generate, validate, build + pack, render foveated.
-fn bench_scale(triangles: u64, resolution: &str) -> Result<serde_json::Value> {
+fn bench_scale(triangles: u64, resolution: [u32; 2]) -> Result<serde_json::Value> {
     if !(1..=200_000_000).contains(&triangles) {
         return Err(FoveaError::option("--triangles", "must be 1 to 200000000"));
     }
-    let [w, h] = crate::parse::resolution(resolution)?;
+    let [w, h] = resolution;
     let start = Instant::now();
     let mut scene = city_scene(triangles, 7);
     scene.validate(Path::new("procedural city"))?;

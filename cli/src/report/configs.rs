@@ -1,5 +1,6 @@
 //! The configurations a report measures (the paper's Tables 1 and 2 and more): uniform 32 spp, foveated
-//! 32/16/8, 32/8/4, 32/2/1, 32/16/8 with both radii halved, uniform at equal time, and a uniform sweep.
+//! 32/16/8, 32/8/4, 32/2/1, 32/16/8 with both radii halved, the user's own (`--spp/--blocks/--radii/
+//! --eccentricity`), uniform at equal time, and a uniform sweep.
 use fovea_core::foveation::regions::FoveationParams;
 
 /// What a configuration is, for the tables and the plot.
@@ -61,10 +62,27 @@ pub fn uniform(spp: u32, kind: ConfigKind) -> ConfigSpec {
     }
 }
 
-/// The fixed configurations: uniform 32, then the foveated ones derived from `paper` (the paper's
-/// 32/16/8 foveation with radii for this display and resolution).
+/// The user's own configuration (`--spp`, `--blocks`, `--radii` or `--eccentricity` given), measured
+/// after the paper's.
 #[must_use]
-pub fn table_configs(paper: &FoveationParams) -> Vec<ConfigSpec> {
+pub fn user_config(foveation: FoveationParams) -> ConfigSpec {
+    let [f, i, p, _] = foveation.spp;
+    let [bf, bi, bp, _] = foveation.block_size;
+    ConfigSpec {
+        name: format!(
+            "yours {f}/{i}/{p} blocks {bf}/{bi}/{bp} radii {:.1}/{:.1}",
+            foveation.radius_fovea, foveation.radius_intermediate
+        ),
+        slug: "yours".into(),
+        kind: ConfigKind::Foveated,
+        foveation,
+    }
+}
+
+/// The fixed configurations: uniform 32, then the foveated ones derived from `paper` (the paper's
+/// 32/16/8 foveation with radii for this display and resolution), then the user's own if any.
+#[must_use]
+pub fn table_configs(paper: &FoveationParams, user: Option<&FoveationParams>) -> Vec<ConfigSpec> {
     let foveated = |spp: [u32; 3], radius_scale: f32, suffix: &str| {
         let mut f = *paper;
         f.spp = [spp[0], spp[1], spp[2], 0];
@@ -90,13 +108,15 @@ pub fn table_configs(paper: &FoveationParams) -> Vec<ConfigSpec> {
             foveation: f,
         }
     };
-    vec![
+    let mut configs = vec![
         uniform(UNIFORM_SPP, ConfigKind::Uniform),
         foveated([32, 16, 8], 1.0, ""),
         foveated([32, 8, 4], 1.0, ""),
         foveated([32, 2, 1], 1.0, ""),
         foveated([32, 16, 8], 0.5, "half radii"),
-    ]
+    ];
+    configs.extend(user.map(|f| user_config(*f)));
+    configs
 }
 
 /// The uniform sweep: 1, 2, 4, ... up to `max`, and `max` itself when it is not a power of two.
@@ -165,7 +185,7 @@ mod tests {
     #[test]
     fn table_has_the_papers_configurations() {
         let paper = FoveationParams::paper([960.0, 540.0], 73.8, 243.0);
-        let c = table_configs(&paper);
+        let c = table_configs(&paper, None);
         let names: Vec<_> = c.iter().map(|c| c.name.as_str()).collect();
         assert_eq!(
             names,

@@ -27,8 +27,8 @@ use crate::args::{Fill, ReportArgs};
 use crate::backend::Renderer;
 use crate::error::{FoveaError, Result};
 use crate::output::{regions_overlay, tonemapped_rgb8, write_png};
-use crate::parse::{self, MAX_SPP};
 use crate::scene_setup::{choose_camera, default_scene_path, prepare_scene, Lighting};
+use crate::values::{self, MAX_SPP};
 
 use configs::{ConfigKind, ConfigSpec, UNIFORM_SPP};
 use metrics::{RegionMap, RegionMeans};
@@ -88,8 +88,36 @@ pub struct SceneReport {
 }
 
 /// The options, checked, with `--quick` applied.
+/// The paper's region bounds in degrees (5.2° and 17°).
+const PAPER_ECCENTRICITY: values::Eccentricity = values::Eccentricity([
+    fovea_core::foveation::FOVEA_ECCENTRICITY_DEG,
+    fovea_core::foveation::INTERMEDIATE_ECCENTRICITY_DEG,
+]);
+
+/// The user's own foveation settings (an extra configuration).
+#[derive(Clone, Copy, Debug)]
+struct UserFoveation {
+    spp: [u32; 3],
+    blocks: [u32; 3],
+    radii_px: [f32; 2],
+}
+
+impl UserFoveation {
+    fn around(&self, gaze: [f32; 2]) -> FoveationParams {
+        FoveationParams {
+            gaze,
+            radius_fovea: self.radii_px[0],
+            radius_intermediate: self.radii_px[1],
+            spp: [self.spp[0], self.spp[1], self.spp[2], 0],
+            block_size: [self.blocks[0], self.blocks[1], self.blocks[2], 0],
+        }
+    }
+}
+
 struct Plan {
     resolution: [u32; 2],
+    /// The user's own configuration, if they gave one.
+    user: Option<UserFoveation>,
     gaze: [f32; 2],
     runs: u32,
     reference_spp: u32,
@@ -116,25 +144,11 @@ fn positive(option: &'static str, value: u32, max: u32) -> Result<u32> {
 }
 
 fn plan(args: &ReportArgs) -> Result<Plan> {
-    let resolution = parse::resolution(args.resolution.as_deref().unwrap_or(if args.quick {
-        "320x180"
-    } else {
-        "3840x2160"
-    }))?;
+    let resolution = args
+        .resolution
+        .map_or(if args.quick { [320, 180] } else { [3840, 2160] }, |r| r.0);
     let [w, h] = resolution;
-    let gaze = match &args.gaze {
-        Some(text) => {
-            let g: [f32; 2] = parse::floats("--gaze", text, ',')?;
-            if g.iter().any(|v| v.abs() > 1.0e6) {
-                return Err(FoveaError::option(
-                    "--gaze",
-                    format!("{g:?} is absurdly far off the image"),
-                ));
-            }
-            g
-        }
-        None => [0.5 * w as f32, 0.5 * h as f32],
-    };
+    let gaze = args.gaze.map_or([0.5 * w as f32, 0.5 * h as f32], |g| g.0);
     let runs = positive(
         "--runs",
         args.runs.unwrap_or(if args.quick { 1 } else { 3 }),
@@ -153,12 +167,29 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
     )?;
     // The image fills the display whatever its resolution, as in `fovea render`: pixels per centimetre,
     // radii and pixels per degree all scale with the rendered width.
-    let display = parse::display_geometry(
-        &args.display.display_cm,
+    let (display, aspect_warning) = values::display_geometry(
+        args.display.display_cm,
         args.display.distance_cm,
         resolution,
     )?;
-    let radii_px = parse::eccentricity_radii(&args.display.eccentricity, &display)?;
+    if let (Some(w), false) = (aspect_warning, args.quiet) {
+        eprintln!("warning: {w}");
+    }
+    // The paper's configurations keep the paper's angles; the user's own foveation, when any of its
+    // options is given, is measured as one more configuration.
+    let radii_px = values::eccentricity_radii(PAPER_ECCENTRICITY, &display);
+    let own = args.spp.is_some()
+        || args.blocks.is_some()
+        || args.radii.is_some()
+        || args.display.eccentricity != PAPER_ECCENTRICITY;
+    let user = own.then(|| UserFoveation {
+        spp: args.spp.map_or([32, 16, 8], |s| s.0),
+        blocks: args.blocks.map_or([1, 2, 4], |b| b.0),
+        radii_px: args.radii.map_or_else(
+            || values::eccentricity_radii(args.display.eccentricity, &display),
+            |r| r.0,
+        ),
+    });
     if args.depth > 64 {
         return Err(FoveaError::option(
             "--depth",
@@ -171,7 +202,7 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
             "must be a finite EV between -64 and 64",
         ));
     }
-    let parse::CameraOptions { eye, target, up } = parse::camera_options(&args.camera)?;
+    let (eye, target, up) = args.camera.points();
     let mut names = std::collections::HashSet::new();
     for s in &args.scenes {
         if !s.is_file() {
@@ -193,6 +224,7 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
         ppd: pixels_per_degree(&display),
         display,
         radii_px,
+        user,
         fill_mode: match args.fill {
             Fill::Bilinear => FILL_BILINEAR,
             Fill::Replicate => FILL_REPLICATE,
@@ -260,8 +292,15 @@ pub fn run(args: &ReportArgs) -> Result<()> {
             "the foveation settings are inconsistent",
         ));
     }
+    let user = plan.user.map(|u| u.around(plan.gaze));
+    if user.is_some_and(|u| u.validate() != FOVEATION_OK) {
+        return Err(FoveaError::option(
+            "--spp/--blocks/--radii",
+            "the foveation settings are inconsistent",
+        ));
+    }
     // Samples of every render known now (the reference and equal time are added when known).
-    let per_scene: u64 = configs::table_configs(&paper)
+    let per_scene: u64 = configs::table_configs(&paper, user.as_ref())
         .iter()
         .map(|c| c.foveation)
         .chain(
@@ -499,7 +538,8 @@ fn run_scene(
     // Uniform results by spp: the sweep's 32 spp and an equal-time spp already measured are reused.
     let mut uniform_by_spp: HashMap<u32, ConfigResult> = HashMap::new();
     let mut results = Vec::new();
-    for spec in configs::table_configs(&paper) {
+    let user = plan.user.map(|u| u.around(plan.gaze));
+    for spec in configs::table_configs(&paper, user.as_ref()) {
         let r = measurer.measure(renderer, &spec)?;
         if spec.kind == ConfigKind::Uniform {
             uniform_by_spp.insert(spec.foveation.spp[0], r.clone());

@@ -168,12 +168,12 @@ struct MeanKey {
 impl Viewer {
     fn new(options: ViewOptions, scene: PreparedScene, use_gpu: bool) -> Result<Self> {
         let [w, h] = options.window_size;
-        let c = &options.camera;
+        let (eye_option, target_option, world_up) = options.camera;
         let camera = choose_camera(
             &scene,
-            c.eye,
-            c.target,
-            c.up,
+            eye_option,
+            target_option,
+            world_up,
             options.fov,
             w as f32 / h as f32,
         )?;
@@ -182,7 +182,7 @@ impl Viewer {
         let up = Vec3::from_slice(&camera.up[..3]);
         let fov_deg = (2.0 * up.length().atan()).to_degrees();
         let diagonal = (scene.packed.bounds_max - scene.packed.bounds_min).length();
-        let fly = FlyCamera::new(eye, eye + forward, Vec3::from(c.up), fov_deg, diagonal);
+        let fly = FlyCamera::new(eye, eye + forward, Vec3::from(world_up), fov_deg, diagonal);
         let now = Instant::now();
         Ok(Self {
             uniform: options.uniform,

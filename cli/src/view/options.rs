@@ -8,8 +8,8 @@ use fovea_core::integrator::IntegratorSettings;
 
 use crate::args::{Backend, Fill, GazeSourceArg, ViewArgs};
 use crate::error::{FoveaError, Result};
-use crate::parse::{self, MAX_SPP};
 use crate::scene_setup::Lighting;
+use crate::values;
 use crate::view::gaze::{GazeConvention, GazeTrace, UdpGazeSource};
 use crate::view::sampling::{configurations, SamplingConfig};
 use crate::view::script::Script;
@@ -92,7 +92,8 @@ pub struct ViewOptions {
     pub fill_mode: u32,
     pub exposure: f32,
     pub seed: u32,
-    pub camera: parse::CameraOptions,
+    /// `--eye`, `--target`, `--up`.
+    pub camera: (Option<[f32; 3]>, Option<[f32; 3]>, [f32; 3]),
     pub fov: Option<f32>,
     pub script: Option<Script>,
     pub exit_after_frames: Option<u64>,
@@ -104,46 +105,18 @@ pub struct ViewOptions {
 
 impl ViewOptions {
     pub fn from_args(args: &ViewArgs) -> Result<Self> {
-        let spp: [u32; 3] = parse::list("--spp", &args.spp, ',')?;
-        if spp.iter().any(|&s| s == 0 || s > MAX_SPP) {
-            return Err(FoveaError::option(
-                "--spp",
-                format!("each value must be 1 to {MAX_SPP}, got {}", args.spp),
-            ));
-        }
-        let blocks: [u32; 3] = parse::list("--blocks", &args.blocks, ',')?;
-        if blocks.iter().any(|&b| b == 0 || b > 64)
-            || !blocks[1].is_multiple_of(blocks[0])
-            || !blocks[2].is_multiple_of(blocks[1])
-        {
-            return Err(FoveaError::option(
-                "--blocks",
-                format!(
-                    "each block edge must be 1 to 64 and divide the next, got {}",
-                    args.blocks
-                ),
-            ));
-        }
-        // The display model, checked as `render` checks it (the resolution only scales the radii).
-        let display =
-            parse::display_geometry(&args.display.display_cm, args.display.distance_cm, [1, 1])?;
-        let radii = match &args.radii {
-            Some(text) => {
-                let r: [f32; 2] = parse::floats("--radii", text, ',')?;
-                if !(r[0] >= 0.0 && r[1] >= r[0]) {
-                    return Err(FoveaError::option("--radii", "need 0 <= R1 <= R2"));
-                }
-                RadiiRule::Pixels(r)
-            }
-            None => {
-                // Checks the angles.
-                parse::eccentricity_radii(&args.display.eccentricity, &display)?;
-                RadiiRule::Eccentricity {
-                    degrees: parse::floats("--eccentricity", &args.display.eccentricity, ',')?,
-                    display_cm: [display.width_cm, display.height_cm],
-                    distance_cm: display.distance_cm,
-                }
-            }
+        let (spp, blocks) = (args.spp.0, args.blocks.0);
+        // The display model, checked as `render` checks it (the window's size only scales the radii;
+        // its aspect follows the window, so no aspect warning here).
+        let (display, _) =
+            values::display_geometry(args.display.display_cm, args.display.distance_cm, [1, 1])?;
+        let radii = match args.radii {
+            Some(r) => RadiiRule::Pixels(r.0),
+            None => RadiiRule::Eccentricity {
+                degrees: args.display.eccentricity.0,
+                display_cm: [display.width_cm, display.height_cm],
+                distance_cm: display.distance_cm,
+            },
         };
         let convention = if args.gaze_pixels {
             GazeConvention::PixelsBottomLeft
@@ -227,7 +200,7 @@ impl ViewOptions {
                 "must be at least 1",
             ));
         }
-        let camera = parse::camera_options(&args.camera)?;
+        let camera = args.camera.points();
         if let Some(f) = args.camera.fov {
             if !(f > 0.0 && f < 180.0) {
                 return Err(FoveaError::option(

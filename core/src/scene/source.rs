@@ -11,7 +11,7 @@
 //! Why a texel buffer: lavapipe (Mesa 25) compiles a storage-buffer load whose offset differs between
 //! invocations into a loop over the 8 lanes with a bounds check per component, but a texel-buffer read
 //! into a branch-free gather; traversal is mostly such loads, and reading nodes and triangles through a
-//! texel buffer made frames 31-36 % faster there (README, "lavapipe against the CPU host"). rust-gpu
+//! texel buffer made frames 31-36 % faster there (docs/performance.md, "lavapipe against the CPU host"). rust-gpu
 //! cannot keep an image inside a struct, so the source is an argument of its own next to the
 //! [`SceneView`] rather than one of its fields.
 use crate::scene::{

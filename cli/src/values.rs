@@ -1,0 +1,257 @@
+//! Typed command-line values, parsed once at the edge: clap calls each type's `FromStr` (its value
+//! parser), so a malformed or out-of-range value fails in clap's own format and names the option
+//! (`error: invalid value '0,1,1' for '--spp <F,I,P>': each value must be 1 to 1048576`), and the code
+//! inside takes `[u32; 3]` or `[f32; 2]`, never strings.
+use std::str::FromStr;
+
+use fovea_core::foveation::display::{eccentricity_to_radius_px, DisplayGeometry};
+use fovea_core::scene::{Light, LIGHT_POINT};
+
+/// The largest image edge fovea accepts.
+pub const MAX_IMAGE_EDGE: u32 = 32_768;
+/// The most samples per pixel or block fovea accepts.
+pub const MAX_SPP: u32 = 1 << 20;
+/// The largest block edge.
+pub const MAX_BLOCK_EDGE: u32 = 64;
+/// How far off the image a gaze may be, in pixels (the regions are then partly or wholly off-screen).
+pub const MAX_GAZE_OFFSET: f32 = 1.0e6;
+
+/// Splits `text` at `sep` into exactly `N` values parsed as `T`.
+fn split<T: FromStr + Copy + Default, const N: usize>(
+    text: &str,
+    sep: char,
+) -> Result<[T; N], String> {
+    let parts: Vec<&str> = text.split(sep).map(str::trim).collect();
+    if parts.len() != N {
+        return Err(format!("expected {N} values separated by '{sep}'"));
+    }
+    let mut out = [T::default(); N];
+    for (slot, part) in out.iter_mut().zip(&parts) {
+        *slot = part
+            .parse()
+            .map_err(|_| format!("'{part}' is not a valid number"))?;
+    }
+    Ok(out)
+}
+
+/// `N` finite floats separated by `sep`.
+fn finite<const N: usize>(text: &str, sep: char) -> Result<[f32; N], String> {
+    let v: [f32; N] = split(text, sep)?;
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(format!("'{text}' contains a non-finite value"));
+    }
+    Ok(v)
+}
+
+/// Declares a newtype over an array parsed by `$parse` (a `fn(&str) -> Result<$inner, String>`).
+macro_rules! typed_value {
+    ($(#[$doc:meta])* $name:ident($inner:ty) = $parse:expr) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub struct $name(pub $inner);
+
+        impl FromStr for $name {
+            type Err = String;
+            fn from_str(s: &str) -> Result<Self, String> {
+                let parse: fn(&str) -> Result<$inner, String> = $parse;
+                parse(s).map(Self)
+            }
+        }
+    };
+}
+
+typed_value!(
+    /// `WxH`, each edge 1 to [`MAX_IMAGE_EDGE`] pixels.
+    Resolution([u32; 2]) = |s| {
+        let [w, h]: [u32; 2] = split(&s.to_ascii_lowercase(), 'x')?;
+        if w == 0 || h == 0 || w > MAX_IMAGE_EDGE || h > MAX_IMAGE_EDGE {
+            return Err(format!("out of range (each edge 1 to {MAX_IMAGE_EDGE} pixels)"));
+        }
+        Ok([w, h])
+    }
+);
+
+typed_value!(
+    /// `F,I,P`: samples per fovea pixel, intermediate block and periphery block, each 1 to
+    /// [`MAX_SPP`].
+    SppTriple([u32; 3]) = |s| {
+        let v: [u32; 3] = split(s, ',')?;
+        if v.iter().any(|&x| x == 0 || x > MAX_SPP) {
+            return Err(format!("each value must be 1 to {MAX_SPP}"));
+        }
+        Ok(v)
+    }
+);
+
+typed_value!(
+    /// `F,I,P`: block edges in pixels per region, each 1 to [`MAX_BLOCK_EDGE`] and dividing the next.
+    BlockTriple([u32; 3]) = |s| {
+        let v: [u32; 3] = split(s, ',')?;
+        if v.iter().any(|&x| x == 0 || x > MAX_BLOCK_EDGE) {
+            return Err(format!("each block edge must be 1 to {MAX_BLOCK_EDGE}"));
+        }
+        if !v[1].is_multiple_of(v[0]) || !v[2].is_multiple_of(v[1]) {
+            return Err(
+                "each block edge must divide the next (fovea | intermediate | periphery)".into(),
+            );
+        }
+        Ok(v)
+    }
+);
+
+typed_value!(
+    /// `X,Y` in pixels (a gaze): finite, at most [`MAX_GAZE_OFFSET`] pixels from the origin.
+    PixelPoint([f32; 2]) = |s| {
+        let v: [f32; 2] = finite(s, ',')?;
+        if v.iter().any(|x| x.abs() > MAX_GAZE_OFFSET) {
+            return Err(format!("{v:?} is absurdly far off the image (over {MAX_GAZE_OFFSET} px)"));
+        }
+        Ok(v)
+    }
+);
+
+typed_value!(
+    /// `R1,R2`: region radii in pixels, `0 <= R1 <= R2`.
+    RadiiPx([f32; 2]) = |s| {
+        let r: [f32; 2] = finite(s, ',')?;
+        if !(r[0] >= 0.0 && r[1] >= r[0]) {
+            return Err("need 0 <= R1 <= R2".into());
+        }
+        Ok(r)
+    }
+);
+
+typed_value!(
+    /// `E1,E2`: region bounds in degrees of eccentricity, `0 <= E1 <= E2 < 180`.
+    Eccentricity([f32; 2]) = |s| {
+        let e: [f32; 2] = finite(s, ',')?;
+        if !(e[0] >= 0.0 && e[1] >= e[0] && e[1] < 180.0) {
+            return Err("need 0 <= E1 <= E2 < 180 degrees".into());
+        }
+        Ok(e)
+    }
+);
+
+typed_value!(
+    /// `WxH`: the display's size in centimetres, both positive.
+    DisplayCm([f32; 2]) = |s| {
+        let v: [f32; 2] = finite(&s.to_ascii_lowercase(), 'x')?;
+        if v.iter().any(|&x| x <= 0.0) {
+            return Err("both sizes must be positive".into());
+        }
+        Ok(v)
+    }
+);
+
+typed_value!(
+    /// `X,Y,Z`: a point or vector, finite.
+    Point3([f32; 3]) = |s| finite(s, ',')
+);
+
+typed_value!(
+    /// `R,G,B`: a radiance, finite and not negative.
+    Rgb([f32; 3]) = |s| {
+        let c: [f32; 3] = finite(s, ',')?;
+        if c.iter().any(|&v| v < 0.0) {
+            return Err("a radiance must not be negative".into());
+        }
+        Ok(c)
+    }
+);
+
+typed_value!(
+    /// `X,Y,Z,R,G,B`: a point light at X,Y,Z with intensity R,G,B in W/sr (radiant intensity per channel,
+    /// as KHR_lights_punctual's candela without the photometric factor).
+    PointLight(Light) = |s| {
+        let [x, y, z, r, g, b]: [f32; 6] = finite(s, ',')?;
+        if [r, g, b].iter().any(|&v| v < 0.0) {
+            return Err("intensity must not be negative".into());
+        }
+        Ok(Light {
+            kind: LIGHT_POINT,
+            position: [x, y, z, 0.0],
+            intensity: [r, g, b, 0.0],
+            ..Default::default()
+        })
+    }
+);
+
+/// The display model for an image of `resolution` that fills the display's width (radii scale with the
+/// rendered width), and a warning when the display's aspect ratio is not the image's (the height is then
+/// not what the image covers, and the radii follow the width alone).
+pub fn display_geometry(
+    display_cm: DisplayCm,
+    distance_cm: f32,
+    resolution: [u32; 2],
+) -> Result<(DisplayGeometry, Option<String>), crate::error::FoveaError> {
+    if !(distance_cm.is_finite() && distance_cm > 0.0) {
+        return Err(crate::error::FoveaError::option(
+            "--distance-cm",
+            "the viewing distance must be positive",
+        ));
+    }
+    let [w, h] = display_cm.0;
+    let display_aspect = w / h;
+    let image_aspect = resolution[0] as f32 / resolution[1] as f32;
+    let warning = ((display_aspect / image_aspect - 1.0).abs() > 0.02).then(|| {
+        format!(
+            "--display-cm {w}x{h} has aspect {display_aspect:.3} but the image ({}x{}) has {image_aspect:.3}: \
+             the image is taken to fill the display's width, and the radii follow the width alone",
+            resolution[0], resolution[1]
+        )
+    });
+    Ok((
+        DisplayGeometry {
+            width_cm: w,
+            height_cm: h,
+            distance_cm,
+            resolution,
+        },
+        warning,
+    ))
+}
+
+/// The radii in pixels of `eccentricity` on `display` (`a = 2·d·tan(e/2)`, Mohanto et al. 2023).
+#[must_use]
+pub fn eccentricity_radii(eccentricity: Eccentricity, display: &DisplayGeometry) -> [f32; 2] {
+    eccentricity
+        .0
+        .map(|e| eccentricity_to_radius_px(e, display))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_and_rejects() {
+        assert_eq!("1920x1080".parse::<Resolution>().unwrap().0, [1920, 1080]);
+        assert_eq!("64X32".parse::<Resolution>().unwrap().0, [64, 32]);
+        assert!("0x10".parse::<Resolution>().is_err());
+        assert!("100000x10".parse::<Resolution>().is_err());
+        assert!("abc".parse::<Resolution>().is_err());
+        assert_eq!("32, 16,8".parse::<SppTriple>().unwrap().0, [32, 16, 8]);
+        assert!("0,1,1".parse::<SppTriple>().is_err());
+        assert!("1,3,4".parse::<BlockTriple>().is_err());
+        assert!("1,2,4".parse::<BlockTriple>().is_ok());
+        assert!("1,nan".parse::<PixelPoint>().is_err());
+        assert!("1e9,0".parse::<PixelPoint>().is_err());
+        assert!("-100,5000".parse::<PixelPoint>().is_ok());
+        assert!("5,2".parse::<RadiiPx>().is_err());
+        assert!("5,200".parse::<Eccentricity>().is_err());
+        assert!("70x0".parse::<DisplayCm>().is_err());
+        assert!("1,-1,1".parse::<Rgb>().is_err());
+        let l = "0,1,2,3,4,5".parse::<PointLight>().unwrap().0;
+        assert_eq!((l.position[1], l.intensity[2]), (1.0, 5.0));
+        assert!("0,1,2".parse::<PointLight>().is_err());
+    }
+
+    #[test]
+    fn a_display_of_another_aspect_is_warned_about() {
+        let d = "70.848x39.852".parse::<DisplayCm>().unwrap();
+        assert!(display_geometry(d, 60.0, [3840, 2160]).unwrap().1.is_none());
+        let (_, w) = display_geometry(d, 60.0, [1000, 1000]).unwrap();
+        assert!(w.unwrap().contains("--display-cm"));
+        assert!(display_geometry(d, 0.0, [10, 10]).is_err());
+    }
+}
