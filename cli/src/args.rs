@@ -92,17 +92,6 @@ pub struct ViewArgs {
     /// Scene file (.gltf, .glb or .obj). Default: the bundled Lost Empire.
     pub scene: Option<PathBuf>,
 
-    /// Backend: `vulkan` renders and presents on the GPU; `cpu` renders on the CPU and presents the
-    /// frame through Vulkan (any Vulkan driver, lavapipe included); `auto` picks Vulkan on a hardware
-    /// GPU, else the CPU.
-    #[arg(long, value_enum, default_value = "auto")]
-    pub backend: Backend,
-    /// Vulkan device index (see `fovea devices`).
-    #[arg(long, value_name = "N")]
-    pub device: Option<usize>,
-    /// Ray traversal on a Vulkan device (as for `render`).
-    #[arg(long, value_enum, default_value = "auto")]
-    pub traversal: Traversal,
     /// Initial window size (the frame is rendered at the window's size).
     #[arg(long, default_value = "1280x720", value_name = "WxH")]
     pub size: WindowSize,
@@ -141,12 +130,6 @@ pub struct ViewArgs {
     /// configuration's samples and accumulation completes it while the eye rests (0: no budget).
     #[arg(long, default_value_t = 33.0, value_name = "MS")]
     pub budget_ms: f64,
-    /// Bounces per path.
-    #[arg(long, default_value_t = 3, value_name = "N")]
-    pub depth: u32,
-    /// Russian roulette from this bounce on (0: off).
-    #[arg(long, default_value_t = 0, value_name = "N")]
-    pub russian_roulette: u32,
     /// Exposure compensation in EV (stops) before tone mapping.
     #[arg(
         long,
@@ -168,15 +151,9 @@ pub struct ViewArgs {
     /// The diffuse lobe of purely diffuse MTL materials (as for `render`).
     #[arg(long, value_enum, default_value = "disney")]
     pub mtl_diffuse: MtlDiffuse,
-    /// How block pixels are filled.
-    #[arg(long, value_enum, default_value = "bilinear")]
-    pub fill: Fill,
     /// Render with every optional feature on.
     #[arg(long)]
     pub no_specialize: bool,
-    /// Worker threads of the CPU backend (default: all cores).
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
     /// Start with the region overlay on (toggle with O).
     #[arg(long)]
     pub overlay: bool,
@@ -198,6 +175,10 @@ pub struct ViewArgs {
     /// No summary line at exit.
     #[arg(short, long)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub target: BackendArgs,
+    #[command(flatten)]
+    pub path: PathArgs,
 }
 
 /// Which backend renders.
@@ -263,16 +244,6 @@ pub struct RenderArgs {
     /// Scene file (.gltf, .glb or .obj). Default: the bundled Lost Empire.
     pub scene: Option<PathBuf>,
 
-    /// Backend.
-    #[arg(long, value_enum, default_value = "auto")]
-    pub backend: Backend,
-    /// Vulkan device index (see `fovea devices`); default: the first discrete, else integrated GPU.
-    #[arg(long, value_name = "N")]
-    pub device: Option<usize>,
-    /// Ray traversal on a Vulkan device: `hardware` uses the driver's acceleration structures
-    /// (VK_KHR_ray_query), `software` the kernel's BVH, `auto` hardware on a GPU that has ray queries.
-    #[arg(long, value_enum, default_value = "auto")]
-    pub traversal: Traversal,
     /// Image size WxH in pixels.
     #[arg(long, default_value = "1920x1080", value_name = "WxH")]
     pub resolution: Resolution,
@@ -296,12 +267,6 @@ pub struct RenderArgs {
     pub radii: Option<RadiiPx>,
     #[command(flatten)]
     pub display: DisplayArgs,
-    /// Bounces per path (3: camera -> x1 -> x2 -> x3 -> light).
-    #[arg(long, default_value_t = 3, value_name = "N")]
-    pub depth: u32,
-    /// Russian roulette from this bounce on (0: off).
-    #[arg(long, default_value_t = 0, value_name = "N")]
-    pub russian_roulette: u32,
     /// Exposure compensation in EV (stops) before tone mapping.
     #[arg(
         long,
@@ -327,9 +292,6 @@ pub struct RenderArgs {
     /// `aniso`): `lambert` makes an OBJ scene the same scene to Mitsuba or pbrt, whose `diffuse` it is.
     #[arg(long, value_enum, default_value = "disney")]
     pub mtl_diffuse: MtlDiffuse,
-    /// How block pixels are filled.
-    #[arg(long, value_enum, default_value = "bilinear")]
-    pub fill: Fill,
     /// Output image: .png (tone-mapped sRGB) or .exr (linear HDR).
     #[arg(short, long, default_value = "fovea.png", value_name = "FILE")]
     pub output: PathBuf,
@@ -339,9 +301,6 @@ pub struct RenderArgs {
     /// Write render statistics as JSON.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
     /// Print scene details and warnings.
     #[arg(short, long)]
     pub verbose: bool,
@@ -352,6 +311,10 @@ pub struct RenderArgs {
     /// lacks; for comparison (the image is the same).
     #[arg(long)]
     pub no_specialize: bool,
+    #[command(flatten)]
+    pub target: BackendArgs,
+    #[command(flatten)]
+    pub path: PathArgs,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -402,30 +365,8 @@ pub struct ReportArgs {
     #[arg(long)]
     pub no_cache: bool,
 
-    /// Backend.
-    #[arg(long, value_enum, default_value = "auto")]
-    pub backend: Backend,
-    /// Vulkan device index (see `fovea devices`).
-    #[arg(long, value_name = "N")]
-    pub device: Option<usize>,
-    /// Ray traversal on a Vulkan device (as for `render`).
-    #[arg(long, value_enum, default_value = "auto")]
-    pub traversal: Traversal,
-    /// Worker threads of the CPU backend (default: all cores).
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
-
     #[command(flatten)]
     pub display: DisplayArgs,
-    /// How block pixels are filled.
-    #[arg(long, value_enum, default_value = "bilinear")]
-    pub fill: Fill,
-    /// Bounces per path.
-    #[arg(long, default_value_t = 3, value_name = "N")]
-    pub depth: u32,
-    /// Russian roulette from this bounce on (0: off).
-    #[arg(long, default_value_t = 0, value_name = "N")]
-    pub russian_roulette: u32,
     /// Exposure compensation in EV before tone mapping (PNGs and FLIP).
     #[arg(
         long,
@@ -444,6 +385,64 @@ pub struct ReportArgs {
     /// No progress bar and no summary.
     #[arg(short, long)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub target: BackendArgs,
+    #[command(flatten)]
+    pub path: PathArgs,
+}
+
+/// Where frames render (`render`, `report`, `view`).
+#[derive(Args, Debug, Clone)]
+pub struct BackendArgs {
+    /// `vulkan`: the rust-gpu kernel on a Vulkan device (lavapipe included); `cpu`: the CPU host;
+    /// `auto`: Vulkan on a hardware GPU, else the CPU. (`view --backend cpu` presents through Vulkan.)
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: Backend,
+    /// Vulkan device index (see `fovea devices`); default: the first discrete, else integrated GPU.
+    #[arg(long, value_name = "N")]
+    pub device: Option<usize>,
+    /// Ray traversal on a Vulkan device: `hardware` uses the driver's acceleration structures
+    /// (VK_KHR_ray_query), `software` the kernel's BVH, `auto` hardware on a GPU that has ray queries.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub traversal: Traversal,
+    /// Worker threads of the CPU backend (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+}
+
+/// How paths are traced and blocks filled (`render`, `report`, `view`).
+#[derive(Args, Debug, Clone)]
+pub struct PathArgs {
+    /// Bounces per path (3: camera -> x1 -> x2 -> x3 -> light; at most 64).
+    #[arg(long, default_value_t = 3, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=64))]
+    pub depth: u32,
+    /// Russian roulette from this bounce on (0: off).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub russian_roulette: u32,
+    /// How block pixels are filled.
+    #[arg(long, value_enum, default_value = "bilinear")]
+    pub fill: Fill,
+}
+
+impl PathArgs {
+    /// The integrator's settings.
+    #[must_use]
+    pub fn integrator(&self) -> fovea_core::integrator::IntegratorSettings {
+        fovea_core::integrator::IntegratorSettings {
+            max_bounces: self.depth,
+            russian_roulette_start: self.russian_roulette,
+            ..Default::default()
+        }
+    }
+
+    /// `FILL_BILINEAR` or `FILL_REPLICATE`.
+    #[must_use]
+    pub fn fill_mode(&self) -> u32 {
+        match self.fill {
+            Fill::Bilinear => fovea_core::foveation::fill::FILL_BILINEAR,
+            Fill::Replicate => fovea_core::foveation::fill::FILL_REPLICATE,
+        }
+    }
 }
 
 /// The camera (`render` and `report`; `report` applies it to every scene).

@@ -4,12 +4,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use fovea_core::foveation::blocks::count_samples;
-use fovea_core::foveation::fill::{FILL_BILINEAR, FILL_REPLICATE};
 use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
-use fovea_core::integrator::{FrameParams, IntegratorSettings};
+use fovea_core::integrator::FrameParams;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::args::{Fill, RenderArgs};
+use crate::args::RenderArgs;
 use crate::backend::Renderer;
 use crate::error::{FoveaError, Result};
 use crate::output::{
@@ -151,12 +150,6 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
             ));
         }
     }
-    if args.depth > 64 {
-        return Err(FoveaError::option(
-            "--depth",
-            format!("{} bounces is more than the 64 fovea allows", args.depth),
-        ));
-    }
     if !args.exposure.is_finite() || args.exposure.abs() > 64.0 {
         return Err(FoveaError::option(
             "--exposure",
@@ -181,10 +174,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         gazes,
         output: args.output.clone(),
         output_format,
-        fill_mode: match args.fill {
-            Fill::Bilinear => FILL_BILINEAR,
-            Fill::Replicate => FILL_REPLICATE,
-        },
+        fill_mode: args.path.fill_mode(),
         lighting,
         warnings,
     })
@@ -214,10 +204,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     // The backend first: a bad `--device` fails before the scene loads.
     let mut renderer = Renderer::new(
-        args.backend,
-        args.device,
-        args.traversal,
-        args.threads,
+        args.target.backend,
+        args.target.device,
+        args.target.traversal,
+        args.target.threads,
         args.quiet,
     )?;
     let backend_name = renderer.name();
@@ -281,11 +271,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         w as f32 / h as f32,
     )?;
     renderer.set_scene(&scene.packed, !args.no_specialize)?;
-    let integrator = IntegratorSettings {
-        max_bounces: args.depth,
-        russian_roulette_start: args.russian_roulette,
-        ..Default::default()
-    };
+    let integrator = args.path.integrator();
 
     let mut frames = Vec::new();
     for g in &plan.gazes {

@@ -35,7 +35,7 @@ pub const BINDING_ENVIRONMENT_TEXELS: u32 = 12;
 pub const BINDING_ENVIRONMENT_MARGINAL: u32 = 13;
 /// Environment conditional CDFs, `f32`.
 pub const BINDING_ENVIRONMENT_CONDITIONAL: u32 = 14;
-/// The blocks of one dispatch chunk: `[origin_x, origin_y, size, region]` each ([`GpuBlock`]).
+/// The blocks of one dispatch chunk: `[origin_x, origin_y, size, region]` each ([`crate::foveation::OwnedBlock`]).
 pub const BINDING_BLOCKS: u32 = 15;
 /// One radiance estimate per sample of the chunk (`[f32; 4]`, rgb + unused).
 pub const BINDING_SAMPLES: u32 = 16;
@@ -71,28 +71,6 @@ pub const BINDING_COUNT: u32 = 26;
 /// Specialization constant id of `render_samples`' feature mask (`FEATURE_*` bits; default every
 /// feature). The host sets it per scene when it creates the pipeline.
 pub const SPEC_CONSTANT_FEATURES: u32 = 0;
-
-/// One block of a dispatch chunk (16 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
-pub struct GpuBlock {
-    pub origin: [u32; 2],
-    pub size: u32,
-    pub region: u32,
-}
-
-impl GpuBlock {
-    /// The block as foveation's [`crate::foveation::OwnedBlock`].
-    #[inline]
-    #[must_use]
-    pub fn owned(&self) -> crate::foveation::OwnedBlock {
-        crate::foveation::OwnedBlock {
-            region: self.region,
-            size: self.size,
-            origin: self.origin,
-        }
-    }
-}
 
 /// Push constants of every entry point: what this dispatch covers (32 bytes). The frame itself is in
 /// [`BINDING_FRAME`].
@@ -195,10 +173,10 @@ pub const PROBE_SELECTOR_COUNT: u32 = 12;
 // [`BINDING_PROBE_INPUT`] and writing [`BINDING_PROBE_OUTPUT`] with the same strides as `probe`
 // ([`probe_scene_eval`]).
 
-/// [`crate::bvh::traverse::closest_hit`]: `in[0]` = (origin xyz, t_max), `in[1].xyz` = direction →
+/// [`crate::bvh::closest_hit`]: `in[0]` = (origin xyz, t_max), `in[1].xyz` = direction →
 /// `out[0]` = (t, b1, b2, triangle (bits)); a miss gives t = +inf and triangle `INVALID_INDEX`.
 pub const PROBE_SCENE_CLOSEST_HIT: u32 = 16;
-/// [`crate::bvh::traverse::any_hit`]: inputs as for [`PROBE_SCENE_CLOSEST_HIT`] → `out[0].x` = 1 if
+/// [`crate::bvh::any_hit`]: inputs as for [`PROBE_SCENE_CLOSEST_HIT`] → `out[0].x` = 1 if
 /// blocked, else 0.
 pub const PROBE_SCENE_ANY_HIT: u32 = 17;
 /// [`crate::lights::sample_light`]: `in[0].xyz` = shading point, `in[1].xyz` = (u_select, u.x, u.y) →

@@ -7,7 +7,7 @@
 use std::io;
 use std::path::{Path, PathBuf};
 
-use fovea_core::bvh::traverse::closest_hit;
+use fovea_core::bvh::closest_hit;
 use fovea_core::geometry::Ray;
 use fovea_core::scene::{
     is_leaf_word, triangle_lane, SceneView, BLOCK_LANE_CUTOUT, INVALID_INDEX, TEXTURE_RGBA16,

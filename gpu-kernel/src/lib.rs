@@ -23,10 +23,11 @@
 #![allow(clippy::too_many_arguments)]
 
 use fovea_core::foveation::overlay::overlay_rgba8;
+use fovea_core::foveation::OwnedBlock;
 use fovea_core::foveation::{block_extent, cell_mean_at, fill_value};
 use fovea_core::glam::{Vec3, Vec4};
 use fovea_core::integrator::{render_sample_stream, FrameParams};
-use fovea_core::kernel_abi::{self, GpuBlock, KernelPushConstants, WORKGROUP_SIZE};
+use fovea_core::kernel_abi::{self, KernelPushConstants, WORKGROUP_SIZE};
 use fovea_core::post::accumulate::accumulate_mean;
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::features::FEATURES_ALL;
@@ -113,7 +114,7 @@ pub fn render_samples(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 13)] environment_marginal_cdf: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 14)]
     environment_conditional_cdf: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] blocks: &[GpuBlock],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] blocks: &[OwnedBlock],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] samples: &mut [[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
     #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
@@ -168,7 +169,7 @@ pub fn reduce_blocks(
     #[spirv(global_invocation_id)] id: UVec3,
     #[spirv(num_workgroups)] num_workgroups: UVec3,
     #[spirv(push_constant)] pc: &KernelPushConstants,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] blocks: &[GpuBlock],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] blocks: &[OwnedBlock],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] samples: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 17)] replicated: &mut [[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
@@ -186,7 +187,7 @@ pub fn reduce_blocks(
     }
     let mean = sum / spp.max(1) as f32;
     let value = [mean.x, mean.y, mean.z, 1.0];
-    let block = blocks[j as usize].owned();
+    let block = blocks[j as usize];
     let extent = block_extent(&block, frame.width, frame.height);
     for dy in 0..extent[1] {
         let row = (block.origin[1] + dy) * frame.width + block.origin[0];

@@ -12,27 +12,7 @@ use crate::specialize::{dispatch, path_mask, WithScene};
 use glam::Vec4;
 use rayon::prelude::*;
 
-/// A rendered frame in linear HDR (`[r, g, b, 1]` per pixel, row-major, top row first).
-#[derive(Clone, Debug)]
-pub struct FrameImage {
-    pub width: u32,
-    pub height: u32,
-    pub pixels: Vec<[f32; 4]>,
-}
-
-/// What rendering a frame cost.
-#[derive(Clone, Debug, Default)]
-pub struct RenderStats {
-    /// Time for the three passes (samples, cell means, fill).
-    pub render_ms: f64,
-    /// Camera samples traced, in total and per region.
-    pub primary_samples: u64,
-    pub samples_per_region: [u64; 3],
-    /// Blocks rendered per region.
-    pub blocks_per_region: [u64; 3],
-    /// Feature mask of the compiled path that rendered the samples (see [`crate::specialize`]).
-    pub path_features: u32,
-}
+pub use fovea_frame::{FrameImage, RenderStats};
 
 /// Renders one frame of `scene`. `fill_mode` is `FILL_BILINEAR` or `FILL_REPLICATE`. `progress` is called
 /// from worker threads with the number of camera samples just finished.

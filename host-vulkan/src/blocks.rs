@@ -2,7 +2,8 @@
 //! chunks of bounded size (one `render_samples` + `reduce_blocks` pair per chunk).
 use fovea_core::foveation::blocks::owning_block;
 use fovea_core::foveation::regions::{FoveationParams, REGION_COUNT};
-use fovea_core::kernel_abi::{GpuBlock, SAMPLES_PER_INVOCATION, WORKGROUP_SIZE};
+use fovea_core::foveation::OwnedBlock;
+use fovea_core::kernel_abi::{SAMPLES_PER_INVOCATION, WORKGROUP_SIZE};
 
 /// Default bound on the samples of one chunk: 2^20 (16 MiB of samples buffer; a few hundred ms of lavapipe
 /// time on a small scene, about a millisecond on a desktop GPU).
@@ -16,13 +17,13 @@ pub const SOFTWARE_MAX_CHUNK_SAMPLES: u32 = 1 << 18;
 /// `owning_block(p).origin == p`; the walk visits only candidate origins on the nested grids (periphery
 /// squares, then their intermediate sub-squares, then fovea sub-squares), in the order the grids nest.
 #[must_use]
-pub fn enumerate_blocks(width: u32, height: u32, params: &FoveationParams) -> [Vec<GpuBlock>; 3] {
-    let mut out: [Vec<GpuBlock>; 3] = Default::default();
+pub fn enumerate_blocks(width: u32, height: u32, params: &FoveationParams) -> [Vec<OwnedBlock>; 3] {
+    let mut out: [Vec<OwnedBlock>; 3] = Default::default();
     let mut push = |x: u32, y: u32| {
         let b = owning_block(x, y, params);
         if b.origin == [x, y] {
             let region = b.region.min(REGION_COUNT - 1);
-            out[region as usize].push(GpuBlock {
+            out[region as usize].push(OwnedBlock {
                 origin: b.origin,
                 size: b.size,
                 region,
@@ -60,7 +61,7 @@ pub struct Chunk {
     /// Index of the chunk's first block in the region's list.
     pub first_block: u32,
     pub block_count: u32,
-    /// Element index (in `GpuBlock`s) of the chunk's first block in the block buffer.
+    /// Element index (in `OwnedBlock`s) of the chunk's first block in the block buffer.
     pub buffer_index: u64,
 }
 
@@ -116,7 +117,7 @@ impl ChunkPlan {
     #[inline]
     #[must_use]
     pub fn block_offset(chunk: &Chunk) -> u64 {
-        chunk.buffer_index * std::mem::size_of::<GpuBlock>() as u64
+        chunk.buffer_index * std::mem::size_of::<OwnedBlock>() as u64
     }
 
     /// Invocations without work over all `render_samples` dispatches.
@@ -141,7 +142,7 @@ impl ChunkPlan {
 /// can be bound with a dynamic offset that meets `minStorageBufferOffsetAlignment`.
 #[must_use]
 pub fn plan_chunks(
-    blocks: &[Vec<GpuBlock>; 3],
+    blocks: &[Vec<OwnedBlock>; 3],
     spp: [u32; 3],
     max_chunk_samples: u32,
     align_blocks: u64,
@@ -183,8 +184,8 @@ pub fn plan_chunks(
 
 /// The block buffer's contents for `plan` (padding entries are zero and never read).
 #[must_use]
-pub fn block_buffer_contents(blocks: &[Vec<GpuBlock>; 3], plan: &ChunkPlan) -> Vec<GpuBlock> {
-    let mut out = vec![GpuBlock::default(); plan.block_buffer_len as usize];
+pub fn block_buffer_contents(blocks: &[Vec<OwnedBlock>; 3], plan: &ChunkPlan) -> Vec<OwnedBlock> {
+    let mut out = vec![OwnedBlock::default(); plan.block_buffer_len as usize];
     for c in &plan.chunks {
         let src = &blocks[c.region as usize]
             [c.first_block as usize..(c.first_block + c.block_count) as usize];
@@ -219,13 +220,13 @@ mod tests {
     }
 
     /// Brute force: every pixel whose owning block starts there.
-    fn brute_force(w: u32, h: u32, p: &FoveationParams) -> [Vec<GpuBlock>; 3] {
-        let mut out: [Vec<GpuBlock>; 3] = Default::default();
+    fn brute_force(w: u32, h: u32, p: &FoveationParams) -> [Vec<OwnedBlock>; 3] {
+        let mut out: [Vec<OwnedBlock>; 3] = Default::default();
         for y in 0..h {
             for x in 0..w {
                 let b = owning_block(x, y, p);
                 if b.origin == [x, y] {
-                    out[b.region as usize].push(GpuBlock {
+                    out[b.region as usize].push(OwnedBlock {
                         origin: b.origin,
                         size: b.size,
                         region: b.region,
@@ -250,7 +251,7 @@ mod tests {
             let mut slow = brute_force(w, h, &p);
             let mut fast_sorted = fast.clone();
             for r in 0..3 {
-                let key = |b: &GpuBlock| (b.origin[1], b.origin[0]);
+                let key = |b: &OwnedBlock| (b.origin[1], b.origin[0]);
                 fast_sorted[r].sort_by_key(key);
                 slow[r].sort_by_key(key);
                 assert_eq!(fast_sorted[r], slow[r], "region {r} of {w}x{h}");

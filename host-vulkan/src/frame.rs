@@ -9,7 +9,7 @@ use fovea_core::foveation::fill::cell_buffer_len;
 use fovea_core::foveation::regions::FOVEATION_OK;
 use fovea_core::integrator::FrameParams;
 use fovea_core::kernel_abi::*;
-use fovea_cpu::{FrameImage, RenderStats};
+use fovea_frame::{FrameImage, RenderStats};
 
 use crate::blocks::{
     block_buffer_contents, enumerate_blocks, plan_chunks, workgroups_2d, ChunkPlan,

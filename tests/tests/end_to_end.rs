@@ -149,12 +149,12 @@ fn mis_light_only_and_bsdf_only_agree_on_average() {
 /// of a chunk) gives every sample the value the CPU host computes for it, whatever the stride.
 #[test]
 fn sample_stream_matches_per_sample_rendering() {
+    use fovea_core::foveation::OwnedBlock;
     use fovea_core::integrator::{render_block_sample, render_sample_stream};
-    use fovea_core::kernel_abi::GpuBlock;
     let scene = load_packed(&cornell_box_path(), &Environment::None);
     let frame = frame_params(cornell_camera(W, H), FoveationParams::uniform(3), W, H, 5);
-    let blocks: Vec<GpuBlock> = (0..37)
-        .map(|i| GpuBlock {
+    let blocks: Vec<OwnedBlock> = (0..37)
+        .map(|i| OwnedBlock {
             origin: [i * 2 % W, i * 5 % H],
             size: 1,
             region: REGION_FOVEA,
@@ -164,12 +164,8 @@ fn sample_stream_matches_per_sample_rendering() {
     let total = blocks.len() as u32 * spp;
     let expected: Vec<[f32; 4]> = (0..total)
         .map(|i| {
-            let c = render_block_sample(
-                &scene.view(),
-                &frame,
-                &blocks[(i / spp) as usize].owned(),
-                i % spp,
-            );
+            let c =
+                render_block_sample(&scene.view(), &frame, &blocks[(i / spp) as usize], i % spp);
             [c.x, c.y, c.z, 0.0]
         })
         .collect();

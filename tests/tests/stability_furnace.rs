@@ -22,7 +22,7 @@
 use std::time::Instant;
 
 use fovea_core::bsdf::DisneyParams;
-use fovea_core::bvh::traverse::closest_hit;
+use fovea_core::bvh::closest_hit;
 use fovea_core::camera::Camera;
 use fovea_core::foveation::fill::FILL_BILINEAR;
 use fovea_core::foveation::regions::FoveationParams;

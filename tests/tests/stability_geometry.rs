@@ -5,7 +5,7 @@
 //! Prints its measurements (`-- --nocapture`); see each test for the thresholds and why.
 use std::time::Instant;
 
-use fovea_core::bvh::traverse::closest_hit;
+use fovea_core::bvh::closest_hit;
 use fovea_core::geometry::offset::{offset_ray_origin, triangle_magnitude, SHADOW_RAY_T_MAX};
 use fovea_core::geometry::triangle::WatertightRay;
 use fovea_core::geometry::Ray;

@@ -16,14 +16,13 @@ use std::time::Instant;
 use fovea_core::camera::Camera;
 use fovea_core::foveation::blocks::count_samples;
 use fovea_core::foveation::display::{pixels_per_degree, DisplayGeometry};
-use fovea_core::foveation::fill::{FILL_BILINEAR, FILL_REPLICATE};
 use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
 use fovea_core::integrator::{FrameParams, IntegratorSettings};
 use fovea_cpu::FrameImage;
 use fovea_scene::environment::Environment;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::args::{Fill, ReportArgs};
+use crate::args::ReportArgs;
 use crate::backend::Renderer;
 use crate::error::{FoveaError, Result};
 use crate::output::{regions_overlay, tonemapped_rgb8, write_png};
@@ -190,12 +189,6 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
             |r| r.0,
         ),
     });
-    if args.depth > 64 {
-        return Err(FoveaError::option(
-            "--depth",
-            format!("{} bounces is more than the 64 fovea allows", args.depth),
-        ));
-    }
     if !args.exposure.is_finite() || args.exposure.abs() > 64.0 {
         return Err(FoveaError::option(
             "--exposure",
@@ -225,15 +218,8 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
         display,
         radii_px,
         user,
-        fill_mode: match args.fill {
-            Fill::Bilinear => FILL_BILINEAR,
-            Fill::Replicate => FILL_REPLICATE,
-        },
-        integrator: IntegratorSettings {
-            max_bounces: args.depth,
-            russian_roulette_start: args.russian_roulette,
-            ..Default::default()
-        },
+        fill_mode: args.path.fill_mode(),
+        integrator: args.path.integrator(),
         eye,
         target,
         up,
@@ -252,10 +238,10 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     let wall = Instant::now();
     let plan = plan(args)?;
     let mut renderer = Renderer::new(
-        args.backend,
-        args.device,
-        args.traversal,
-        args.threads,
+        args.target.backend,
+        args.target.device,
+        args.target.traversal,
+        args.target.threads,
         args.quiet,
     )?;
     let lighting = Lighting::from_args(&args.lighting)?;

@@ -3,10 +3,9 @@
 use std::net::{Ipv4Addr, SocketAddr};
 use std::path::{Path, PathBuf};
 
-use fovea_core::foveation::fill::{FILL_BILINEAR, FILL_REPLICATE};
 use fovea_core::integrator::IntegratorSettings;
 
-use crate::args::{Backend, Fill, GazeSourceArg, ViewArgs};
+use crate::args::{Backend, GazeSourceArg, ViewArgs};
 use crate::error::{FoveaError, Result};
 use crate::scene_setup::Lighting;
 use crate::values;
@@ -157,12 +156,6 @@ impl ViewOptions {
                 GazeInput::Mouse
             }
         };
-        if args.depth > 64 {
-            return Err(FoveaError::option(
-                "--depth",
-                format!("{} bounces is more than the 64 fovea allows", args.depth),
-            ));
-        }
         if !args.exposure.is_finite() || args.exposure.abs() > 64.0 {
             return Err(FoveaError::option(
                 "--exposure",
@@ -175,7 +168,7 @@ impl ViewOptions {
                 "must be 0 (no budget) to 60000 milliseconds",
             ));
         }
-        if args.backend == Backend::Cpu && args.device.is_some() {
+        if args.target.backend == Backend::Cpu && args.target.device.is_some() {
             // The device still presents, so it is allowed: say what it does.
             eprintln!("note: --device selects the Vulkan device that presents the CPU's frames");
         }
@@ -214,10 +207,10 @@ impl ViewOptions {
             mtl: args.mtl.clone(),
             mtl_diffuse: args.mtl_diffuse.into(),
             lighting: Lighting::from_args(&args.lighting)?,
-            backend: args.backend,
-            device: args.device,
-            traversal: args.traversal,
-            threads: args.threads,
+            backend: args.target.backend,
+            device: args.target.device,
+            traversal: args.target.traversal,
+            threads: args.target.threads,
             specialize: !args.no_specialize,
             window_size: args.size.0,
             render_scale: args.render_scale,
@@ -227,15 +220,8 @@ impl ViewOptions {
             uniform: args.uniform,
             overlay: args.overlay,
             budget_ms: args.budget_ms,
-            integrator: IntegratorSettings {
-                max_bounces: args.depth,
-                russian_roulette_start: args.russian_roulette,
-                ..Default::default()
-            },
-            fill_mode: match args.fill {
-                Fill::Bilinear => FILL_BILINEAR,
-                Fill::Replicate => FILL_REPLICATE,
-            },
+            integrator: args.path.integrator(),
+            fill_mode: args.path.fill_mode(),
             exposure: args.exposure,
             seed: args.seed,
             camera,

@@ -20,7 +20,8 @@
 use ::wide::{f32x8, CmpLe};
 use arrayvec::ArrayVec;
 
-use super::traverse::{closest_hit_with, test_leaf, Hit, SlabInverses};
+use super::query::closest_hit_with;
+use super::traverse::{test_leaf, Hit, SlabInverses};
 use super::wide::{Bvh8Node, Entry, Stack};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;

@@ -27,7 +27,7 @@ use crate::material::alpha::is_cut_out;
 use crate::math::lane_mask::{eq_mask, gt_mask, lane_u32, le_mask};
 use crate::scene::features::FEATURE_ALPHA_CUTOUT;
 use crate::scene::{
-    leaf_count, leaf_first, Bvh4Node, Features, SceneSlices, SceneSource, SceneView, TriangleBlock,
+    leaf_count, leaf_first, Bvh4Node, Features, SceneSource, SceneView, TriangleBlock,
     BLOCK_LANE_CUTOUT, INVALID_INDEX, SLOT_LEAF,
 };
 
@@ -381,7 +381,7 @@ pub(crate) fn test_leaf<F: Features, S: SceneSource>(
 // Index loops over local arrays: rust-gpu does not compile iterators over them.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn traverse<F: Features, S: SceneSource>(
+pub(crate) fn traverse<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     ray: &Ray,
@@ -491,63 +491,12 @@ fn traverse<F: Features, S: SceneSource>(
     }
 }
 
-/// The closest hit of `ray` with `0 < t < t_max` over the scene's BVH, skipping alpha cut-out holes;
-/// [`Hit::miss`] if there is none or the scene has no nodes. On the CPU, the scene's 8-wide tree is
-/// traversed where it has one ([`super::wide`]); in the ray-query kernel module, the driver's
-/// acceleration structures (`super::hardware`).
-#[must_use]
-pub fn closest_hit<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32) -> Hit {
-    closest_hit_with(scene, &SceneSlices, ray, t_max)
-}
-
-/// [`closest_hit`] reading the scene's arrays from `source`.
-#[must_use]
-pub fn closest_hit_with<F: Features, S: SceneSource>(
-    scene: &SceneView<F>,
-    source: &S,
-    ray: &Ray,
-    t_max: f32,
-) -> Hit {
-    #[cfg(all(target_arch = "spirv", feature = "ray-query"))]
-    return super::hardware::closest_hit(scene, source, ray, t_max);
-    #[cfg(not(target_arch = "spirv"))]
-    if !scene.wide_nodes.is_empty() {
-        return super::wide::closest_hit_wide(scene, source, ray, t_max);
-    }
-    #[allow(unreachable_code)]
-    traverse(scene, source, ray, t_max, false)
-}
-
-/// Whether anything (other than alpha cut-out holes) blocks the open segment `(0, t_max)` of `ray`; for
-/// shadow rays. Stops at the first hit found.
-#[must_use]
-pub fn any_hit<F: Features>(scene: &SceneView<F>, ray: &Ray, t_max: f32) -> bool {
-    any_hit_with(scene, &SceneSlices, ray, t_max)
-}
-
-/// [`any_hit`] reading the scene's arrays from `source`.
-#[must_use]
-pub fn any_hit_with<F: Features, S: SceneSource>(
-    scene: &SceneView<F>,
-    source: &S,
-    ray: &Ray,
-    t_max: f32,
-) -> bool {
-    #[cfg(all(target_arch = "spirv", feature = "ray-query"))]
-    return super::hardware::any_hit(scene, source, ray, t_max);
-    #[cfg(not(target_arch = "spirv"))]
-    if !scene.wide_nodes.is_empty() {
-        return super::wide::any_hit_wide(scene, source, ray, t_max);
-    }
-    #[allow(unreachable_code)]
-    traverse(scene, source, ray, t_max, true).is_hit()
-}
-
 #[cfg(test)]
 mod tests {
     extern crate std;
 
     use super::*;
+    use crate::bvh::query::{any_hit, closest_hit};
     use crate::scene::{
         leaf_slot, Material, TriangleBlock, TriangleInfo, TrianglePositions, MATERIAL_ALPHA_CUTOUT,
     };

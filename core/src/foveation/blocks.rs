@@ -26,15 +26,18 @@ use super::regions::{
     region_of_point, FoveationParams, REGION_FOVEA, REGION_INTERMEDIATE, REGION_PERIPHERY,
 };
 
-/// One block of the foveated image: its region, its (unclipped) edge length and its top-left pixel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// One block of the foveated image: its top-left pixel, its (unclipped) edge length and its region.
+/// Also the GPU's block-list element (16 bytes, [`crate::kernel_abi::BINDING_BLOCKS`]), so the host and
+/// the kernel share this one type.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct OwnedBlock {
-    /// [`REGION_FOVEA`], [`REGION_INTERMEDIATE`] or [`REGION_PERIPHERY`].
-    pub region: u32,
-    /// Edge length of the aligned square in pixels (`block_size[region]`).
-    pub size: u32,
     /// Top-left pixel; a multiple of `size` in both axes.
     pub origin: [u32; 2],
+    /// Edge length of the aligned square in pixels (`block_size[region]`).
+    pub size: u32,
+    /// [`REGION_FOVEA`], [`REGION_INTERMEDIATE`] or [`REGION_PERIPHERY`].
+    pub region: u32,
 }
 
 /// Centre of the aligned `size × size` square with top-left pixel (`x0`, `y0`).

@@ -10,7 +10,6 @@ pub use path::{trace_path, trace_path_with, IntegratorSettings};
 use crate::camera::Camera;
 use crate::foveation::{block_sample_position, FoveationParams, OwnedBlock};
 use crate::geometry::Ray;
-use crate::kernel_abi::GpuBlock;
 use crate::rng::SampleRng;
 use crate::scene::{SceneSlices, SceneSource, SceneView};
 
@@ -156,7 +155,7 @@ pub fn render_sample_stream<F: crate::scene::Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     frame: &FrameParams,
-    blocks: &[GpuBlock],
+    blocks: &[OwnedBlock],
     block_count: u32,
     spp: u32,
     first: u32,
@@ -166,7 +165,7 @@ pub fn render_sample_stream<F: crate::scene::Features, S: SceneSource>(
     let total = block_count * spp;
     let mut i = first;
     while i < total {
-        let block = blocks[(i / spp) as usize].owned();
+        let block = blocks[(i / spp) as usize];
         let c = render_block_sample_with(scene, source, frame, &block, i % spp);
         out[i as usize] = [c.x, c.y, c.z, 0.0];
         if stride == 0 {
