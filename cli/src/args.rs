@@ -392,7 +392,7 @@ pub struct ReportArgs {
 }
 
 /// Where frames render (`render`, `report`, `view`).
-#[derive(Args, Debug, Clone)]
+#[derive(Args, Debug, Clone, Copy)]
 pub struct BackendArgs {
     /// `vulkan`: the rust-gpu kernel on a Vulkan device (lavapipe included); `cpu`: the CPU host;
     /// `auto`: Vulkan on a hardware GPU, else the CPU. (`view --backend cpu` presents through Vulkan.)

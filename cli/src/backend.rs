@@ -79,13 +79,13 @@ pub fn cpu_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
 impl Renderer {
     /// Sets up the backend `choice` asks for. `auto` uses Vulkan when a hardware device is available
     /// (or `--device` names one), else the CPU with a note on stderr (unless `quiet`).
-    pub fn new(
-        choice: Backend,
-        device: Option<usize>,
-        traversal: crate::args::Traversal,
-        threads: Option<usize>,
-        quiet: bool,
-    ) -> Result<Self> {
+    pub fn new(target: &crate::args::BackendArgs, quiet: bool) -> Result<Self> {
+        let crate::args::BackendArgs {
+            backend: choice,
+            device,
+            traversal,
+            threads,
+        } = *target;
         if choice == Backend::Cpu && traversal == crate::args::Traversal::Hardware {
             return Err(FoveaError::option(
                 "--traversal",

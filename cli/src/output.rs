@@ -64,6 +64,31 @@ fn parent_dir(path: &Path) -> PathBuf {
     }
 }
 
+/// Checks an output JSON path before any work: a `.json` name in an existing folder.
+pub fn check_json_path(p: &Path, option: &'static str) -> Result<()> {
+    let ext = p
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if ext.as_deref() != Some("json") {
+        return Err(FoveaError::option(
+            option,
+            format!("'{}' must end in .json", p.display()),
+        ));
+    }
+    let dir = p
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        return Err(FoveaError::option(
+            option,
+            format!("the folder '{}' does not exist", dir.display()),
+        ));
+    }
+    Ok(())
+}
+
 /// Writes `bytes_writer`'s output to `path` atomically: a temporary sibling file, then a rename.
 pub fn write_atomically(
     path: &Path,

@@ -12,7 +12,8 @@ use crate::args::RenderArgs;
 use crate::backend::Renderer;
 use crate::error::{FoveaError, Result};
 use crate::output::{
-    check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png, ImageFormat,
+    check_json_path, check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png,
+    ImageFormat,
 };
 use crate::scene_setup::{choose_camera, prepare_scene, Lighting};
 use crate::stats::FrameStats;
@@ -129,26 +130,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         }
     }
     if let Some(p) = &args.stats {
-        let ext = p
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        if ext.as_deref() != Some("json") {
-            return Err(FoveaError::option(
-                "--stats",
-                format!("'{}' must end in .json", p.display()),
-            ));
-        }
-        let dir = p
-            .parent()
-            .filter(|d| !d.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        if !dir.is_dir() {
-            return Err(FoveaError::option(
-                "--stats",
-                format!("the folder '{}' does not exist", dir.display()),
-            ));
-        }
+        check_json_path(p, "--stats")?;
     }
     if !args.exposure.is_finite() || args.exposure.abs() > 64.0 {
         return Err(FoveaError::option(
@@ -203,13 +185,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
     }
     // The backend first: a bad `--device` fails before the scene loads.
-    let mut renderer = Renderer::new(
-        args.target.backend,
-        args.target.device,
-        args.target.traversal,
-        args.target.threads,
-        args.quiet,
-    )?;
+    let mut renderer = Renderer::new(&args.target, args.quiet)?;
     let backend_name = renderer.name();
 
     let (eye, target, up) = args.camera.points();

@@ -269,26 +269,41 @@ pub(crate) fn record_dispatch(
     }
 }
 
-/// Makes the transfer writes before it visible to host reads after the submission's fence.
-///
-/// # Safety
-/// `cb` must be in the recording state.
-unsafe fn host_read_barrier(device: &ash::Device, cb: vk::CommandBuffer) {
-    let to_host = [vk::MemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-        .dst_access_mask(vk::AccessFlags::HOST_READ)];
-    // SAFETY: the caller guarantees a recording command buffer.
+/// Records one global memory barrier: `src_access` at `src_stage` before `dst_access` at `dst_stage`.
+pub(crate) fn memory_barrier(
+    device: &ash::Device,
+    cb: vk::CommandBuffer,
+    (src_stage, src_access): (vk::PipelineStageFlags, vk::AccessFlags),
+    (dst_stage, dst_access): (vk::PipelineStageFlags, vk::AccessFlags),
+) {
+    let b = [vk::MemoryBarrier::default()
+        .src_access_mask(src_access)
+        .dst_access_mask(dst_access)];
+    // SAFETY: recording into a command buffer in the recording state (every caller records there).
     unsafe {
         device.cmd_pipeline_barrier(
             cb,
-            vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::HOST,
+            src_stage,
+            dst_stage,
             vk::DependencyFlags::empty(),
-            &to_host,
+            &b,
             &[],
             &[],
         );
     }
+}
+
+/// Makes the transfer writes before it visible to host reads after the submission's fence.
+fn host_read_barrier(device: &ash::Device, cb: vk::CommandBuffer) {
+    memory_barrier(
+        device,
+        cb,
+        (
+            vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::TRANSFER_WRITE,
+        ),
+        (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
+    );
 }
 
 /// Resets the frame's two timestamp queries and writes the first one.
@@ -320,21 +335,15 @@ fn barrier(device: &ash::Device, cb: vk::CommandBuffer, dst_stage: vk::PipelineS
     } else {
         vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE
     };
-    let b = [vk::MemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::SHADER_READ)
-        .dst_access_mask(dst_access)];
-    // SAFETY: recording into a command buffer in the recording state.
-    unsafe {
-        device.cmd_pipeline_barrier(
-            cb,
+    memory_barrier(
+        device,
+        cb,
+        (
             vk::PipelineStageFlags::COMPUTE_SHADER,
-            dst_stage,
-            vk::DependencyFlags::empty(),
-            &b,
-            &[],
-            &[],
-        );
-    }
+            vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::SHADER_READ,
+        ),
+        (dst_stage, dst_access),
+    );
 }
 
 impl VulkanContext {

@@ -198,21 +198,15 @@ impl GpuBuffer {
 
 /// A memory barrier between acceleration-structure builds (and copies) and what reads them next.
 fn build_barrier(device: &ash::Device, cb: vk::CommandBuffer, dst_stage: vk::PipelineStageFlags) {
-    let b = [vk::MemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::ACCELERATION_STRUCTURE_WRITE_KHR)
-        .dst_access_mask(vk::AccessFlags::ACCELERATION_STRUCTURE_READ_KHR)];
-    // SAFETY: recording into a command buffer in the recording state.
-    unsafe {
-        device.cmd_pipeline_barrier(
-            cb,
+    crate::frame::memory_barrier(
+        device,
+        cb,
+        (
             vk::PipelineStageFlags::ACCELERATION_STRUCTURE_BUILD_KHR,
-            dst_stage,
-            vk::DependencyFlags::empty(),
-            &b,
-            &[],
-            &[],
-        );
-    }
+            vk::AccessFlags::ACCELERATION_STRUCTURE_WRITE_KHR,
+        ),
+        (dst_stage, vk::AccessFlags::ACCELERATION_STRUCTURE_READ_KHR),
+    );
 }
 
 impl VulkanContext {

@@ -28,42 +28,37 @@ const OP_ENTRY_POINT: u32 = 15;
 /// The kernel's words: the embedded module, or the file named by `FOVEA_KERNEL_SPV` in the environment at
 /// run time (for experiments with other builds of the kernel).
 pub fn load_kernel() -> Result<Vec<u32>> {
-    match std::env::var("FOVEA_KERNEL_SPV")
-        .ok()
-        .filter(|p| !p.is_empty())
-    {
-        Some(path) => {
-            let bytes = std::fs::read(&path)
-                .map_err(|e| VulkanError::KernelNotBuilt(format!("cannot read '{path}': {e}")))?;
-            words_from_bytes(&bytes)
-                .map_err(|e| VulkanError::KernelNotBuilt(format!("'{path}': {e}")))
-        }
-        None => words_from_bytes(EMBEDDED_KERNEL).map_err(|e| {
-            VulkanError::KernelNotBuilt(format!("the embedded kernel is unusable: {e}"))
-        }),
-    }
+    load_module("FOVEA_KERNEL_SPV", EMBEDDED_KERNEL, "kernel")
 }
 
 /// The ray-query kernel's words: the embedded module, or the file named by `FOVEA_KERNEL_RQ_SPV` at run
 /// time.
 pub fn load_ray_query_kernel() -> Result<Vec<u32>> {
-    match std::env::var("FOVEA_KERNEL_RQ_SPV")
-        .ok()
-        .filter(|p| !p.is_empty())
-    {
+    if EMBEDDED_RAY_QUERY_KERNEL.is_empty() && std::env::var_os("FOVEA_KERNEL_RQ_SPV").is_none() {
+        return Err(VulkanError::KernelNotBuilt(
+            "this binary has no ray-query kernel (it was built from a prebuilt software module); \
+             use --traversal software"
+                .into(),
+        ));
+    }
+    load_module(
+        "FOVEA_KERNEL_RQ_SPV",
+        EMBEDDED_RAY_QUERY_KERNEL,
+        "ray-query kernel",
+    )
+}
+
+/// A module's words from the file named by the environment variable `variable`, else from `embedded`.
+fn load_module(variable: &str, embedded: &[u8], what: &str) -> Result<Vec<u32>> {
+    match std::env::var(variable).ok().filter(|p| !p.is_empty()) {
         Some(path) => {
             let bytes = std::fs::read(&path)
                 .map_err(|e| VulkanError::KernelNotBuilt(format!("cannot read '{path}': {e}")))?;
             words_from_bytes(&bytes)
                 .map_err(|e| VulkanError::KernelNotBuilt(format!("'{path}': {e}")))
         }
-        None if EMBEDDED_RAY_QUERY_KERNEL.is_empty() => Err(VulkanError::KernelNotBuilt(
-            "this binary has no ray-query kernel (it was built from a prebuilt software module); \
-             use --traversal software"
-                .into(),
-        )),
-        None => words_from_bytes(EMBEDDED_RAY_QUERY_KERNEL).map_err(|e| {
-            VulkanError::KernelNotBuilt(format!("the embedded ray-query kernel is unusable: {e}"))
+        None => words_from_bytes(embedded).map_err(|e| {
+            VulkanError::KernelNotBuilt(format!("the embedded {what} is unusable: {e}"))
         }),
     }
 }

@@ -1056,6 +1056,23 @@ fn environment_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
     v
 }
 
+/// Whether traversal item `i`'s hit (`out`, a closest-hit record) runs (almost) in the plane of the
+/// triangle it hits: such a hit point is not well defined, so it is not compared.
+fn grazing_hit(packed: &PackedScene, inputs: &[[f32; 4]], i: usize, out: &[[f32; 4]]) -> bool {
+    let tri = out[0][3].to_bits() as usize;
+    tri < packed.triangle_count() && {
+        let t = packed.triangle(tri);
+        let item = [
+            inputs[i * STRIDE],
+            inputs[i * STRIDE + 1],
+            t.v0.to_array(),
+            t.v1.to_array(),
+            t.v2.to_array(),
+        ];
+        grazing_cos(&item) < GRAZING_COS
+    }
+}
+
 /// Whether two unit directions differ by more than `eps` in any component.
 fn directions_differ(a: [f32; 4], b: [f32; 4], eps: f32) -> bool {
     (0..3).any(|k| (a[k] - b[k]).abs() > eps)
@@ -1114,20 +1131,7 @@ fn scene_functions_agree_across_backends() {
     let (cpu, gpu) = run(PROBE_SCENE_CLOSEST_HIT, &inputs);
     // A ray (almost) in the plane of the triangle it hits has no well-defined hit point (the scene
     // points lie on faces, so some rays run along a face): not compared, as in the triangle test.
-    let grazing_hit = |i: usize, out: &[[f32; 4]]| {
-        let tri = out[0][3].to_bits() as usize;
-        tri < packed.triangle_count() && {
-            let t = packed.triangle(tri);
-            let item = [
-                inputs[i * STRIDE],
-                inputs[i * STRIDE + 1],
-                t.v0.to_array(),
-                t.v1.to_array(),
-                t.v2.to_array(),
-            ];
-            grazing_cos(&item) < GRAZING_COS
-        }
-    };
+    let grazing_hit = |i: usize, out: &[[f32; 4]]| grazing_hit(&packed, &inputs, i, out);
     let other_triangle = |i: usize, c: &[[f32; 4]], g: &[[f32; 4]]| {
         if grazing_hit(i, c) || grazing_hit(i, g) {
             Class::IllConditioned
@@ -1454,20 +1458,7 @@ fn hardware_traversal_finds_the_software_hits() {
         };
         let cpu = cpu_eval_scene(PROBE_SCENE_CLOSEST_HIT);
         let gpu = gpu_eval(&mut ctx, PROBE_SCENE_CLOSEST_HIT);
-        let grazing_hit = |i: usize, out: &[[f32; 4]]| {
-            let tri = out[0][3].to_bits() as usize;
-            tri < packed.triangle_count() && {
-                let t = packed.triangle(tri);
-                let item = [
-                    inputs[i * STRIDE],
-                    inputs[i * STRIDE + 1],
-                    t.v0.to_array(),
-                    t.v1.to_array(),
-                    t.v2.to_array(),
-                ];
-                grazing_cos(&item) < GRAZING_COS
-            }
-        };
+        let grazing_hit = |i: usize, out: &[[f32; 4]]| grazing_hit(packed, &inputs, i, out);
         // Half the probe rays start on a face (as no path does: the integrator offsets its origins).
         // The software test counts only t > 0 and so never sees the face a ray starts on; the
         // hardware's t_min of 0 may report it at t ~ 0. Such rays are not compared.

@@ -237,13 +237,7 @@ fn create_dir(dir: &Path) -> Result<()> {
 pub fn run(args: &ReportArgs) -> Result<()> {
     let wall = Instant::now();
     let plan = plan(args)?;
-    let mut renderer = Renderer::new(
-        args.target.backend,
-        args.target.device,
-        args.target.traversal,
-        args.target.threads,
-        args.quiet,
-    )?;
+    let mut renderer = Renderer::new(&args.target, args.quiet)?;
     let lighting = Lighting::from_args(&args.lighting)?;
     create_dir(&args.out)?;
 

@@ -264,17 +264,7 @@ impl Viewer {
     // ----- input --------------------------------------------------------------------------------------
 
     fn key(&mut self, key: ViewKey, pressed: bool, repeat: bool, event_loop: &ActiveEventLoop) {
-        let movement = matches!(
-            key,
-            ViewKey::W
-                | ViewKey::A
-                | ViewKey::S
-                | ViewKey::D
-                | ViewKey::Q
-                | ViewKey::E
-                | ViewKey::Shift
-        );
-        if movement {
+        if key.is_movement() {
             if pressed {
                 self.held.insert(key);
             } else {

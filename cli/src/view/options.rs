@@ -1,7 +1,7 @@
 //! `fovea view`'s command line, parsed and checked before a window opens: every bad value, missing
 //! file or port in use fails here with a message that names the option.
 use std::net::{Ipv4Addr, SocketAddr};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use fovea_core::integrator::IntegratorSettings;
 
@@ -179,7 +179,7 @@ impl ViewOptions {
             .transpose()
             .map_err(|e| FoveaError::option("--script", e.to_string()))?;
         if let Some(p) = &args.stats {
-            check_json_path(p, "--stats")?;
+            crate::output::check_json_path(p, "--stats")?;
         }
         if !(args.render_scale.is_finite() && (0.1..=1.0).contains(&args.render_scale)) {
             return Err(FoveaError::option(
@@ -234,29 +234,4 @@ impl ViewOptions {
             quiet: args.quiet,
         })
     }
-}
-
-/// A `.json` output whose folder exists.
-fn check_json_path(p: &Path, option: &'static str) -> Result<()> {
-    let ext = p
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    if ext.as_deref() != Some("json") {
-        return Err(FoveaError::option(
-            option,
-            format!("'{}' must end in .json", p.display()),
-        ));
-    }
-    let dir = p
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    if !dir.is_dir() {
-        return Err(FoveaError::option(
-            option,
-            format!("the folder '{}' does not exist", dir.display()),
-        ));
-    }
-    Ok(())
 }

@@ -104,6 +104,15 @@ impl ViewKey {
             .find(|key| key.name().eq_ignore_ascii_case(name))
     }
 
+    /// Whether the key moves the camera while held (W A S D Q E, Shift).
+    #[must_use]
+    pub fn is_movement(self) -> bool {
+        matches!(
+            self,
+            Self::W | Self::A | Self::S | Self::D | Self::Q | Self::E | Self::Shift
+        )
+    }
+
     /// The key's canonical name, as accepted by [`ViewKey::from_name`].
     #[must_use]
     pub fn name(self) -> &'static str {
