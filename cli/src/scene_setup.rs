@@ -62,7 +62,7 @@ pub fn prepare_scene(
         ..Default::default()
     };
     let start = Instant::now();
-    let mut loaded: LoadedScene = fovea_scene::mesh::load_scene(&path, &options)?;
+    let mut loaded: LoadedScene = fovea_scene::load_scene(&path, &options)?;
     loaded.punctual_lights.extend_from_slice(extra_lights);
     let load_ms = start.elapsed().as_secs_f64() * 1e3;
     let camera_desc = loaded.camera;

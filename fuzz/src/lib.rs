@@ -15,7 +15,8 @@ use fovea_core::scene::{
 use fovea_scene::bvh::blocks::leaf_slots;
 use fovea_scene::bvh::{BvhBuildOptions, MAX_NODE_DEPTH};
 use fovea_scene::environment::Environment;
-use fovea_scene::mesh::{load_scene_from, LoadOptions, MtlDiffuse};
+use fovea_scene::load_scene_from;
+use fovea_scene::mesh::{LoadOptions, MtlDiffuse};
 use fovea_scene::pack::{pack_scene, PackedScene};
 use fovea_scene::source::FileSource;
 use glam::Vec3;

@@ -885,7 +885,7 @@ impl Loader<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::load_scene;
+    use crate::load::load_scene;
 
     fn scenes() -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes")
@@ -1260,7 +1260,7 @@ mod tests {
     /// inside gltf-json's validation.
     #[test]
     fn json_the_gltf_crate_panics_on_is_an_error_or_repaired() {
-        use crate::mesh::load_scene_from;
+        use crate::load::load_scene_from;
         use crate::source::MemoryFiles;
         let json = r#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":5}}]}]}"#;
         let files = MemoryFiles::new().with("d/p.gltf", json);

@@ -11,9 +11,12 @@ pub mod bvh;
 pub mod environment;
 pub mod error;
 pub mod gltf_loader;
+pub mod load;
 pub mod mesh;
 pub mod obj_loader;
 pub mod pack;
 pub mod procedural;
 pub mod source;
 pub mod texture;
+
+pub use load::{load_scene, load_scene_from};

@@ -2,14 +2,13 @@
 //!
 //! Both loaders ([`crate::gltf_loader`], [`crate::obj_loader`]) produce a [`LoadedScene`]: flat world-space
 //! vertex arrays, indexed triangles with a material each, materials in `fovea_core`'s GPU layout, decoded
-//! textures, punctual lights and an optional camera. [`load_scene`] picks the loader by file extension.
+//! textures, punctual lights and an optional camera. [`crate::load::load_scene`] picks the loader by file extension.
 use std::path::{Path, PathBuf};
 
 use fovea_core::scene::{Light, Material};
 use glam::Vec3;
 
 use crate::error::SceneError;
-use crate::source::{FileSource, Filesystem};
 pub use crate::texture::Texture;
 use crate::texture::TextureLimits;
 
@@ -452,44 +451,6 @@ impl LoadedScene {
     }
 }
 
-/// Loads a scene file, choosing the loader by extension (case-insensitive): `.gltf` / `.glb` →
-/// [`crate::gltf_loader::load_gltf`], `.obj` → [`crate::obj_loader::load_obj`].
-pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
-    load_scene_from(&Filesystem, path, options)
-}
-
-/// [`load_scene`] reading the scene file and every file it refers to from `source`.
-pub fn load_scene_from(
-    source: &dyn FileSource,
-    path: &Path,
-    options: &LoadOptions,
-) -> Result<LoadedScene, SceneError> {
-    let extension = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    let scene = match extension.as_str() {
-        "gltf" | "glb" => crate::gltf_loader::load_gltf_from(source, path, options),
-        "obj" => crate::obj_loader::load_obj_from(source, path, options),
-        _ => Err(SceneError::UnknownExtension {
-            path: path.to_owned(),
-            extension,
-        }),
-    }?;
-    let words = crate::pack::packed_texel_words(&scene.textures);
-    if words > u64::from(u32::MAX) {
-        return Err(SceneError::TooLarge {
-            path: path.to_owned(),
-            message: format!(
-                "its textures need {words} 32-bit texel words once packed (sRGB colour takes two per \
-                 texel); at most {} fit",
-                u32::MAX
-            ),
-        });
-    }
-    Ok(scene)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -690,14 +651,5 @@ mod tests {
         );
         let e = options.check_size(Path::new("a.obj"), 1, 6).unwrap_err();
         assert!(matches!(e, SceneError::TooLarge { .. }), "{e}");
-    }
-
-    #[test]
-    fn unknown_extension_is_an_error() {
-        let e = load_scene(Path::new("/tmp/scene.PLY"), &LoadOptions::default()).unwrap_err();
-        match e {
-            SceneError::UnknownExtension { extension, .. } => assert_eq!(extension, "ply"),
-            other => panic!("{other}"),
-        }
     }
 }

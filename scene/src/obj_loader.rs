@@ -774,7 +774,7 @@ fn convert_materials(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::load_scene;
+    use crate::load::load_scene;
     use fovea_core::scene::MATERIAL_DOUBLE_SIDED_EMISSION;
 
     fn scenes() -> PathBuf {
@@ -1055,7 +1055,7 @@ mod tests {
     /// values (`parse_float3` unwraps).
     #[test]
     fn mtl_fuzz_regressions_are_errors_or_warnings_not_panics() {
-        use crate::mesh::load_scene_from;
+        use crate::load::load_scene_from;
         use crate::source::MemoryFiles;
         let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
         let load = |mtl: &str| {
@@ -1095,7 +1095,7 @@ mod tests {
 
     #[test]
     fn faces_naming_no_element_are_refused_before_tobj() {
-        use crate::mesh::load_scene_from;
+        use crate::load::load_scene_from;
         use crate::source::MemoryFiles;
         let load = |obj: &str| {
             let files = MemoryFiles::new().with("d/f.obj", obj.to_owned());

@@ -7,7 +7,8 @@ use fovea_core::integrator::{FrameParams, IntegratorSettings};
 use fovea_cpu::{FrameImage, RenderStats};
 use fovea_scene::bvh::BvhBuildOptions;
 use fovea_scene::environment::Environment;
-use fovea_scene::mesh::{load_scene, LoadOptions};
+use fovea_scene::load_scene;
+use fovea_scene::mesh::LoadOptions;
 use fovea_scene::pack::{pack_scene, PackedScene};
 use glam::Vec3;
 

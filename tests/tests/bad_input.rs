@@ -11,10 +11,11 @@ use fovea_core::scene::INVALID_INDEX;
 use fovea_scene::bvh::BvhBuildOptions;
 use fovea_scene::environment::Environment;
 use fovea_scene::error::SceneError;
-use fovea_scene::mesh::{load_scene, load_scene_from, LoadOptions, LoadedScene};
+use fovea_scene::mesh::{LoadOptions, LoadedScene};
 use fovea_scene::pack::pack_scene;
 use fovea_scene::source::MemoryFiles;
 use fovea_scene::texture::{decode_texture_bytes, TextureLimits};
+use fovea_scene::{load_scene, load_scene_from};
 use fovea_tests::{cornell_box_path, repo_root};
 
 fn fixture(name: &str) -> PathBuf {

@@ -1187,7 +1187,7 @@ fn frames_are_finite_without_the_final_guard_on_vulkan() {
     }
     let stiff = fovea_tests::shared_scenes().join("cornell_stiff/cornell_stiff.gltf");
     if stiff.exists() {
-        let mut loaded = fovea_scene::mesh::load_scene(&stiff, &Default::default()).unwrap();
+        let mut loaded = fovea_scene::load_scene(&stiff, &Default::default()).unwrap();
         for m in &mut loaded.materials {
             for c in 0..3 {
                 m.emission[c] *= 1000.0;

@@ -12,7 +12,8 @@ use fovea_core::geometry::Ray;
 use fovea_core::glam::Vec3;
 use fovea_core::scene::{Material, TrianglePositions};
 use fovea_scene::environment::Environment;
-use fovea_scene::mesh::{load_scene, LoadOptions};
+use fovea_scene::load_scene;
+use fovea_scene::mesh::LoadOptions;
 use fovea_tests::stability::{icosphere, loaded_scene, pack, pick, Rng};
 use rayon::prelude::*;
 

@@ -18,7 +18,8 @@ use fovea_core::integrator::path::{
 };
 use fovea_core::integrator::{render_block_sample, FrameParams};
 use fovea_scene::environment::Environment;
-use fovea_scene::mesh::{load_scene, LoadOptions};
+use fovea_scene::load_scene;
+use fovea_scene::mesh::LoadOptions;
 use fovea_scene::pack::PackedScene;
 use fovea_tests::stability::{pack, pick, quantile, rel_mse};
 use rayon::prelude::*;
