@@ -15,63 +15,10 @@ use fovea_core::scene::features::FEATURES_ALL;
 use crate::blocks::{DEFAULT_MAX_CHUNK_SAMPLES, SOFTWARE_MAX_CHUNK_SAMPLES};
 use crate::buffer::GpuBuffer;
 use crate::error::{Result, VkContext, VulkanError};
-use crate::frame::FrameResources;
 use crate::instance::{choose_device, DeviceInfo, InstanceHandle, MessageLog, Shared};
+use crate::limits::{query_limits, Limits};
+use crate::resources::FrameResources;
 use crate::spirv::{self, capability, ENTRY_POINTS};
-
-/// How rays find triangles on the device.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Traversal {
-    /// Hardware where the device has ray queries and is a GPU, else software (see
-    /// [`resolve_traversal`]).
-    #[default]
-    Auto,
-    /// The kernel's own BVH traversal (core's `bvh::traverse`), on any device.
-    Software,
-    /// The driver's acceleration structures through `VK_KHR_ray_query` (core's `bvh::hardware`); an
-    /// error where the device has no ray queries.
-    Hardware,
-}
-
-/// What a device offers for hardware traversal: `None` if it has everything, else what it lacks.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct RayQuerySupport {
-    pub missing: Option<String>,
-}
-
-/// The traversal a context uses for `requested` on a device of `device_type` ("discrete", "cpu", ...)
-/// with `support`, and a note when `Auto` fell back or chose for a reason worth saying.
-///
-/// `Auto` takes hardware only on GPUs: lavapipe (a CPU device) has ray queries, but its acceleration
-/// structures are traversed by the same CPU cores, slower than the kernel's own BVH (docs/architecture.md, "Hardware
-/// traversal"), so `Auto` keeps software there.
-pub fn resolve_traversal(
-    requested: Traversal,
-    device_type: &str,
-    support: &RayQuerySupport,
-) -> std::result::Result<(bool, Option<String>), String> {
-    match (requested, &support.missing) {
-        (Traversal::Software, _) => Ok((false, None)),
-        (Traversal::Hardware, None) => Ok((true, None)),
-        (Traversal::Hardware, Some(why)) => Err(format!(
-            "--traversal hardware needs ray queries, and this device lacks {why}; use --traversal \
-             software or auto"
-        )),
-        (Traversal::Auto, Some(why)) => Ok((
-            false,
-            Some(format!("software traversal: the device lacks {why}")),
-        )),
-        (Traversal::Auto, None) if device_type == "cpu" => Ok((
-            false,
-            Some(
-                "software traversal: this CPU device's ray queries are slower than fovea's own BVH \
-                 (--traversal hardware forces them)"
-                    .into(),
-            ),
-        )),
-        (Traversal::Auto, None) => Ok((true, None)),
-    }
-}
 
 /// How to set up a context.
 #[derive(Clone, Debug, Default)]
@@ -84,9 +31,9 @@ pub struct ContextOptions {
     /// A window to present to (`fovea view`): the instance gets the window system's surface extensions,
     /// the device must present to the window's surface from its compute queue, and `VK_KHR_swapchain` is
     /// enabled.
-    pub window: Option<crate::present::WindowHandles>,
+    pub window: Option<crate::swapchain::WindowHandles>,
     /// Software or hardware traversal (the latter loads the ray-query kernel module).
-    pub traversal: Traversal,
+    pub traversal: crate::traversal::Traversal,
 }
 
 impl ContextOptions {
@@ -97,7 +44,7 @@ impl ContextOptions {
             device_index: None,
             validation: validation_requested(),
             window: None,
-            traversal: Traversal::Auto,
+            traversal: crate::traversal::Traversal::Auto,
         }
     }
 }
@@ -111,18 +58,6 @@ pub fn validation_requested() -> bool {
     )
 }
 
-/// Device limits the host checks buffers against.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Limits {
-    pub max_storage_buffer_range: u64,
-    pub min_storage_buffer_offset_alignment: u64,
-    pub max_texel_buffer_elements: u64,
-    pub max_workgroup_count_x: u32,
-    pub max_memory_allocation_size: u64,
-    /// Size of the largest device-local heap.
-    pub device_local_heap: u64,
-}
-
 /// Indices into [`VulkanContext::pipelines`].
 pub(crate) mod pipeline {
     pub const RENDER_SAMPLES: usize = 0;
@@ -130,7 +65,7 @@ pub(crate) mod pipeline {
     pub const CELL_MEANS: usize = 2;
     pub const FILL: usize = 3;
     pub const TONEMAP: usize = 4;
-    /// The live view's two passes (see `crate::live`).
+    /// The live view's two passes (see [`VulkanContext::render_live_frame`]).
     pub const ACCUMULATE: usize = 5;
     pub const OVERLAY_REGIONS: usize = 6;
 }
@@ -170,7 +105,7 @@ pub struct VulkanContext {
     /// Size of the last frame rendered (what [`Self::read_back_hdr`] and [`Self::present`] show).
     pub(crate) last_frame_size: Option<(u32, u32)>,
     /// The window's swapchain (live view), created by the first [`Self::present`].
-    pub(crate) presenter: Option<crate::present::Presenter>,
+    pub(crate) presenter: Option<crate::swapchain::Presenter>,
     pub(crate) poisoned: bool,
     /// A failure the next submission reports instead of submitting ([`Self::inject_fault`]).
     pub(crate) injected_fault: Option<vk::Result>,
@@ -208,10 +143,10 @@ impl VulkanContext {
         let instance = match &options.window {
             None => InstanceHandle::new(options.validation)?,
             Some(window) => {
-                let extensions = crate::present::surface_extensions(window)?;
+                let extensions = crate::swapchain::surface_extensions(window)?;
                 let mut instance =
                     InstanceHandle::with_extensions(options.validation, &extensions)?;
-                crate::present::create_surface(&mut instance, window)?;
+                crate::swapchain::create_surface(&mut instance, window)?;
                 instance
             }
         };
@@ -224,7 +159,7 @@ impl VulkanContext {
         if instance.surface.is_some() {
             for (info, &pd) in infos.iter_mut().zip(&physical) {
                 if info.unsuitable.is_none()
-                    && crate::present::present_queue_family(&instance, pd).is_none()
+                    && crate::swapchain::present_queue_family(&instance, pd).is_none()
                 {
                     info.unsuitable =
                         Some("no compute queue that can present to the window".into());
@@ -236,14 +171,13 @@ impl VulkanContext {
         let info = infos[index].clone();
         let vk_instance = &instance.instance;
 
-        let support = crate::hardware::ray_query_support(&instance, pd);
+        let support = crate::traversal::ray_query_support(&instance, pd);
         let (hardware, traversal_note) =
-            resolve_traversal(options.traversal, info.device_type, &support).map_err(|reason| {
-                VulkanError::UnsuitableDevice {
+            crate::traversal::resolve_traversal(options.traversal, info.device_type, &support)
+                .map_err(|reason| VulkanError::UnsuitableDevice {
                     device: info.name.clone(),
                     reason,
-                }
-            })?;
+                })?;
         let code = if hardware {
             let rq = spirv::load_ray_query_kernel()?;
             let rq_info = spirv::module_info(&rq);
@@ -265,7 +199,7 @@ impl VulkanContext {
         // Prefer a compute-only queue family (async compute), else any with compute; with a window, the
         // first compute family that presents to it.
         let family = if instance.surface.is_some() {
-            crate::present::present_queue_family(&instance, pd)
+            crate::swapchain::present_queue_family(&instance, pd)
         } else {
             queue_families
                 .iter()
@@ -379,10 +313,10 @@ impl VulkanContext {
             enabled = enabled
                 .push_next(&mut want_accel)
                 .push_next(&mut want_ray_query);
-            device_extensions.extend(crate::hardware::DEVICE_EXTENSIONS.map(|e| e.as_ptr()));
+            device_extensions.extend(crate::traversal::DEVICE_EXTENSIONS.map(|e| e.as_ptr()));
         }
         if instance.surface.is_some() {
-            crate::present::check_swapchain_extension(&instance, pd, &info.name)?;
+            crate::swapchain::check_swapchain_extension(&instance, pd, &info.name)?;
             device_extensions.push(ash::khr::swapchain::NAME.as_ptr());
         }
         let device_info = vk::DeviceCreateInfo::default()
@@ -414,7 +348,7 @@ impl VulkanContext {
             instance,
         });
         let limits = query_limits(&shared);
-        let hardware_scratch_alignment = crate::hardware::scratch_alignment(&shared.instance, pd);
+        let hardware_scratch_alignment = crate::traversal::scratch_alignment(&shared.instance, pd);
         // SAFETY: `pd` belongs to the instance.
         let props = unsafe { shared.instance.instance.get_physical_device_properties(pd) };
 
@@ -776,30 +710,12 @@ impl VulkanContext {
     /// Checks a buffer of `bytes` that is bound as a storage buffer against the device limits
     /// (`maxStorageBufferRange`, `maxMemoryAllocationSize`); the error names the limit.
     pub fn check_size(&self, what: &str, bytes: u64) -> Result<()> {
-        let l = &self.limits;
-        if bytes > l.max_storage_buffer_range {
-            return Err(VulkanError::TooLarge {
-                what: what.into(),
-                bytes,
-                limit_name: "maxStorageBufferRange",
-                limit: l.max_storage_buffer_range,
-            });
-        }
-        self.check_allocation(what, bytes)
+        self.limits.check_size(what, bytes)
     }
 
     /// Checks a buffer of `bytes` against `maxMemoryAllocationSize`; the error names the limit.
     pub fn check_allocation(&self, what: &str, bytes: u64) -> Result<()> {
-        let l = &self.limits;
-        if bytes > l.max_memory_allocation_size {
-            return Err(VulkanError::TooLarge {
-                what: what.into(),
-                bytes,
-                limit_name: "maxMemoryAllocationSize",
-                limit: l.max_memory_allocation_size,
-            });
-        }
-        Ok(())
+        self.limits.check_allocation(what, bytes)
     }
 }
 
@@ -826,33 +742,6 @@ pub(crate) fn descriptor_pool_sizes() -> Vec<vk::DescriptorPoolSize> {
         }
     }
     sizes
-}
-
-fn query_limits(shared: &Shared) -> Limits {
-    let instance = &shared.instance.instance;
-    let pd = shared.physical_device;
-    let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut maintenance3);
-    // SAFETY: valid physical device and property chain.
-    unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
-    let limits = props2.properties.limits;
-    // SAFETY: as above.
-    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
-    let heaps = &memory.memory_heaps[..memory.memory_heap_count as usize];
-    let device_local_heap = heaps
-        .iter()
-        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
-        .map(|h| h.size)
-        .max()
-        .unwrap_or_else(|| heaps.iter().map(|h| h.size).max().unwrap_or(0));
-    Limits {
-        max_storage_buffer_range: u64::from(limits.max_storage_buffer_range),
-        min_storage_buffer_offset_alignment: limits.min_storage_buffer_offset_alignment.max(1),
-        max_texel_buffer_elements: u64::from(limits.max_texel_buffer_elements),
-        max_workgroup_count_x: limits.max_compute_work_group_count[0],
-        max_memory_allocation_size: maintenance3.max_memory_allocation_size,
-        device_local_heap,
-    }
 }
 
 /// `vkCreateComputePipelines` for `infos`; on failure the pipelines that were created are destroyed and
@@ -960,39 +849,5 @@ impl Drop for VulkanContext {
             device.destroy_fence(self.fence, None);
             device.destroy_command_pool(self.command_pool, None);
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn traversal_is_resolved_from_the_request_the_device_and_its_support() {
-        let yes = RayQuerySupport { missing: None };
-        let no = RayQuerySupport {
-            missing: Some("VK_KHR_ray_query".into()),
-        };
-        assert_eq!(
-            resolve_traversal(Traversal::Auto, "discrete", &yes),
-            Ok((true, None))
-        );
-        let (hw, note) = resolve_traversal(Traversal::Auto, "discrete", &no).unwrap();
-        assert!(
-            !hw && note.unwrap().contains("VK_KHR_ray_query"),
-            "falls back with a note"
-        );
-        let (hw, note) = resolve_traversal(Traversal::Auto, "cpu", &yes).unwrap();
-        assert!(!hw && note.unwrap().contains("--traversal hardware"));
-        assert_eq!(
-            resolve_traversal(Traversal::Hardware, "cpu", &yes),
-            Ok((true, None))
-        );
-        let e = resolve_traversal(Traversal::Hardware, "discrete", &no).unwrap_err();
-        assert!(e.contains("VK_KHR_ray_query") && e.contains("--traversal software"));
-        assert_eq!(
-            resolve_traversal(Traversal::Software, "discrete", &yes),
-            Ok((false, None))
-        );
     }
 }

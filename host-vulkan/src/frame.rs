@@ -11,12 +11,14 @@ use fovea_core::integrator::FrameParams;
 use fovea_core::kernel_abi::*;
 use fovea_frame::{FrameImage, RenderStats};
 
+use crate::barrier::memory_barrier;
 use crate::blocks::{
     block_buffer_contents, enumerate_blocks, plan_chunks, workgroups_2d, ChunkPlan,
 };
 use crate::buffer::GpuBuffer;
 use crate::context::{pipeline, VulkanContext, CHUNK_TIMEOUT};
 use crate::error::{Result, VulkanError};
+use crate::resources::{FrameResources, Sizes, PIXEL};
 use crate::scene::GpuScene;
 
 /// A frame read back from the device.
@@ -64,26 +66,6 @@ pub struct GpuRenderStats {
     pub warmup_ms: f64,
 }
 
-/// Buffer sizes of one frame layout; buffers are reused while a frame fits.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Sizes {
-    pixels: u64,
-    cells: u64,
-    block_buffer: u64,
-    chunk_blocks: u64,
-    chunk_samples: u64,
-}
-
-impl Sizes {
-    fn fits_in(&self, other: &Sizes) -> bool {
-        self.pixels <= other.pixels
-            && self.cells <= other.cells
-            && self.block_buffer <= other.block_buffer
-            && self.chunk_blocks <= other.chunk_blocks
-            && self.chunk_samples <= other.chunk_samples
-    }
-}
-
 /// A frame planned and bound, ready for [`VulkanContext::dispatch_frame`].
 struct PreparedFrame {
     plan: ChunkPlan,
@@ -122,22 +104,6 @@ impl PreparedFrame {
     }
 }
 
-/// The per-frame buffers (see `kernel_abi` for what each binding holds).
-pub(crate) struct FrameResources {
-    sizes: Sizes,
-    frame: GpuBuffer,
-    blocks: GpuBuffer,
-    samples: GpuBuffer,
-    /// The replicated image, which the fill overwrites with the HDR image (bindings 17 and 19).
-    replicated: GpuBuffer,
-    cell_means: GpuBuffer,
-    ldr: GpuBuffer,
-    ldr_readback: GpuBuffer,
-    hdr_readback: GpuBuffer,
-    /// The live view's running mean ([`BINDING_ACCUMULATION`]), created by the first live frame.
-    accumulation: Option<GpuBuffer>,
-}
-
 /// What the last submission of a frame does after the fill.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum FrameTail {
@@ -149,85 +115,6 @@ pub(crate) enum FrameTail {
         accumulated_frames: u32,
         overlay: bool,
     },
-}
-
-const PIXEL: u64 = 16;
-
-impl FrameResources {
-    fn new(ctx: &VulkanContext, s: Sizes) -> Result<Self> {
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let src = vk::BufferUsageFlags::TRANSFER_SRC;
-        let dst = vk::BufferUsageFlags::TRANSFER_DST;
-        let sh = &ctx.shared;
-        for (what, bytes) in [
-            ("the block list", s.block_buffer * 16),
-            ("the samples buffer", s.chunk_samples * PIXEL),
-            ("the HDR image", s.pixels * PIXEL),
-            ("the cell means", s.cells * PIXEL),
-        ] {
-            ctx.check_size(what, bytes)?;
-        }
-        Ok(Self {
-            sizes: s,
-            frame: GpuBuffer::new(
-                sh,
-                "frame parameters",
-                std::mem::size_of::<FrameParams>() as u64,
-                storage,
-                MemoryLocation::CpuToGpu,
-            )?,
-            blocks: GpuBuffer::new(
-                sh,
-                "block list",
-                s.block_buffer * 16,
-                storage,
-                MemoryLocation::CpuToGpu,
-            )?,
-            samples: GpuBuffer::new(
-                sh,
-                "samples",
-                s.chunk_samples * PIXEL,
-                storage,
-                MemoryLocation::GpuOnly,
-            )?,
-            replicated: GpuBuffer::new(
-                sh,
-                "replicated and HDR image",
-                s.pixels * PIXEL,
-                storage | src,
-                MemoryLocation::GpuOnly,
-            )?,
-            cell_means: GpuBuffer::new(
-                sh,
-                "cell means",
-                s.cells.max(1) * PIXEL,
-                storage,
-                MemoryLocation::GpuOnly,
-            )?,
-            ldr: GpuBuffer::new(
-                sh,
-                "LDR image",
-                s.pixels * 4,
-                storage | src,
-                MemoryLocation::GpuOnly,
-            )?,
-            ldr_readback: GpuBuffer::new(
-                sh,
-                "LDR readback",
-                s.pixels * 4,
-                dst,
-                MemoryLocation::GpuToCpu,
-            )?,
-            hdr_readback: GpuBuffer::new(
-                sh,
-                "HDR readback",
-                s.pixels * PIXEL,
-                dst,
-                MemoryLocation::GpuToCpu,
-            )?,
-            accumulation: None,
-        })
-    }
 }
 
 /// Records one compute dispatch over `items` invocations: binds `pipeline` and `set` (with the one dynamic
@@ -266,30 +153,6 @@ pub(crate) fn record_dispatch(
             bytemuck::bytes_of(pc),
         );
         device.cmd_dispatch(cb, x, y, 1);
-    }
-}
-
-/// Records one global memory barrier: `src_access` at `src_stage` before `dst_access` at `dst_stage`.
-pub(crate) fn memory_barrier(
-    device: &ash::Device,
-    cb: vk::CommandBuffer,
-    (src_stage, src_access): (vk::PipelineStageFlags, vk::AccessFlags),
-    (dst_stage, dst_access): (vk::PipelineStageFlags, vk::AccessFlags),
-) {
-    let b = [vk::MemoryBarrier::default()
-        .src_access_mask(src_access)
-        .dst_access_mask(dst_access)];
-    // SAFETY: recording into a command buffer in the recording state (every caller records there).
-    unsafe {
-        device.cmd_pipeline_barrier(
-            cb,
-            src_stage,
-            dst_stage,
-            vk::DependencyFlags::empty(),
-            &b,
-            &[],
-            &[],
-        );
     }
 }
 
@@ -536,7 +399,7 @@ impl VulkanContext {
 
         if !self.frame.as_ref().is_some_and(|f| sizes.fits_in(&f.sizes)) {
             self.frame = None; // free the old buffers first
-            self.frame = Some(FrameResources::new(self, sizes)?);
+            self.frame = Some(FrameResources::new(&self.shared, &self.limits, sizes)?);
         }
         if self.last_frame_size != Some((w, h)) {
             // A mean of another image size is meaningless.

@@ -27,85 +27,6 @@ use crate::instance::Shared;
 /// Words before the triangle map in the hardware-traversal buffer (core's `HARDWARE_HEADER_WORDS`).
 const HEADER_WORDS: usize = 4;
 
-/// The device extensions hardware traversal enables.
-pub(crate) const DEVICE_EXTENSIONS: [&std::ffi::CStr; 3] = [
-    ash::khr::acceleration_structure::NAME,
-    ash::khr::ray_query::NAME,
-    ash::khr::deferred_host_operations::NAME,
-];
-
-/// What `pd` offers for hardware traversal (extensions, then features).
-pub(crate) fn ray_query_support(
-    instance: &crate::instance::InstanceHandle,
-    pd: vk::PhysicalDevice,
-) -> crate::context::RayQuerySupport {
-    // SAFETY: `pd` belongs to this instance.
-    let extensions =
-        unsafe { instance.instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
-    let absent: Vec<String> = DEVICE_EXTENSIONS
-        .iter()
-        .filter(|name| {
-            !extensions
-                .iter()
-                .any(|e| e.extension_name_as_c_str().ok() == Some(**name))
-        })
-        .map(|n| n.to_string_lossy().into_owned())
-        .collect();
-    if !absent.is_empty() {
-        return crate::context::RayQuerySupport {
-            missing: Some(absent.join(", ")),
-        };
-    }
-    let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
-    let mut ray_query = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
-    let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
-    let mut features = vk::PhysicalDeviceFeatures2::default()
-        .push_next(&mut accel)
-        .push_next(&mut ray_query)
-        .push_next(&mut v12);
-    // SAFETY: valid chain of feature structs of extensions the device has.
-    unsafe {
-        instance
-            .instance
-            .get_physical_device_features2(pd, &mut features)
-    };
-    let mut lacking = Vec::new();
-    if accel.acceleration_structure == vk::FALSE {
-        lacking.push("accelerationStructure");
-    }
-    if ray_query.ray_query == vk::FALSE {
-        lacking.push("rayQuery");
-    }
-    if v12.buffer_device_address == vk::FALSE {
-        lacking.push("bufferDeviceAddress");
-    }
-    crate::context::RayQuerySupport {
-        missing: (!lacking.is_empty()).then(|| lacking.join(", ")),
-    }
-}
-
-/// `minAccelerationStructureScratchOffsetAlignment`, or 256 where the device has no acceleration
-/// structures (then unused).
-pub(crate) fn scratch_alignment(
-    instance: &crate::instance::InstanceHandle,
-    pd: vk::PhysicalDevice,
-) -> u32 {
-    if ray_query_support(instance, pd).missing.is_some() {
-        return 256;
-    }
-    let mut accel = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
-    let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut accel);
-    // SAFETY: valid property chain of an extension the device has.
-    unsafe {
-        instance
-            .instance
-            .get_physical_device_properties2(pd, &mut props)
-    };
-    accel
-        .min_acceleration_structure_scratch_offset_alignment
-        .max(1)
-}
-
 /// What the acceleration structures cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct HardwareStats {
@@ -198,7 +119,7 @@ impl GpuBuffer {
 
 /// A memory barrier between acceleration-structure builds (and copies) and what reads them next.
 fn build_barrier(device: &ash::Device, cb: vk::CommandBuffer, dst_stage: vk::PipelineStageFlags) {
-    crate::frame::memory_barrier(
+    crate::barrier::memory_barrier(
         device,
         cb,
         (

@@ -20,6 +20,7 @@
 //! `render_ms` comes from GPU timestamps around the whole frame (wall time where the queue has none).
 //! With `FOVEA_VULKAN_VALIDATION=1` the Khronos validation layer is enabled and its warnings and errors are
 //! collected ([`VulkanContext::validation_messages`]).
+mod barrier;
 pub mod blocks;
 mod buffer;
 pub mod context;
@@ -27,19 +28,21 @@ pub mod error;
 pub mod frame;
 pub mod hardware;
 pub mod instance;
+mod limits;
 pub mod present;
 pub mod probe;
+mod resources;
 pub mod scene;
 pub mod spirv;
+pub mod swapchain;
+pub mod traversal;
 
 /// The `ash` Vulkan types (result codes for [`VulkanContext::inject_fault`]).
 pub use ash::vk;
-pub use context::{
-    resolve_traversal, validation_requested, ContextOptions, RayQuerySupport, Traversal,
-    VulkanContext,
-};
+pub use context::{validation_requested, ContextOptions, VulkanContext};
 pub use error::VulkanError;
 pub use frame::{GpuFrame, GpuRenderStats};
 pub use instance::{list_devices, DeviceInfo};
 pub use present::{HudOverlay, PresentOutcome, PresentSource, WindowHandles};
 pub use scene::GpuScene;
+pub use traversal::{resolve_traversal, RayQuerySupport, Traversal};

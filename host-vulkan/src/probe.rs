@@ -19,10 +19,7 @@ use crate::error::{Result, VkContext, VulkanError};
 use crate::scene::GpuScene;
 use crate::spirv;
 
-/// Name of the entry point of single-function probes.
-pub const PROBE_ENTRY_POINT: &str = "probe";
-/// Name of the entry point of scene probes (traversal, lights).
-pub const PROBE_SCENE_ENTRY_POINT: &str = "probe_scene";
+pub use crate::spirv::{PROBE_ENTRY_POINT, PROBE_SCENE_ENTRY_POINT};
 
 /// Which probe entry point a dispatch runs (index into `VulkanContext::probe_pipelines`).
 #[derive(Clone, Copy)]

@@ -18,6 +18,10 @@ pub const ENTRY_POINTS: [&str; 7] = [
     "overlay_regions",
 ];
 
+/// The probe entry points (cross-backend tests), whose pipelines are created on first use.
+pub const PROBE_ENTRY_POINT: &str = "probe";
+pub const PROBE_SCENE_ENTRY_POINT: &str = "probe_scene";
+
 /// SPIR-V magic number (first word of every module).
 const MAGIC: u32 = 0x0723_0203;
 /// `OpCapability`.
@@ -169,10 +173,7 @@ mod tests {
     fn embedded_kernel_has_every_entry_point() {
         let words = words_from_bytes(EMBEDDED_KERNEL).expect("the build embeds a SPIR-V module");
         let info = module_info(&words);
-        let probes = [
-            crate::probe::PROBE_ENTRY_POINT,
-            crate::probe::PROBE_SCENE_ENTRY_POINT,
-        ];
+        let probes = [PROBE_ENTRY_POINT, PROBE_SCENE_ENTRY_POINT];
         for name in ENTRY_POINTS.iter().chain(&probes) {
             assert!(
                 info.entry_points.iter().any(|e| e == name),
