@@ -37,7 +37,7 @@ fn main() {
     let manifest_dir = PathBuf::from(env("CARGO_MANIFEST_DIR"));
     let repo = manifest_dir
         .parent()
-        .expect("host-vulkan lives in the repository root")
+        .expect("vulkan lives in the repository root")
         .to_path_buf();
     let out = PathBuf::from(env("OUT_DIR")).join("fovea-kernel.spv");
     let out_rq = PathBuf::from(env("OUT_DIR")).join("fovea-kernel-ray-query.spv");
