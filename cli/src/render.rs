@@ -64,13 +64,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         }
         FoveationParams::uniform(spp[0])
     } else {
-        FoveationParams {
-            gaze: [0.5 * w as f32, 0.5 * h as f32],
-            radius_fovea: radii_px[0],
-            radius_intermediate: radii_px[1],
-            spp: [spp[0], spp[1], spp[2], 0],
-            block_size: [blocks[0], blocks[1], blocks[2], 0],
-        }
+        FoveationParams::new([0.5 * w as f32, 0.5 * h as f32], radii_px, spp, blocks)
     };
     let gazes =
         match (&args.gaze_trace, args.gaze) {

@@ -190,6 +190,7 @@ pub fn display_geometry(
             "the viewing distance must be positive",
         ));
     }
+    let display = display_at(display_cm, distance_cm, resolution);
     let [w, h] = display_cm.0;
     let display_aspect = w / h;
     let image_aspect = resolution[0] as f32 / resolution[1] as f32;
@@ -200,15 +201,22 @@ pub fn display_geometry(
             resolution[0], resolution[1]
         )
     });
-    Ok((
-        DisplayGeometry {
-            width_cm: w,
-            height_cm: h,
-            distance_cm,
-            resolution,
-        },
-        warning,
-    ))
+    Ok((display, warning))
+}
+
+/// The display model of checked options for an image of `resolution` that fills its width.
+#[must_use]
+pub fn display_at(
+    display_cm: DisplayCm,
+    distance_cm: f32,
+    resolution: [u32; 2],
+) -> DisplayGeometry {
+    DisplayGeometry {
+        width_cm: display_cm.0[0],
+        height_cm: display_cm.0[1],
+        distance_cm,
+        resolution,
+    }
 }
 
 /// The radii in pixels of `eccentricity` on `display` (`a = 2·d·tan(e/2)`, Mohanto et al. 2023).

@@ -25,3 +25,25 @@ pub(crate) fn memory_barrier(
         );
     }
 }
+
+/// Records image layout transitions `images` between `src_stage` and `dst_stage`.
+pub(crate) fn image_barrier(
+    device: &ash::Device,
+    cb: vk::CommandBuffer,
+    (src_stage, dst_stage): (vk::PipelineStageFlags, vk::PipelineStageFlags),
+    images: &[vk::ImageMemoryBarrier<'_>],
+) {
+    // SAFETY: recording into a command buffer in the recording state (every caller records there),
+    // with barriers on images of this device.
+    unsafe {
+        device.cmd_pipeline_barrier(
+            cb,
+            src_stage,
+            dst_stage,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[],
+            images,
+        );
+    }
+}

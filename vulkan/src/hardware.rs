@@ -176,6 +176,41 @@ impl VulkanContext {
         Ok((buffer, address))
     }
 
+    /// Sizes the build `info` (with `counts` primitives per geometry), creates its destination (guarded)
+    /// and scratch buffer, and points `info` at them; returns those and the structure's size in bytes.
+    fn prepare_build<'l, 'g>(
+        &self,
+        loader: &'l ash::khr::acceleration_structure::Device,
+        info: vk::AccelerationStructureBuildGeometryInfoKHR<'g>,
+        counts: &[u32],
+        what: &str,
+    ) -> Result<(
+        AccelGuard<'l>,
+        GpuBuffer,
+        vk::AccelerationStructureBuildGeometryInfoKHR<'g>,
+        u64,
+    )> {
+        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+        // SAFETY: valid build info whose geometry count matches `counts`.
+        unsafe {
+            loader.get_acceleration_structure_build_sizes(
+                vk::AccelerationStructureBuildTypeKHR::DEVICE,
+                &info,
+                counts,
+                &mut sizes,
+            )
+        };
+        let size = sizes.acceleration_structure_size.max(256);
+        let accel = AccelGuard::new(loader, self.create_accel(loader, what, info.ty, size)?);
+        let (scratch, scratch_address) = self.scratch(sizes.build_scratch_size)?;
+        let info = info
+            .dst_acceleration_structure(accel.handle())
+            .scratch_data(vk::DeviceOrHostAddressKHR {
+                device_address: scratch_address,
+            });
+        Ok((accel, scratch, info, sizes.acceleration_structure_size))
+    }
+
     /// Builds the acceleration structures of `packed` (see the module documentation).
     pub(crate) fn build_hardware_scene(&mut self, packed: &PackedScene) -> Result<HardwareScene> {
         let start = Instant::now();
@@ -240,7 +275,7 @@ impl VulkanContext {
                 }
             }
             let counts: Vec<u32> = ranges.iter().map(|r| r.primitive_count).collect();
-            let mut info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+            let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
                 .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
                 .flags(
                     vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
@@ -248,29 +283,12 @@ impl VulkanContext {
                 )
                 .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
                 .geometries(&geometries);
-            let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-            // SAFETY: valid build info whose geometry count matches `counts`.
-            unsafe {
-                loader.get_acceleration_structure_build_sizes(
-                    vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                    &info,
-                    &counts,
-                    &mut sizes,
-                )
-            };
-            let full = self.create_accel(
+            let (full, _scratch, info, full_size) = self.prepare_build(
                 &loader,
+                info,
+                &counts,
                 "bottom-level acceleration structure",
-                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
-                sizes.acceleration_structure_size,
             )?;
-            let full = AccelGuard::new(&loader, full);
-            let (_scratch, scratch_address) = self.scratch(sizes.build_scratch_size)?;
-            info = info.dst_acceleration_structure(full.handle()).scratch_data(
-                vk::DeviceOrHostAddressKHR {
-                    device_address: scratch_address,
-                },
-            );
             // SAFETY: valid device and create info; the pool is destroyed below.
             let pool = unsafe {
                 self.shared.device.create_query_pool(
@@ -323,8 +341,8 @@ impl VulkanContext {
             // SAFETY: nothing uses the pool any more.
             unsafe { self.shared.device.destroy_query_pool(pool, None) };
             read?;
-            stats.blas_bytes_uncompacted = sizes.acceleration_structure_size;
-            let size = compacted[0].clamp(1, sizes.acceleration_structure_size);
+            stats.blas_bytes_uncompacted = full_size;
+            let size = compacted[0].clamp(1, full_size);
             let compact = self.create_accel(
                 &loader,
                 "compacted bottom-level acceleration structure",
@@ -389,34 +407,17 @@ impl VulkanContext {
         let ranges = [
             vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(instance_count)
         ];
-        let mut info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+        let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
             .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
             .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
             .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
             .geometries(&geometries);
-        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-        // SAFETY: valid build info with one geometry and one count.
-        unsafe {
-            loader.get_acceleration_structure_build_sizes(
-                vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                &info,
-                &[instance_count],
-                &mut sizes,
-            )
-        };
-        let tlas = self.create_accel(
+        let (tlas, _scratch, info, tlas_size) = self.prepare_build(
             &loader,
+            info,
+            &[instance_count],
             "top-level acceleration structure",
-            vk::AccelerationStructureTypeKHR::TOP_LEVEL,
-            sizes.acceleration_structure_size.max(256),
         )?;
-        let tlas = AccelGuard::new(&loader, tlas);
-        let (_scratch, scratch_address) = self.scratch(sizes.build_scratch_size)?;
-        info = info.dst_acceleration_structure(tlas.handle()).scratch_data(
-            vk::DeviceOrHostAddressKHR {
-                device_address: scratch_address,
-            },
-        );
         let loader_ref = &loader;
         self.submit_and_wait(
             "the top-level acceleration structure build",
@@ -430,7 +431,7 @@ impl VulkanContext {
                 }
             },
         )?;
-        stats.tlas_bytes = sizes.acceleration_structure_size;
+        stats.tlas_bytes = tlas_size;
         // SAFETY: a live top-level structure of this device.
         let tlas_address = unsafe {
             loader.get_acceleration_structure_device_address(

@@ -16,6 +16,7 @@
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
+use crate::barrier::image_barrier;
 use crate::buffer::GpuBuffer;
 use crate::context::{VulkanContext, CHUNK_TIMEOUT};
 use crate::error::{Result, VkContext, VulkanError};
@@ -34,6 +35,16 @@ pub enum PresentSource<'a> {
         width: u32,
         height: u32,
     },
+}
+
+impl PresentSource<'_> {
+    /// Bytes of host pixels the source puts in the staging buffer (before the HUD's).
+    fn host_bytes(&self) -> u64 {
+        match self {
+            Self::Host { pixels, .. } => pixels.len() as u64 * 4,
+            Self::LastFrame => 0,
+        }
+    }
 }
 
 /// A small RGBA8 image drawn over the window's top-left corner at (`x`, `y`) (the on-screen figures),
@@ -327,10 +338,7 @@ impl VulkanContext {
             p.frame = None;
             p.frame = Some(OwnedImage::new(&shared, frame_size, format)?);
         }
-        let host_bytes = match source {
-            PresentSource::Host { pixels, .. } => pixels.len() as u64 * 4,
-            PresentSource::LastFrame => 0,
-        };
+        let host_bytes = source.host_bytes();
         let hud_bytes = hud.map_or(0, |h| h.pixels.len() as u64 * 4);
         let needed = host_bytes + hud_bytes;
         if needed > 0 && p.staging.as_ref().is_none_or(|s| s.size < needed) {
@@ -359,7 +367,8 @@ impl VulkanContext {
     }
 
     /// Records and submits the copies of one present into swapchain image `index`: source → frame image,
-    /// HUD → frame image corner, frame image → swapchain image (blit), then the layout for presenting.
+    /// frame image → swapchain image (blit), HUD → the swapchain image's corner, then the layout for
+    /// presenting.
     fn record_and_submit_copy(
         &mut self,
         index: u32,
@@ -379,10 +388,7 @@ impl VulkanContext {
             }
             PresentSource::Host { .. } => (staging.expect("staging holds the host frame"), 0),
         };
-        let hud_offset = match source {
-            PresentSource::Host { pixels, .. } => pixels.len() as u64 * 4,
-            PresentSource::LastFrame => 0,
-        };
+        let hud_offset = source.host_bytes();
         // The HUD goes straight onto the swapchain image, after the (possibly scaling) blit, so its text
         // stays sharp at any render scale. Its pixels are grey, so RGBA and BGRA read the same; other
         // swapchain formats get no HUD.
@@ -429,7 +435,7 @@ impl VulkanContext {
             |device, cb| {
                 // SAFETY: (whole closure) recording into a command buffer in the recording state; every
                 // buffer and image is alive until the submission's fence is waited on, and the regions
-                // lie inside them (the HUD copy is clipped to the frame).
+                // lie inside them (the HUD copy is clipped to the swapchain image).
                 unsafe {
                     // The kernel's writes (an earlier submission) and host writes before the copies.
                     let memory = [vk::MemoryBarrier::default()
@@ -486,15 +492,11 @@ impl VulkanContext {
                             vk::AccessFlags::TRANSFER_WRITE,
                         ),
                     ];
-                    device.cmd_pipeline_barrier(
-                        cb,
+                    let transfer = (
                         vk::PipelineStageFlags::TRANSFER,
                         vk::PipelineStageFlags::TRANSFER,
-                        vk::DependencyFlags::empty(),
-                        &[],
-                        &[],
-                        &to_blit,
                     );
+                    image_barrier(device, cb, transfer, &to_blit);
                     let corner = |w: u32, h: u32| {
                         [
                             vk::Offset3D::default(),
@@ -532,15 +534,7 @@ impl VulkanContext {
                             vk::AccessFlags::TRANSFER_WRITE,
                             vk::AccessFlags::TRANSFER_WRITE,
                         )];
-                        device.cmd_pipeline_barrier(
-                            cb,
-                            vk::PipelineStageFlags::TRANSFER,
-                            vk::PipelineStageFlags::TRANSFER,
-                            vk::DependencyFlags::empty(),
-                            &[],
-                            &[],
-                            &again,
-                        );
+                        image_barrier(device, cb, transfer, &again);
                         let region = [vk::BufferImageCopy::default()
                             .buffer_offset(hud_offset)
                             .buffer_row_length(h.width)
@@ -570,13 +564,13 @@ impl VulkanContext {
                         vk::AccessFlags::TRANSFER_WRITE,
                         vk::AccessFlags::empty(),
                     )];
-                    device.cmd_pipeline_barrier(
+                    image_barrier(
+                        device,
                         cb,
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                        vk::DependencyFlags::empty(),
-                        &[],
-                        &[],
+                        (
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                        ),
                         &to_present,
                     );
                 }

@@ -103,13 +103,7 @@ struct UserFoveation {
 
 impl UserFoveation {
     fn around(&self, gaze: [f32; 2]) -> FoveationParams {
-        FoveationParams {
-            gaze,
-            radius_fovea: self.radii_px[0],
-            radius_intermediate: self.radii_px[1],
-            spp: [self.spp[0], self.spp[1], self.spp[2], 0],
-            block_size: [self.blocks[0], self.blocks[1], self.blocks[2], 0],
-        }
+        FoveationParams::new(gaze, self.radii_px, self.spp, self.blocks)
     }
 }
 

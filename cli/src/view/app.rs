@@ -34,7 +34,7 @@ use crate::view::hud::render_hud;
 use crate::view::live::LiveRenderer;
 use crate::view::options::{GazeInput, ViewOptions};
 use crate::view::record::{median, stats_document, write_screenshot, FrameRecord};
-use crate::view::sampling::{frame_foveation, frame_spp, BudgetController};
+use crate::view::sampling::{frame_foveation, BudgetController};
 use crate::view::script::{ScriptEvent, ViewKey};
 
 /// Frames in one mean before the view stops rendering and waits (the image has converged far past
@@ -147,7 +147,6 @@ struct Viewer {
     frame_index_key: u32,
     next_idle_tick: Instant,
     records: Vec<FrameRecord>,
-    last_record: Option<FrameRecord>,
     last_foveation: Option<fovea_core::foveation::regions::FoveationParams>,
     screenshot_requested: bool,
     screenshots: Vec<String>,
@@ -219,7 +218,6 @@ impl Viewer {
             frame_index_key: 0,
             next_idle_tick: now,
             records: Vec::new(),
-            last_record: None,
             last_foveation: None,
             screenshot_requested: false,
             screenshots: Vec::new(),
@@ -256,9 +254,41 @@ impl Viewer {
     }
 
     fn view_changed_since_mean(&self) -> bool {
-        self.reset_requested
-            || self.camera_moved
-            || self.mean_key.map(|k| k.config_index) != Some(self.config_index)
+        self.mean_is_stale(&self.mean_key_now())
+    }
+
+    /// The rendered size: the window's times `--render-scale`.
+    fn render_size(&self) -> [u32; 2] {
+        let scale = self.options.render_scale;
+        self.window_size
+            .map(|w| ((w as f32 * scale).round() as u32).max(1))
+    }
+
+    /// What a mean started now would depend on.
+    fn mean_key_now(&self) -> MeanKey {
+        MeanKey {
+            size: self.render_size(),
+            config_index: self.config_index,
+            uniform: self.uniform,
+            gaze: self.gaze,
+        }
+    }
+
+    /// Whether the running mean must restart before a frame with `key` joins it.
+    fn mean_is_stale(&self, key: &MeanKey) -> bool {
+        match self.mean_key {
+            None => true,
+            Some(old) => {
+                self.reset_requested
+                    || self.camera_moved
+                    || old.size != key.size
+                    || old.config_index != key.config_index
+                    || old.uniform != key.uniform
+                    || (!self.uniform
+                        && ((old.gaze[0] - key.gaze[0]).abs() >= 0.5
+                            || (old.gaze[1] - key.gaze[1]).abs() >= 0.5))
+            }
+        }
     }
 
     // ----- input --------------------------------------------------------------------------------------
@@ -490,8 +520,8 @@ impl Viewer {
         self.tapped.clear();
 
         let window = self.window_size;
-        let scale = self.options.render_scale;
-        let size = window.map(|w| ((w as f32 * scale).round() as u32).max(1));
+        let key = self.mean_key_now();
+        let size = key.size;
         // The gaze in rendered pixels.
         let gaze = [
             self.gaze[0] * size[0] as f32 / window[0] as f32,
@@ -499,27 +529,11 @@ impl Viewer {
         ];
         let config = self.options.configs[self.config_index].clone();
         let radii = self.options.radii.radii_px(size);
-        // A new mean? (The budget shift may only change on such frames.)
-        let key = MeanKey {
-            size,
-            config_index: self.config_index,
-            uniform: self.uniform,
-            gaze: self.gaze,
+        let accumulated_before = if self.mean_is_stale(&key) {
+            0
+        } else {
+            self.accumulated
         };
-        let restart = match self.mean_key {
-            None => true,
-            Some(old) => {
-                self.reset_requested
-                    || self.camera_moved
-                    || old.size != key.size
-                    || old.config_index != key.config_index
-                    || old.uniform != key.uniform
-                    || (!self.uniform
-                        && ((old.gaze[0] - key.gaze[0]).abs() >= 0.5
-                            || (old.gaze[1] - key.gaze[1]).abs() >= 0.5))
-            }
-        };
-        let accumulated_before = if restart { 0 } else { self.accumulated };
         self.reset_requested = false;
         self.camera_moved = false;
 
@@ -566,11 +580,11 @@ impl Viewer {
         self.accumulated = before + 1;
         self.mean_key = Some(key);
 
-        let frame_spp = if self.uniform {
-            [frame.foveation.spp[0]; 3]
-        } else {
-            frame_spp(config.spp, shift)
-        };
+        let frame_spp = [
+            frame.foveation.spp[0],
+            frame.foveation.spp[1],
+            frame.foveation.spp[2],
+        ];
         if before == 0 {
             self.effective_spp = [0; 3];
         }
@@ -602,12 +616,7 @@ impl Viewer {
         let frame_ms = tick_start.elapsed().as_secs_f64() * 1e3;
         // The first frame compiles the driver's pipelines (lavapipe: LLVM): not a measure of the budget.
         if !self.records.is_empty() {
-            let spp = if self.uniform {
-                [config.spp[0]; 3]
-            } else {
-                config.spp
-            };
-            self.budget.observe(frame_ms, spp);
+            self.budget.observe(frame_ms, config.spp_for(self.uniform));
         }
         let record = FrameRecord {
             frame: self.frame,
@@ -637,15 +646,16 @@ impl Viewer {
             self.screenshot_requested = false;
             self.screenshot(&record)?;
         }
-        if self.window.is_some() && !self.options.quiet && self.frame.is_multiple_of(30) {
-            if let Some(w) = &self.window {
-                w.set_title(&format!(
-                    "fovea view - {:.1} ms, {} - {} frames accumulated",
-                    frame_ms, config.name, self.accumulated
-                ));
-            }
+        if let (Some(w), false, true) = (
+            &self.window,
+            self.options.quiet,
+            self.frame.is_multiple_of(30),
+        ) {
+            w.set_title(&format!(
+                "fovea view - {:.1} ms, {} - {} frames accumulated",
+                frame_ms, config.name, self.accumulated
+            ));
         }
-        self.last_record = Some(record.clone());
         if self.records.len() < 1_000_000 {
             self.records.push(record);
         }
@@ -735,15 +745,16 @@ impl Viewer {
         let renderer = self.renderer.as_mut().expect("the window is open");
         let mean = renderer.mean_hdr()?;
         let foveation = self.last_foveation.expect("a frame was rendered");
+        let pose = self.fly.pose();
         let details = json!({
             "backend": renderer.backend_name,
             "device": renderer.device,
             "scene": self.options.scene,
             "seed": self.options.seed,
             "camera": {
-                "eye": self.fly.pose().eye.to_array(),
-                "forward": self.fly.pose().forward.to_array(),
-                "fov_y_degrees": self.fly.fov_y_degrees(),
+                "eye": pose.eye.to_array(),
+                "forward": pose.forward.to_array(),
+                "fov_y_degrees": pose.fov_y_degrees,
             },
         });
         let path = write_screenshot(

@@ -19,8 +19,8 @@ use crate::view::script::Script;
 pub enum RadiiRule {
     Pixels([f32; 2]),
     Eccentricity {
-        degrees: [f32; 2],
-        display_cm: [f32; 2],
+        degrees: values::Eccentricity,
+        display_cm: values::DisplayCm,
         distance_cm: f32,
     },
 }
@@ -35,16 +35,10 @@ impl RadiiRule {
                 degrees,
                 display_cm,
                 distance_cm,
-            } => {
-                let display = fovea_core::foveation::display::DisplayGeometry {
-                    width_cm: display_cm[0],
-                    height_cm: display_cm[1],
-                    distance_cm,
-                    resolution: size,
-                };
-                degrees
-                    .map(|e| fovea_core::foveation::display::eccentricity_to_radius_px(e, &display))
-            }
+            } => values::eccentricity_radii(
+                degrees,
+                &values::display_at(display_cm, distance_cm, size),
+            ),
         }
     }
 }
@@ -107,14 +101,13 @@ impl ViewOptions {
         let (spp, blocks) = (args.spp.0, args.blocks.0);
         // The display model, checked as `render` checks it (the window's size only scales the radii;
         // its aspect follows the window, so no aspect warning here).
-        let (display, _) =
-            values::display_geometry(args.display.display_cm, args.display.distance_cm, [1, 1])?;
+        values::display_geometry(args.display.display_cm, args.display.distance_cm, [1, 1])?;
         let radii = match args.radii {
             Some(r) => RadiiRule::Pixels(r.0),
             None => RadiiRule::Eccentricity {
-                degrees: args.display.eccentricity.0,
-                display_cm: [display.width_cm, display.height_cm],
-                distance_cm: display.distance_cm,
+                degrees: args.display.eccentricity,
+                display_cm: args.display.display_cm,
+                distance_cm: args.display.distance_cm,
             },
         };
         let convention = if args.gaze_pixels {

@@ -115,14 +115,15 @@ pub fn write_screenshot(
     })?;
     let stem = dir.join(format!("fovea_view_{:05}", record.frame));
     let png = stem.with_extension("png");
-    write_image(&png, ImageFormat::Png, mean, exposure)?;
+    // Tone-mapped once, for the PNG and the overlay.
+    let rgb = tonemapped_rgb8(mean, exposure);
+    write_png(&png, mean.width, mean.height, &rgb)?;
     write_image(
         &stem.with_extension("exr"),
         ImageFormat::Exr,
         mean,
         exposure,
     )?;
-    let rgb = tonemapped_rgb8(mean, exposure);
     let overlay_path = dir.join(format!("fovea_view_{:05}_regions.png", record.frame));
     write_png(
         &overlay_path,

@@ -26,6 +26,17 @@ pub struct SamplingConfig {
 }
 
 impl SamplingConfig {
+    /// The samples per pixel / block the configuration asks for: its own, or with `uniform` the
+    /// fovea's everywhere.
+    #[must_use]
+    pub fn spp_for(&self, uniform: bool) -> [u32; 3] {
+        if uniform {
+            [self.spp[0]; 3]
+        } else {
+            self.spp
+        }
+    }
+
     fn new(spp: [u32; 3], blocks: [u32; 3], radius_scale: f32) -> Self {
         let mut name = format!("{}/{}/{}", spp[0], spp[1], spp[2]);
         if blocks != [1, 2, 4] {
@@ -91,13 +102,12 @@ pub fn frame_foveation(
         f.gaze = gaze;
         return f;
     }
-    FoveationParams {
+    FoveationParams::new(
         gaze,
-        radius_fovea: radii[0] * config.radius_scale,
-        radius_intermediate: radii[1] * config.radius_scale,
-        spp: [spp[0], spp[1], spp[2], 0],
-        block_size: [config.blocks[0], config.blocks[1], config.blocks[2], 0],
-    }
+        radii.map(|r| r * config.radius_scale),
+        spp,
+        config.blocks,
+    )
 }
 
 /// Chooses the budget shift from measured frame times.

@@ -55,12 +55,25 @@ impl FoveationParams {
     #[inline]
     #[must_use]
     pub fn paper(gaze: [f32; 2], radius_fovea: f32, radius_intermediate: f32) -> Self {
+        Self::new(
+            gaze,
+            [radius_fovea, radius_intermediate],
+            [32, 16, 8],
+            [1, 2, 4],
+        )
+    }
+
+    /// Foveation around `gaze` with region radii `radii` (fovea, intermediate) in pixels, `spp` samples
+    /// per fovea pixel, intermediate block and periphery block, and `blocks` block edges.
+    #[inline]
+    #[must_use]
+    pub fn new(gaze: [f32; 2], radii: [f32; 2], spp: [u32; 3], blocks: [u32; 3]) -> Self {
         Self {
             gaze,
-            radius_fovea,
-            radius_intermediate,
-            spp: [32, 16, 8, 0],
-            block_size: [1, 2, 4, 0],
+            radius_fovea: radii[0],
+            radius_intermediate: radii[1],
+            spp: [spp[0], spp[1], spp[2], 0],
+            block_size: [blocks[0], blocks[1], blocks[2], 0],
         }
     }
 
