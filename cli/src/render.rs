@@ -200,7 +200,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         eprintln!(
             "scene: {} triangles, {} materials, {} textures, {} lights ({} emissive triangles); BVH {} 4-wide nodes (depth {}), {} 8-wide nodes; {:.1} MiB packed",
             s.triangle_count,
-            scene.packed.materials.len(),
+            scene.packed.materials.list.len(),
             s.texture_count,
             s.light_count,
             s.emissive_triangle_count,
@@ -224,7 +224,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             scene.warnings.len()
         );
     }
-    if scene.packed.lights.is_empty() {
+    if scene.packed.lights.list.is_empty() {
         eprintln!(
             "warning: the scene has no light and no sky: the image will be black (add --sky R,G,B \
              or --point-light X,Y,Z,R,G,B)"

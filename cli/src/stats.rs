@@ -79,7 +79,7 @@ pub fn build_report(
         "features": feature_names(scene.packed.features().0),
         "path_features": feature_names(first.render.path_features),
         "triangles": scene.triangle_count,
-        "lights": scene.packed.lights.len(),
+        "lights": scene.packed.lights.list.len(),
         "load_ms": scene.load_ms,
         "bvh_ms": scene.bvh_ms,
         "pack_ms": scene.pack_ms,

@@ -9,7 +9,7 @@ use bytemuck::{Pod, Zeroable};
 pub const BINDING_GLOBALS: u32 = 0;
 /// `Bvh4Node` array.
 pub const BINDING_NODES: u32 = 1;
-/// Triangle to block lane (`SceneView::triangle_lanes`), `u32`.
+/// Triangle to block lane (`GeometryArrays::triangle_lanes`), `u32`.
 pub const BINDING_TRIANGLE_LANES: u32 = 2;
 /// `TriangleInfo` array.
 pub const BINDING_TRIANGLE_INFO: u32 = 3;
@@ -393,7 +393,7 @@ pub fn probe_scene_eval<F: crate::scene::Features, S: crate::scene::SceneSource>
         ];
     } else if selector == PROBE_SCENE_TRIANGLE_LIGHT {
         let triangle = r0[3].to_bits();
-        if (triangle as usize) < scene.triangle_lanes.len() {
+        if (triangle as usize) < scene.geometry.triangle_lanes.len() {
             let p = probe_vec3(r0);
             let s = crate::lights::triangle::sample(
                 scene,

@@ -86,7 +86,7 @@ impl SplitMix64 {
     }
 }
 
-/// Triangles packed one per block, each in lane 0: the blocks and the `SceneView::triangle_lanes` that
+/// Triangles packed one per block, each in lane 0: the blocks and the `GeometryArrays::triangle_lanes` that
 /// name them (the layout of a BVH whose leaves hold one triangle each, so a leaf word `leaf_slot(i, 1)`
 /// names triangle `i`). `cut_out` lists the triangles whose material has an alpha cut-out.
 pub(crate) fn one_triangle_per_block(

@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 use fovea_core::bvh::closest_hit;
 use fovea_core::geometry::Ray;
 use fovea_core::scene::{
-    is_leaf_word, triangle_lane, SceneView, BLOCK_LANE_CUTOUT, INVALID_INDEX, TEXTURE_RGBA16,
+    is_leaf_word, triangle_lane, GeometryArrays, SceneView, BLOCK_LANE_CUTOUT, INVALID_INDEX,
+    TEXTURE_RGBA16,
 };
 use fovea_scene::bvh::blocks::leaf_slots;
 use fovea_scene::bvh::{BvhBuildOptions, MAX_NODE_DEPTH};
@@ -107,30 +108,30 @@ fn finite(v: &[f32]) -> bool {
 
 /// Invariants every packed scene must satisfy (what the CPU and GPU kernels rely on).
 pub fn check_packed(p: &PackedScene, triangles: usize) {
-    assert_eq!(p.triangle_lanes.len(), triangles);
-    assert_eq!(p.triangle_info.len(), triangles);
-    assert!(!p.nodes.is_empty());
+    assert_eq!(p.geometry.triangle_lanes.len(), triangles);
+    assert_eq!(p.geometry.triangle_info.len(), triangles);
+    assert!(!p.geometry.nodes.is_empty());
     assert!(p.stats.bvh.max_depth <= MAX_NODE_DEPTH, "{:?}", p.stats.bvh);
     assert!(finite(&p.bounds_min.to_array()) && finite(&p.bounds_max.to_array()));
-    let vertices = p.normals.len().max(p.uvs.len());
-    for (i, info) in p.triangle_info.iter().enumerate() {
+    let vertices = p.geometry.normals.len().max(p.geometry.uvs.len());
+    for (i, info) in p.geometry.triangle_info.iter().enumerate() {
         let t = p.triangle(i);
         assert!(
             finite(&t.v0.to_array()) && finite(&t.v1.to_array()) && finite(&t.v2.to_array()),
             "{t:?}"
         );
-        assert!((info.material as usize) < p.materials.len());
+        assert!((info.material as usize) < p.materials.list.len());
         if vertices > 0 {
             assert!(info.vertices.iter().all(|&v| (v as usize) < vertices));
         }
     }
-    for n in &p.normals {
+    for n in &p.geometry.normals {
         assert!(finite(n));
     }
-    for uv in &p.uvs {
+    for uv in &p.geometry.uvs {
         assert!(finite(uv));
     }
-    for m in &p.materials {
+    for m in &p.materials.list {
         assert!(finite(&m.base_color) && finite(&m.emission), "{m:?}");
         assert!(m.emission[..3].iter().all(|&e| e >= 0.0), "{m:?}");
         assert!(finite(&[
@@ -148,13 +149,13 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
             m.emission_texture,
             m.alpha_texture,
         ] {
-            assert!(t == INVALID_INDEX || (t as usize) < p.textures.len());
+            assert!(t == INVALID_INDEX || (t as usize) < p.materials.textures.len());
         }
     }
-    for t in &p.textures {
+    for t in &p.materials.textures {
         let words = if t.flags & TEXTURE_RGBA16 != 0 { 2 } else { 1 };
         let end = t.offset as u64 + words * u64::from(t.width) * u64::from(t.height);
-        assert!(t.width > 0 && t.height > 0 && end <= p.texels.len() as u64);
+        assert!(t.width > 0 && t.height > 0 && end <= p.materials.texels.len() as u64);
         assert!(
             words == 1 || t.offset % 2 == 0,
             "RGBA16 textures start at an even word"
@@ -163,10 +164,10 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
     // Every leaf names blocks that exist, whose first `count` lanes hold its triangles, each triangle
     // exactly once over all leaves, at the lane `triangle_lanes` names.
     let mut seen = vec![false; triangles];
-    for node in &p.nodes {
+    for node in &p.geometry.nodes {
         for (_, first, count) in leaf_slots(node) {
             for k in 0..count.div_ceil(4) * 4 {
-                let lane = p.blocks[first + k / 4].index[k % 4];
+                let lane = p.geometry.blocks[first + k / 4].index[k % 4];
                 if k < count {
                     let t = (lane & !BLOCK_LANE_CUTOUT) as usize;
                     assert!(
@@ -174,7 +175,7 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
                         "leaf lane {k} names triangle {t}"
                     );
                     assert_eq!(
-                        p.triangle_lanes[t],
+                        p.geometry.triangle_lanes[t],
                         triangle_lane((first + k / 4) as u32, (k % 4) as u32),
                         "triangle {t}'s lane"
                     );
@@ -192,23 +193,33 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
         w.sort_unstable();
         w
     };
-    let four = leaf_words(p.nodes.iter().flat_map(|n| n.slots.to_array()).collect());
-    let eight = leaf_words(p.wide_nodes.iter().flat_map(|n| n.slots).collect());
+    let four = leaf_words(
+        p.geometry
+            .nodes
+            .iter()
+            .flat_map(|n| n.slots.to_array())
+            .collect(),
+    );
+    let eight = leaf_words(p.geometry.wide_nodes.iter().flat_map(|n| n.slots).collect());
     assert_eq!(four, eight, "8-wide leaves");
-    assert!(!p.wide_nodes.is_empty());
-    if !p.lights.is_empty() {
-        assert_eq!(p.light_cdf.len(), p.lights.len() + 1);
-        assert!(p.light_cdf.windows(2).all(|w| w[0] <= w[1]));
-        assert_eq!(*p.light_cdf.last().unwrap(), 1.0);
-        let sum: f32 = p.lights.iter().map(|l| l.pmf).sum();
-        assert!(p.lights.iter().all(|l| l.pmf.is_finite() && l.pmf >= 0.0));
+    assert!(!p.geometry.wide_nodes.is_empty());
+    if !p.lights.list.is_empty() {
+        assert_eq!(p.lights.cdf.len(), p.lights.list.len() + 1);
+        assert!(p.lights.cdf.windows(2).all(|w| w[0] <= w[1]));
+        assert_eq!(*p.lights.cdf.last().unwrap(), 1.0);
+        let sum: f32 = p.lights.list.iter().map(|l| l.pmf).sum();
+        assert!(p
+            .lights
+            .list
+            .iter()
+            .all(|l| l.pmf.is_finite() && l.pmf >= 0.0));
         assert!((sum - 1.0).abs() < 1e-3, "pmf sum {sum}");
-        for l in &p.lights {
+        for l in &p.lights.list {
             assert!(finite(&l.position) && finite(&l.direction) && finite(&l.intensity));
         }
     }
-    if !p.triangle_light.is_empty() {
-        assert_eq!(p.triangle_light.len(), triangles);
+    if !p.lights.triangle_light.is_empty() {
+        assert_eq!(p.lights.triangle_light.len(), triangles);
     }
 }
 
@@ -252,7 +263,10 @@ pub fn cast_rays(p: &PackedScene) {
     }
     // The same rays through the 4-wide tree alone (what the GPU traverses) find the same distances.
     let four_wide = SceneView {
-        wide_nodes: &[],
+        geometry: GeometryArrays {
+            wide_nodes: &[],
+            ..view.geometry
+        },
         ..view
     };
     for ray in &rays {

@@ -37,8 +37,8 @@ use fovea_core::scene::SceneSlices as SceneTexels;
 #[cfg(target_arch = "spirv")]
 use fovea_core::scene::SceneTexels;
 use fovea_core::scene::{
-    Bvh4Node, FeatureFlags, Light, Material, SceneGlobals, SceneView, TextureInfo, TriangleBlock,
-    TriangleInfo,
+    Bvh4Node, EnvironmentArrays, FeatureFlags, GeometryArrays, Light, LightArrays, Material,
+    MaterialArrays, SceneGlobals, SceneView, TextureInfo, TriangleBlock, TriangleInfo,
 };
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
@@ -80,6 +80,80 @@ const _: () = {
     assert!(FEATURES_ALL == 0xFFFF);
 };
 
+/// Declares a compute entry point that binds the whole scene, group by group as
+/// [`SceneView`] holds it, and runs `$body` with it as `$scene`: the one list of scene bindings
+/// (`BINDING_GLOBALS ..= BINDING_ENVIRONMENT_CONDITIONAL`, `BINDING_TRIANGLE_BLOCKS` and, in the
+/// ray-query module, `BINDING_HARDWARE_TRAVERSAL`) for every entry point that reads the scene. A new
+/// scene array is one parameter and one field here. `$features` is the [`FeatureFlags`] the view
+/// carries.
+macro_rules! scene_entry_point {
+    (
+        $(#[$meta:meta])*
+        pub fn $name:ident($($param:tt)*) with_scene($scene:ident, $features:expr) $body:block
+    ) => {
+        $(#[$meta])*
+        pub fn $name(
+            $($param)*
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] globals: &SceneGlobals,
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] nodes: &[Bvh4Node],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] triangle_lanes: &[u32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] triangle_info: &[TriangleInfo],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] normals: &[[f32; 4]],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] uvs: &[[f32; 2]],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] materials: &[Material],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] textures: &[TextureInfo],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] texels: &[u32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[Light],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] light_cdf: &[f32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] triangle_light: &[u32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 12)]
+            environment_texels: &[[f32; 4]],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 13)]
+            environment_marginal_cdf: &[f32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 14)]
+            environment_conditional_cdf: &[f32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 23)]
+            triangle_blocks: &[TriangleBlock],
+            #[cfg(feature = "ray-query")]
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 25)]
+            hardware: &[u32],
+        ) {
+            let $scene = SceneView {
+                features: $features,
+                globals: *globals,
+                geometry: GeometryArrays {
+                    nodes,
+                    #[cfg(not(target_arch = "spirv"))]
+                    wide_nodes: &[],
+                    #[cfg(feature = "ray-query")]
+                    hardware,
+                    triangle_lanes,
+                    blocks: triangle_blocks,
+                    triangle_info,
+                    normals,
+                    uvs,
+                },
+                materials: MaterialArrays {
+                    list: materials,
+                    textures,
+                    texels,
+                },
+                lights: LightArrays {
+                    list: lights,
+                    cdf: light_cdf,
+                    triangle_light,
+                },
+                environment: EnvironmentArrays {
+                    texels: environment_texels,
+                    marginal_cdf: environment_marginal_cdf,
+                    conditional_cdf: environment_conditional_cdf,
+                },
+            };
+            $body
+        }
+    };
+}
+
 /// The linear invocation index of a (possibly 2D) dispatch of 64-wide workgroups.
 #[inline]
 #[must_use]
@@ -87,79 +161,40 @@ pub fn invocation_index(id: UVec3, num_workgroups: UVec3) -> u32 {
     id.x + id.y * (num_workgroups.x * WORKGROUP_SIZE)
 }
 
-/// Pass 1a: the chunk's `block_count · spp` samples into `samples` (rgb, w = 0; sample `i` is sample
-/// `i % spp` of block `i / spp`), invocation `i` rendering samples `i`, `i + n`, `i + 2n`, ... for `n`
-/// invocations in the dispatch, one sample after another (core's `render_sample_stream`). `features`
-/// is a specialization constant: the host sets the scene's feature mask when it creates the pipeline, so
-/// the driver drops the code of absent features.
-#[spirv(compute(threads(64)))]
-pub fn render_samples(
-    #[spirv(spec_constant(id = 0, default = 65535))] features: u32,
-    #[spirv(global_invocation_id)] id: UVec3,
-    #[spirv(num_workgroups)] num_workgroups: UVec3,
-    #[spirv(push_constant)] pc: &KernelPushConstants,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] globals: &SceneGlobals,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] nodes: &[Bvh4Node],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] triangle_lanes: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] triangle_info: &[TriangleInfo],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] normals: &[[f32; 4]],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] uvs: &[[f32; 2]],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] materials: &[Material],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] textures: &[TextureInfo],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] texels: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[Light],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] light_cdf: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] triangle_light: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] environment_texels: &[[f32; 4]],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 13)] environment_marginal_cdf: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 14)]
-    environment_conditional_cdf: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] blocks: &[OwnedBlock],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] samples: &mut [[f32; 4]],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
-    #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 23)] triangle_blocks: &[TriangleBlock],
-    #[cfg(feature = "ray-query")]
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 25)]
-    hardware: &[u32],
-) {
-    let i = invocation_index(id, num_workgroups);
-    if pc.spp == 0 {
-        return;
+scene_entry_point! {
+    /// Pass 1a: the chunk's `block_count · spp` samples into `samples` (rgb, w = 0; sample `i` is sample
+    /// `i % spp` of block `i / spp`), invocation `i` rendering samples `i`, `i + n`, `i + 2n`, ... for `n`
+    /// invocations in the dispatch, one sample after another (core's `render_sample_stream`). `features`
+    /// is a specialization constant: the host sets the scene's feature mask when it creates the pipeline, so
+    /// the driver drops the code of absent features.
+    #[spirv(compute(threads(64)))]
+    pub fn render_samples(
+        #[spirv(spec_constant(id = 0, default = 65535))] features: u32,
+        #[spirv(global_invocation_id)] id: UVec3,
+        #[spirv(num_workgroups)] num_workgroups: UVec3,
+        #[spirv(push_constant)] pc: &KernelPushConstants,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] blocks: &[OwnedBlock],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] samples: &mut [[f32; 4]],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+        #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
+    ) with_scene(scene, FeatureFlags(features)) {
+        let i = invocation_index(id, num_workgroups);
+        if pc.spp == 0 {
+            return;
+        }
+        let invocations = num_workgroups.x * num_workgroups.y * WORKGROUP_SIZE;
+        render_sample_stream(
+            &scene,
+            scene_texels,
+            frame,
+            blocks,
+            pc.block_count,
+            pc.spp,
+            i,
+            invocations,
+            samples,
+        );
     }
-    let scene = SceneView {
-        features: FeatureFlags(features),
-        globals: *globals,
-        nodes,
-        #[cfg(feature = "ray-query")]
-        hardware,
-        triangle_lanes,
-        blocks: triangle_blocks,
-        triangle_info,
-        normals,
-        uvs,
-        materials,
-        textures,
-        texels,
-        lights,
-        light_cdf,
-        triangle_light,
-        environment_texels,
-        environment_marginal_cdf,
-        environment_conditional_cdf,
-    };
-    let invocations = num_workgroups.x * num_workgroups.y * WORKGROUP_SIZE;
-    render_sample_stream(
-        &scene,
-        scene_texels,
-        frame,
-        blocks,
-        pc.block_count,
-        pc.spp,
-        i,
-        invocations,
-        samples,
-    );
 }
 
 /// Pass 1b: invocation `j < block_count` averages the `spp` samples of block `j` (summed in order from
@@ -332,66 +367,27 @@ pub fn probe(
     outputs[base + 1] = out[1];
 }
 
-/// Cross-backend scene probe: item `i < item_count` evaluates scene function `spp` (a `PROBE_SCENE_*`
-/// selector of [`kernel_abi`]: BVH traversal, light and environment sampling and densities) over the
-/// bound scene, with every feature on, and writes its two output records
-/// ([`kernel_abi::probe_scene_eval`]).
-#[spirv(compute(threads(64)))]
-pub fn probe_scene(
-    #[spirv(global_invocation_id)] id: UVec3,
-    #[spirv(num_workgroups)] num_workgroups: UVec3,
-    #[spirv(push_constant)] pc: &KernelPushConstants,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] globals: &SceneGlobals,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] nodes: &[Bvh4Node],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] triangle_lanes: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] triangle_info: &[TriangleInfo],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] normals: &[[f32; 4]],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] uvs: &[[f32; 2]],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] materials: &[Material],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] textures: &[TextureInfo],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] texels: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[Light],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] light_cdf: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] triangle_light: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] environment_texels: &[[f32; 4]],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 13)] environment_marginal_cdf: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 14)]
-    environment_conditional_cdf: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] inputs: &[[f32; 4]],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] outputs: &mut [[f32; 4]],
-    #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 23)] triangle_blocks: &[TriangleBlock],
-    #[cfg(feature = "ray-query")]
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 25)]
-    hardware: &[u32],
-) {
-    let i = invocation_index(id, num_workgroups);
-    if i >= pc.item_count {
-        return;
+scene_entry_point! {
+    /// Cross-backend scene probe: item `i < item_count` evaluates scene function `spp` (a `PROBE_SCENE_*`
+    /// selector of [`kernel_abi`]: BVH traversal, light and environment sampling and densities) over the
+    /// bound scene, with every feature on, and writes its two output records
+    /// ([`kernel_abi::probe_scene_eval`]).
+    #[spirv(compute(threads(64)))]
+    pub fn probe_scene(
+        #[spirv(global_invocation_id)] id: UVec3,
+        #[spirv(num_workgroups)] num_workgroups: UVec3,
+        #[spirv(push_constant)] pc: &KernelPushConstants,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] inputs: &[[f32; 4]],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] outputs: &mut [[f32; 4]],
+        #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
+    ) with_scene(scene, FeatureFlags(FEATURES_ALL)) {
+        let i = invocation_index(id, num_workgroups);
+        if i >= pc.item_count {
+            return;
+        }
+        let out = kernel_abi::probe_scene_eval(pc.spp, &scene, scene_texels, inputs, i);
+        let base = (i * kernel_abi::PROBE_OUTPUT_RECORDS) as usize;
+        outputs[base] = out[0];
+        outputs[base + 1] = out[1];
     }
-    let scene = SceneView {
-        features: FeatureFlags(FEATURES_ALL),
-        globals: *globals,
-        nodes,
-        #[cfg(feature = "ray-query")]
-        hardware,
-        triangle_lanes,
-        blocks: triangle_blocks,
-        triangle_info,
-        normals,
-        uvs,
-        materials,
-        textures,
-        texels,
-        lights,
-        light_cdf,
-        triangle_light,
-        environment_texels,
-        environment_marginal_cdf,
-        environment_conditional_cdf,
-    };
-    let out = kernel_abi::probe_scene_eval(pc.spp, &scene, scene_texels, inputs, i);
-    let base = (i * kernel_abi::PROBE_OUTPUT_RECORDS) as usize;
-    outputs[base] = out[0];
-    outputs[base + 1] = out[1];
 }

@@ -38,8 +38,8 @@ pub fn load_packed(path: &Path, environment: &Environment) -> PackedScene {
 pub fn emissive_triangles(packed: &PackedScene) -> Vec<u32> {
     (0..packed.triangle_count() as u32)
         .filter(|&t| {
-            let m = packed.triangle_info[t as usize].material as usize;
-            packed.materials[m].is_emissive()
+            let m = packed.geometry.triangle_info[t as usize].material as usize;
+            packed.materials.list[m].is_emissive()
         })
         .collect()
 }

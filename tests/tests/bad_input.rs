@@ -205,7 +205,7 @@ fn degenerate_triangles_and_zero_area_emitters_are_dropped_with_counts() {
     );
     assert_eq!(s.emissive_triangle_count(), 0);
     let packed = pack_scene(s, &Environment::None, &BvhBuildOptions::default());
-    assert!(packed.lights.is_empty());
+    assert!(packed.lights.list.is_empty());
 }
 
 #[test]
@@ -316,7 +316,7 @@ fn a_scene_without_lights_packs_without_lights() {
     let (s, all) = expect_warnings("no_light.obj");
     assert!(all.contains("2 triangles have no material"), "{all}");
     let packed = pack_scene(s, &Environment::None, &BvhBuildOptions::default());
-    assert!(packed.lights.is_empty() && packed.light_cdf.is_empty());
+    assert!(packed.lights.list.is_empty() && packed.lights.cdf.is_empty());
     assert_eq!(packed.globals.light_count, 0);
 }
 

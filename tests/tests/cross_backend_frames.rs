@@ -261,6 +261,7 @@ fn small_scenes_render_alike(traversal: fovea_vulkan::Traversal) {
             assert!(
                 packed
                     .materials
+                    .list
                     .iter()
                     .any(|m| m.flags & fovea_core::scene::MATERIAL_LAMBERTIAN != 0),
                 "{}: no Lambertian material",

@@ -70,7 +70,10 @@ fn scenes() -> Vec<(&'static str, PackedScene, fovea_core::camera::Camera)> {
 
 fn assert_same_hits(name: &str, scene: &PackedScene, rays: &[Ray], t_max: f32) -> usize {
     let view = scene.view();
-    assert!(!view.wide_nodes.is_empty(), "{name}: no 8-wide tree");
+    assert!(
+        !view.geometry.wide_nodes.is_empty(),
+        "{name}: no 8-wide tree"
+    );
     let mut hits = [Hit::miss(); PACKET_SIZE];
     closest_hits_packet(&view, &SceneSlices, rays, t_max, &mut hits);
     let mut found = 0;

@@ -729,7 +729,8 @@ fn adversarial_scene(environment: &Environment) -> PackedScene {
 fn shading_point(rng: &mut Rng, scene: &SceneView) -> Vec3 {
     match rng.below(6) {
         0 => {
-            let t = SceneSlices.triangle(scene, rng.below(scene.triangle_lanes.len() as u32));
+            let t =
+                SceneSlices.triangle(scene, rng.below(scene.geometry.triangle_lanes.len() as u32));
             let (a, b) = (rng.f(), rng.f());
             let (a, b) = if a + b > 1.0 {
                 (1.0 - a, 1.0 - b)
@@ -985,7 +986,7 @@ fn scene_functions_are_finite_on_vulkan() {
                                 Ok(false)
                             } else if t > 0.0
                                 && t.is_finite()
-                                && (tri as usize) < scene.triangle_lanes.len()
+                                && (tri as usize) < scene.geometry.triangle_lanes.len()
                                 && o[0][1].is_finite()
                                 && o[0][2].is_finite()
                             {

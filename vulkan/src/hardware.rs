@@ -77,6 +77,7 @@ impl Drop for HardwareScene {
 fn is_cutout(packed: &PackedScene, material: u32) -> bool {
     packed
         .materials
+        .list
         .get(material as usize)
         .is_some_and(|m| m.flags & MATERIAL_ALPHA_CUTOUT != 0)
 }
@@ -87,7 +88,7 @@ fn triangle_order(packed: &PackedScene) -> (Vec<[f32; 3]>, Vec<u32>, u64) {
     let mut opaque: Vec<u32> = Vec::with_capacity(n);
     let mut cutout: Vec<u32> = Vec::new();
     for t in 0..n {
-        if is_cutout(packed, packed.triangle_info[t].material) {
+        if is_cutout(packed, packed.geometry.triangle_info[t].material) {
             cutout.push(t as u32);
         } else {
             opaque.push(t as u32);

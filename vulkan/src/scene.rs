@@ -3,23 +3,17 @@ use std::sync::Arc;
 
 use ash::vk;
 use fovea_core::kernel_abi::{
-    BINDING_ENVIRONMENT_CONDITIONAL, BINDING_ENVIRONMENT_MARGINAL, BINDING_ENVIRONMENT_TEXELS,
-    BINDING_GLOBALS, BINDING_HARDWARE_TRAVERSAL, BINDING_LIGHTS, BINDING_LIGHT_CDF,
-    BINDING_MATERIALS, BINDING_NODES, BINDING_NORMALS, BINDING_TEXELS, BINDING_TEXTURES,
-    BINDING_TRIANGLE_BLOCKS, BINDING_TRIANGLE_INFO, BINDING_TRIANGLE_LANES, BINDING_TRIANGLE_LIGHT,
-    BINDING_UVS,
+    BINDING_GLOBALS, BINDING_HARDWARE_TRAVERSAL, BINDING_MATERIALS, BINDING_NODES, BINDING_NORMALS,
+    BINDING_TEXELS, BINDING_TEXTURES, BINDING_TRIANGLE_BLOCKS, BINDING_TRIANGLE_INFO,
+    BINDING_TRIANGLE_LANES, BINDING_TRIANGLE_LIGHT, BINDING_UVS,
 };
 use fovea_core::scene::{FeatureFlags, SceneGlobals, TexelOffsets, INVALID_INDEX};
-use fovea_scene::pack::PackedScene;
+use fovea_scene::pack::{ArrayRead, PackedScene};
 
 use crate::buffer::GpuBuffer;
 use crate::context::VulkanContext;
 use crate::error::{Result, VkContext, VulkanError};
 use crate::instance::Shared;
-
-/// Number of scene bindings (`BINDING_GLOBALS` ..= `BINDING_ENVIRONMENT_CONDITIONAL`,
-/// `BINDING_TRIANGLE_BLOCKS` and `BINDING_HARDWARE_TRAVERSAL`).
-pub const SCENE_BINDINGS: usize = 17;
 
 /// Descriptor range of an empty array: 4 bytes, so the kernel's `OpArrayLength` is 0 for every element type
 /// of 8 bytes or more (an empty array must look empty: core tests `normals.is_empty()`, `uvs.is_empty()`,
@@ -121,63 +115,23 @@ impl GpuScene {
     pub fn upload(ctx: &mut VulkanContext, packed: &PackedScene) -> Result<Self> {
         ctx.check_usable()?;
         let triangle_light: Vec<u32> =
-            if packed.triangle_light.is_empty() && packed.triangle_count() > 0 {
+            if packed.lights.triangle_light.is_empty() && packed.triangle_count() > 0 {
                 vec![INVALID_INDEX; packed.triangle_count()]
             } else {
-                packed.triangle_light.clone()
+                packed.lights.triangle_light.clone()
             };
 
         // The scene texel buffer: the arrays core reads through `SceneSource`, each from an offset that
         // suits both a storage-buffer binding and a texel index (nodes first, at texel 0).
-        let sourced: [(u32, &str, &[u8]); 9] = [
-            (
-                BINDING_NODES,
-                "BVH nodes",
-                bytemuck::cast_slice(&packed.nodes),
-            ),
-            (
-                BINDING_TRIANGLE_BLOCKS,
-                "triangle blocks",
-                bytemuck::cast_slice(&packed.blocks),
-            ),
-            (
-                BINDING_TRIANGLE_LANES,
-                "triangle lanes",
-                bytemuck::cast_slice(&packed.triangle_lanes),
-            ),
-            (
-                BINDING_TRIANGLE_INFO,
-                "triangle info",
-                bytemuck::cast_slice(&packed.triangle_info),
-            ),
-            (
-                BINDING_NORMALS,
-                "normals",
-                bytemuck::cast_slice(&packed.normals),
-            ),
-            (
-                BINDING_UVS,
-                "texture coordinates",
-                bytemuck::cast_slice(&packed.uvs),
-            ),
-            (
-                BINDING_MATERIALS,
-                "materials",
-                bytemuck::cast_slice(&packed.materials),
-            ),
-            (
-                BINDING_TEXTURES,
-                "texture infos",
-                bytemuck::cast_slice(&packed.textures),
-            ),
-            (
-                BINDING_TEXELS,
-                "texels",
-                bytemuck::cast_slice(&packed.texels),
-            ),
-        ];
+        let arrays = packed.gpu_arrays();
+        let sourced: Vec<(u32, &str, &[u8])> = arrays
+            .iter()
+            .filter(|a| a.read == ArrayRead::Texels)
+            .map(|a| (a.binding, a.name, a.bytes))
+            .collect();
+        debug_assert_eq!(sourced.first().map(|a| a.0), Some(BINDING_NODES));
         let align = ctx.limits.min_storage_buffer_offset_alignment.max(16);
-        let mut offsets = [0u64; 9];
+        let mut offsets = vec![0u64; sourced.len()];
         let mut texels_size = 0u64;
         for (k, (_, what, data)) in sourced.iter().enumerate() {
             ctx.check_size(what, data.len() as u64)?;
@@ -215,44 +169,20 @@ impl GpuScene {
             },
             ..packed.globals
         }];
-        // The other bindings, in binding order, with buffers of their own.
-        let own: [(u32, &str, &[u8]); 7] = [
-            (
-                BINDING_GLOBALS,
-                "scene globals",
-                bytemuck::cast_slice(&globals),
-            ),
-            (
-                BINDING_LIGHTS,
-                "lights",
-                bytemuck::cast_slice(&packed.lights),
-            ),
-            (
-                BINDING_LIGHT_CDF,
-                "light CDF",
-                bytemuck::cast_slice(&packed.light_cdf),
-            ),
-            (
-                BINDING_TRIANGLE_LIGHT,
-                "triangle lights",
-                bytemuck::cast_slice(&triangle_light),
-            ),
-            (
-                BINDING_ENVIRONMENT_TEXELS,
-                "environment texels",
-                bytemuck::cast_slice(&packed.environment_texels),
-            ),
-            (
-                BINDING_ENVIRONMENT_MARGINAL,
-                "environment marginal CDF",
-                bytemuck::cast_slice(&packed.environment_marginal_cdf),
-            ),
-            (
-                BINDING_ENVIRONMENT_CONDITIONAL,
-                "environment conditional CDF",
-                bytemuck::cast_slice(&packed.environment_conditional_cdf),
-            ),
-        ];
+        // The other bindings, with buffers of their own.
+        let mut own: Vec<(u32, &str, &[u8])> = vec![(
+            BINDING_GLOBALS,
+            "scene globals",
+            bytemuck::cast_slice(&globals),
+        )];
+        own.extend(arrays.iter().filter(|a| a.read == ArrayRead::Storage).map(
+            |a| match a.binding {
+                BINDING_TRIANGLE_LIGHT => {
+                    (a.binding, a.name, bytemuck::cast_slice(&triangle_light))
+                }
+                _ => (a.binding, a.name, a.bytes),
+            },
+        ));
         let mut total = texels_size;
         for (_, what, data) in &own {
             ctx.check_size(what, data.len() as u64)?;
@@ -271,7 +201,7 @@ impl GpuScene {
         let range_of = |len: usize| if len == 0 { EMPTY_RANGE } else { len as u64 };
         let parts: Vec<(u64, &[u8])> = sourced
             .iter()
-            .zip(offsets)
+            .zip(offsets.iter().copied())
             .map(|((_, _, data), offset)| (offset, *data))
             .collect();
         let mut buffers = vec![ctx.upload(
@@ -280,7 +210,7 @@ impl GpuScene {
             texels_size,
             vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER,
         )?];
-        let mut bindings = Vec::with_capacity(SCENE_BINDINGS);
+        let mut bindings = Vec::with_capacity(sourced.len() + own.len() + 1);
         for (k, (binding, _, data)) in sourced.iter().enumerate() {
             let range = BufferRange {
                 buffer: 0,

@@ -392,7 +392,7 @@ fn run_scene(
         point_lights,
         renderer.wants_wide_bvh(),
     )?;
-    if scene.packed.lights.is_empty() {
+    if scene.packed.lights.list.is_empty() {
         note(
             bar,
             false,

@@ -58,12 +58,12 @@ pub fn fnv1a64(bytes: &[u8]) -> u64 {
 pub fn packed_scene_hash(packed: &PackedScene) -> u64 {
     let mut h = Fnv1a64::default();
     h.write(bytemuck::bytes_of(&packed.globals));
-    h.write(bytemuck::cast_slice(&packed.materials));
-    h.write(bytemuck::cast_slice(&packed.textures));
-    h.write(bytemuck::cast_slice(&packed.texels));
-    h.write(&(packed.lights.len() as u64).to_le_bytes());
-    h.write(bytemuck::cast_slice(&packed.lights));
-    h.write(bytemuck::cast_slice(&packed.environment_texels));
+    h.write(bytemuck::cast_slice(&packed.materials.list));
+    h.write(bytemuck::cast_slice(&packed.materials.textures));
+    h.write(bytemuck::cast_slice(&packed.materials.texels));
+    h.write(&(packed.lights.list.len() as u64).to_le_bytes());
+    h.write(bytemuck::cast_slice(&packed.lights.list));
+    h.write(bytemuck::cast_slice(&packed.environment.texels));
     h.write(&(packed.triangle_count() as u64).to_le_bytes());
     for v in [packed.bounds_min, packed.bounds_max] {
         for c in v.to_array() {

@@ -78,7 +78,7 @@ pub fn run(options: ViewOptions) -> Result<()> {
         &options.lighting.point_lights,
         !use_gpu,
     )?;
-    if scene.packed.lights.is_empty() {
+    if scene.packed.lights.list.is_empty() {
         eprintln!(
             "warning: the scene has no light and no sky: the image will be black (add --sky R,G,B \
              or --point-light X,Y,Z,R,G,B)"

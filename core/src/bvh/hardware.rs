@@ -45,7 +45,7 @@ fn query<F: Features, S: SceneSource>(
     t_max: f32,
     any: bool,
 ) -> Hit {
-    let map = scene.hardware;
+    let map = scene.geometry.hardware;
     let flags = if any {
         RayFlags::TERMINATE_ON_FIRST_HIT
     } else {

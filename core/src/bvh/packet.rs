@@ -121,7 +121,7 @@ pub fn closest_hits_packet<F: Features, S: SceneSource>(
 ) {
     assert!(rays.len() <= PACKET_SIZE && hits.len() >= rays.len());
     let count = rays.len();
-    let packet = if count == 0 || scene.wide_nodes.is_empty() {
+    let packet = if count == 0 || scene.geometry.wide_nodes.is_empty() {
         None
     } else {
         PacketBox::new(rays)
@@ -135,7 +135,7 @@ pub fn closest_hits_packet<F: Features, S: SceneSource>(
     for hit in hits.iter_mut().take(count) {
         *hit = Hit::miss();
     }
-    let nodes = scene.wide_nodes;
+    let nodes = scene.geometry.wide_nodes;
     let mut watertight: ArrayVec<WatertightRay, PACKET_SIZE> = ArrayVec::new();
     for ray in rays {
         watertight.push(WatertightRay::new(ray));

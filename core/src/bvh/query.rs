@@ -27,7 +27,7 @@ pub fn closest_hit_with<F: Features, S: SceneSource>(
     #[cfg(all(target_arch = "spirv", feature = "ray-query"))]
     return super::hardware::closest_hit(scene, source, ray, t_max);
     #[cfg(not(target_arch = "spirv"))]
-    if !scene.wide_nodes.is_empty() {
+    if !scene.geometry.wide_nodes.is_empty() {
         return super::wide::closest_hit_wide(scene, source, ray, t_max);
     }
     #[allow(unreachable_code)]
@@ -52,7 +52,7 @@ pub fn any_hit_with<F: Features, S: SceneSource>(
     #[cfg(all(target_arch = "spirv", feature = "ray-query"))]
     return super::hardware::any_hit(scene, source, ray, t_max);
     #[cfg(not(target_arch = "spirv"))]
-    if !scene.wide_nodes.is_empty() {
+    if !scene.geometry.wide_nodes.is_empty() {
         return super::wide::any_hit_wide(scene, source, ray, t_max);
     }
     #[allow(unreachable_code)]

@@ -49,7 +49,7 @@ const ROUND_UP: f32 = 1.0 + 2.0 * GAMMA3;
 /// Scales the (non-negative) entry distance of a slab test down.
 const ROUND_DOWN: f32 = 1.0 - 2.0 * GAMMA3;
 
-/// The closest hit of a ray: `triangle` indexes [`SceneView::triangle_info`] (BVH leaf order) and is
+/// The closest hit of a ray: `triangle` indexes [`GeometryArrays::triangle_info`](crate::scene::GeometryArrays::triangle_info) (BVH leaf order) and is
 /// [`INVALID_INDEX`] on a miss; `b1`, `b2` are the barycentrics of `v1`, `v2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -389,7 +389,7 @@ pub(crate) fn traverse<F: Features, S: SceneSource>(
     any: bool,
 ) -> Hit {
     let mut best = Hit::miss();
-    if scene.nodes.is_empty() {
+    if scene.geometry.nodes.is_empty() {
         return best;
     }
     let watertight = WatertightRay::new(ray);
@@ -498,7 +498,8 @@ mod tests {
     use super::*;
     use crate::bvh::query::{any_hit, closest_hit};
     use crate::scene::{
-        leaf_slot, Material, TriangleBlock, TriangleInfo, TrianglePositions, MATERIAL_ALPHA_CUTOUT,
+        leaf_slot, GeometryArrays, Material, MaterialArrays, TriangleBlock, TriangleInfo,
+        TrianglePositions, MATERIAL_ALPHA_CUTOUT,
     };
     use crate::test_support::one_triangle_per_block;
     use glam::Vec3;
@@ -520,10 +521,16 @@ mod tests {
         materials: &'a [Material],
     ) -> SceneView<'a> {
         SceneView {
-            nodes,
-            blocks,
-            triangle_info: info,
-            materials,
+            geometry: GeometryArrays {
+                nodes,
+                blocks,
+                triangle_info: info,
+                ..GeometryArrays::default()
+            },
+            materials: MaterialArrays {
+                list: materials,
+                ..MaterialArrays::default()
+            },
             ..SceneView::empty()
         }
     }

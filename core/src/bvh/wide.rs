@@ -278,7 +278,7 @@ fn traverse_wide<F: Features, S: SceneSource>(
     t_max: f32,
     any: bool,
 ) -> Hit {
-    let nodes = scene.wide_nodes;
+    let nodes = scene.geometry.wide_nodes;
     let mut best = Hit::miss();
     if nodes.is_empty() {
         return best;
@@ -364,7 +364,7 @@ fn traverse_wide<F: Features, S: SceneSource>(
 }
 
 /// The closest hit of `ray` with `0 < t < t_max` over the scene's 8-wide tree
-/// ([`SceneView::wide_nodes`]), skipping alpha cut-out holes: what the 4-wide traversal finds over the
+/// ([`GeometryArrays::wide_nodes`](crate::scene::GeometryArrays::wide_nodes)), skipping alpha cut-out holes: what the 4-wide traversal finds over the
 /// tree it was collapsed from, up to which of two equally near triangles is reported. Misses
 /// everything if the scene has no 8-wide tree.
 #[must_use]

@@ -146,7 +146,7 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
             } else if use_bsdf_hits && le != Vec3::ZERO {
                 let mut weight = 1.0;
                 if mis && scene.globals.environment_light != INVALID_INDEX {
-                    let light_pdf = scene.lights[scene.globals.environment_light as usize].pmf
+                    let light_pdf = scene.lights.list[scene.globals.environment_light as usize].pmf
                         * environment::pdf(scene, ray.direction);
                     weight = power_heuristic(bsdf_pdf, light_pdf);
                 }
@@ -173,10 +173,10 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
                 radiance += throughput * le;
             } else if use_bsdf_hits {
                 let mut weight = 1.0;
-                if mis && !scene.triangle_light.is_empty() {
-                    let light = scene.triangle_light[hit.triangle as usize];
+                if mis && !scene.lights.triangle_light.is_empty() {
+                    let light = scene.lights.triangle_light[hit.triangle as usize];
                     if light != INVALID_INDEX {
-                        let light_pdf = scene.lights[light as usize].pmf
+                        let light_pdf = scene.lights.list[light as usize].pmf
                             * solid_angle_pdf(
                                 scene,
                                 source,

@@ -46,7 +46,7 @@ pub fn radiance<F: Features>(scene: &SceneView<F>, d: Vec3) -> Vec3 {
         let uv = direction_to_uv(d);
         let x = ((uv.x * g.environment_width as f32) as u32).min(g.environment_width - 1);
         let y = ((uv.y * g.environment_height as f32) as u32).min(g.environment_height - 1);
-        let texel = scene.environment_texels[(y * g.environment_width + x) as usize];
+        let texel = scene.environment.texels[(y * g.environment_width + x) as usize];
         scale * Vec3::new(texel[0], texel[1], texel[2])
     } else {
         Vec3::ZERO
@@ -68,8 +68,8 @@ pub fn pdf<F: Features>(scene: &SceneView<F>, d: Vec3) -> f32 {
             return 0.0;
         }
         let p = pdf_2d(
-            scene.environment_marginal_cdf,
-            scene.environment_conditional_cdf,
+            scene.environment.marginal_cdf,
+            scene.environment.conditional_cdf,
             g.environment_width,
             g.environment_height,
             uv,
@@ -88,8 +88,8 @@ pub fn sample<F: Features>(scene: &SceneView<F>, u: Vec2) -> LightSample {
         (square_to_uniform_sphere(u), UNIFORM_SPHERE_PDF)
     } else if g.environment_kind == ENVIRONMENT_MAP {
         let s = sample_2d(
-            scene.environment_marginal_cdf,
-            scene.environment_conditional_cdf,
+            scene.environment.marginal_cdf,
+            scene.environment.conditional_cdf,
             g.environment_width,
             g.environment_height,
             u,
@@ -151,7 +151,7 @@ mod tests {
     /// follows luminance × sin θ(texel centre) / sin θ.
     #[test]
     fn chi2_environment_map() {
-        use crate::scene::{SceneGlobals, ENVIRONMENT_MAP};
+        use crate::scene::{EnvironmentArrays, SceneGlobals, ENVIRONMENT_MAP};
         use crate::test_support::chi2::{chi2_test, family_share, sample_count, Grid};
         let n = sample_count(1_000_000, 8_000_000);
         let pi = core::f64::consts::PI;
@@ -213,9 +213,11 @@ mod tests {
                     environment_light: 0,
                     ..SceneGlobals::default()
                 },
-                environment_texels: &texels,
-                environment_marginal_cdf: &marginal,
-                environment_conditional_cdf: &conditional,
+                environment: EnvironmentArrays {
+                    texels: &texels,
+                    marginal_cdf: &marginal,
+                    conditional_cdf: &conditional,
+                },
                 ..SceneView::empty()
             };
             // Rows: θ edges at half texels. Columns: the grid's φ' around +y is -φ of the map, and

@@ -75,8 +75,8 @@ pub fn sample_light<F: Features, S: SceneSource>(
     if count == 0 {
         return LightSample::none();
     }
-    let choice = sample_cdf(scene.light_cdf, 0, count, u_select);
-    let light = scene.lights[choice.index as usize];
+    let choice = sample_cdf(scene.lights.cdf, 0, count, u_select);
+    let light = scene.lights.list[choice.index as usize];
     // Light kinds the scene lacks (by its feature set) are never tested for.
     let features = scene.features;
     let mut sample = if features.has(FEATURE_EMISSIVE_TRIANGLES) && light.kind == LIGHT_TRIANGLE {

@@ -132,7 +132,10 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::math::pack_vec3;
-    use crate::scene::{Material, SceneSlices, TriangleBlock, TriangleInfo, TrianglePositions};
+    use crate::scene::{
+        GeometryArrays, Material, MaterialArrays, SceneSlices, TriangleBlock, TriangleInfo,
+        TrianglePositions,
+    };
     use crate::test_support::chi2::{
         chi2_test, family_share, geometric, join, sample_count, uniform_cos, Grid,
     };
@@ -146,10 +149,16 @@ mod tests {
         materials: &'a [Material],
     ) -> SceneView<'a> {
         SceneView {
-            blocks,
-            triangle_lanes,
-            triangle_info: info,
-            materials,
+            geometry: GeometryArrays {
+                blocks,
+                triangle_lanes,
+                triangle_info: info,
+                ..GeometryArrays::default()
+            },
+            materials: MaterialArrays {
+                list: materials,
+                ..MaterialArrays::default()
+            },
             ..SceneView::empty()
         }
     }

@@ -16,7 +16,7 @@ pub fn interpolate_uv<F: Features, S: SceneSource>(
     b1: f32,
     b2: f32,
 ) -> Vec2 {
-    if !scene.features.has(FEATURE_UVS) || scene.uvs.is_empty() {
+    if !scene.features.has(FEATURE_UVS) || scene.geometry.uvs.is_empty() {
         return Vec2::ZERO;
     }
     let v = source.triangle_info(scene, triangle).vertices;

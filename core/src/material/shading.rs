@@ -71,7 +71,7 @@ pub fn surface_point<F: Features, S: SceneSource>(
 
     // Interpolated vertex normal, if the scene has them for all three vertices.
     let mut ns = ng;
-    if scene.features.has(FEATURE_SHADING_NORMALS) && !scene.normals.is_empty() {
+    if scene.features.has(FEATURE_SHADING_NORMALS) && !scene.geometry.normals.is_empty() {
         let n0 = vec3_from(source.normal(scene, info.vertices[0]));
         let n1 = vec3_from(source.normal(scene, info.vertices[1]));
         let n2 = vec3_from(source.normal(scene, info.vertices[2]));
@@ -88,7 +88,7 @@ pub fn surface_point<F: Features, S: SceneSource>(
         && material.normal_texture != INVALID_INDEX)
         || (scene.features.has(FEATURE_LOBE_ANISOTROPY) && !(material.anisotropic == 0.0));
     let mut tangent = Vec3::ZERO;
-    if needs_tangent && scene.features.has(FEATURE_UVS) && !scene.uvs.is_empty() {
+    if needs_tangent && scene.features.has(FEATURE_UVS) && !scene.geometry.uvs.is_empty() {
         let t0 = Vec2::from(source.uv(scene, info.vertices[0]));
         let t1 = Vec2::from(source.uv(scene, info.vertices[1]));
         let t2 = Vec2::from(source.uv(scene, info.vertices[2]));
@@ -154,7 +154,7 @@ pub fn surface_point<F: Features, S: SceneSource>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Material, TriangleInfo, TrianglePositions};
+    use crate::scene::{GeometryArrays, Material, MaterialArrays, TriangleInfo, TrianglePositions};
 
     /// Tangent frames stay finite and orthonormal for texture parameterisations whose determinant is
     /// tiny (just above the 1e-20 cut-off) next to large edges, where the squared length of
@@ -180,11 +180,17 @@ mod tests {
             // det = duv1.x * duv2.y - duv1.y * duv2.x = d * d.
             let uvs = [[0.0, 0.0], [d, 0.0], [0.0, d]];
             let view = SceneView {
-                blocks: &blocks,
-                triangle_lanes: &lanes,
-                triangle_info: core::slice::from_ref(&info),
-                uvs: &uvs,
-                materials: &materials,
+                geometry: GeometryArrays {
+                    blocks: &blocks,
+                    triangle_lanes: &lanes,
+                    triangle_info: core::slice::from_ref(&info),
+                    uvs: &uvs,
+                    ..GeometryArrays::default()
+                },
+                materials: MaterialArrays {
+                    list: &materials,
+                    ..MaterialArrays::default()
+                },
                 ..SceneView::empty()
             };
             let hit = Hit {

@@ -133,7 +133,7 @@ pub(crate) use slot_box_methods;
 /// described by one word, `slots[i]`:
 /// - an interior node: its index, below [`SLOT_LEAF`];
 /// - a leaf of `count` triangles: [`leaf_slot`]`(first, count)`, the triangles in the blocks `first ..`
-///   of [`super::SceneView::blocks`] (in a built, not yet packed, BVH, the triangles `first .. first +
+///   of [`super::GeometryArrays::blocks`] (in a built, not yet packed, BVH, the triangles `first .. first +
 ///   count` of the leaf-ordered arrays), read back with [`leaf_first`] and [`leaf_count`];
 /// - empty: [`SLOT_EMPTY`]. An empty slot's box is inverted (`min = f32::MAX`, `max = -f32::MAX`),
 ///   which the slab test (with near and far planes chosen by the ray's direction signs) always misses,
@@ -249,7 +249,7 @@ pub struct TriangleBlock {
     pub v2x: Vec4,
     pub v2y: Vec4,
     pub v2z: Vec4,
-    /// Each lane's triangle (BVH leaf order, the index of [`super::SceneView::triangle_info`]), with
+    /// Each lane's triangle (BVH leaf order, the index of [`super::GeometryArrays::triangle_info`]), with
     /// [`BLOCK_LANE_CUTOUT`] set
     /// when its material has an alpha cut-out (so traversal runs the cut-out test only for such
     /// triangles, without reading their material first).
@@ -331,21 +331,21 @@ impl TriangleBlock {
     }
 }
 
-/// The [`super::SceneView::triangle_lanes`] word of lane `lane` (0 to 3) of block `block`.
+/// The [`super::GeometryArrays::triangle_lanes`] word of lane `lane` (0 to 3) of block `block`.
 #[inline]
 #[must_use]
 pub const fn triangle_lane(block: u32, lane: u32) -> u32 {
     4 * block + lane
 }
 
-/// The block and the lane a [`super::SceneView::triangle_lanes`] word names (undoes [`triangle_lane`]).
+/// The block and the lane a [`super::GeometryArrays::triangle_lanes`] word names (undoes [`triangle_lane`]).
 #[inline]
 #[must_use]
 pub const fn block_and_lane(word: u32) -> (u32, usize) {
     (word / 4, (word % 4) as usize)
 }
 
-/// The positions in the lane of `blocks` that the [`super::SceneView::triangle_lanes`] word `word`
+/// The positions in the lane of `blocks` that the [`super::GeometryArrays::triangle_lanes`] word `word`
 /// names (the CPU's read; the GPU reads the block from its texel buffer).
 #[inline(always)]
 #[must_use]
@@ -356,7 +356,7 @@ pub fn positions_at(blocks: &[TriangleBlock], word: u32) -> TrianglePositions {
 
 /// What shading needs to know about one triangle besides its positions (16 bytes), in BVH leaf order.
 ///
-/// `vertices` index the per-vertex arrays [`super::SceneView::normals`] and [`super::SceneView::uvs`];
+/// `vertices` index the per-vertex arrays [`super::GeometryArrays::normals`] and [`super::GeometryArrays::uvs`];
 /// those arrays are empty when the scene needs no shading normals or no texture coordinates.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -485,6 +485,17 @@ impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emission[0] > 0.0 || self.emission[1] > 0.0 || self.emission[2] > 0.0
     }
+
+    /// Whether the material reads any texture (and so needs the vertices' texture coordinates).
+    #[inline]
+    #[must_use]
+    pub fn has_texture(&self) -> bool {
+        self.base_color_texture != INVALID_INDEX
+            || self.metallic_roughness_texture != INVALID_INDEX
+            || self.normal_texture != INVALID_INDEX
+            || self.emission_texture != INVALID_INDEX
+            || self.alpha_texture != INVALID_INDEX
+    }
 }
 
 /// [`TextureInfo::flags`]: the texels are RGBA16, two `u32` each (`R | G << 16`, `B | A << 16`, 16-bit
@@ -494,7 +505,7 @@ impl Material {
 /// each (R in the low byte), used as stored.
 pub const TEXTURE_RGBA16: u32 = 1;
 
-/// Where one texture's texels lie in [`super::SceneView::texels`] (16 bytes): `offset` is the index of its
+/// Where one texture's texels lie in [`super::MaterialArrays::texels`] (16 bytes): `offset` is the index of its
 /// first `u32`; texels are row-major, top row first, RGBA8 or, with [`TEXTURE_RGBA16`] in `flags`,
 /// RGBA16. Addressing wraps (glTF's default REPEAT).
 #[repr(C)]
@@ -534,7 +545,7 @@ pub const LIGHT_DIRECTIONAL: u32 = 4;
 /// One entry of the light list that next-event estimation picks from (64 bytes).
 ///
 /// Lights are chosen with probability `pmf`, proportional to an estimate of their power; the matching
-/// cumulative table is [`super::SceneView::light_cdf`].
+/// cumulative table is [`super::LightArrays::cdf`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Light {

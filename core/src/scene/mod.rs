@@ -11,4 +11,4 @@ pub use layout::*;
 #[cfg(target_arch = "spirv")]
 pub use source::SceneTexels;
 pub use source::{SceneSlices, SceneSource};
-pub use view::SceneView;
+pub use view::{EnvironmentArrays, GeometryArrays, LightArrays, MaterialArrays, SceneView};

@@ -40,7 +40,7 @@ pub trait SceneSource {
     /// Node `index` of the BVH (root 0).
     fn node<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Bvh4Node;
     /// The positions of triangle `index` (BVH leaf order), from its block lane
-    /// ([`SceneView::triangle_lanes`]).
+    /// ([`GeometryArrays::triangle_lanes`](crate::scene::GeometryArrays::triangle_lanes)).
     fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions;
     /// The positions of triangle block `index`, which leaves name (its `index` field is not read: see
     /// [`Self::block_lanes`]).
@@ -72,59 +72,62 @@ pub struct SceneSlices;
 impl SceneSource for SceneSlices {
     #[inline(always)]
     fn node<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Bvh4Node {
-        scene.nodes[index as usize]
+        scene.geometry.nodes[index as usize]
     }
 
     #[inline(always)]
     fn triangle<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TrianglePositions {
-        positions_at(scene.blocks, scene.triangle_lanes[index as usize])
+        positions_at(
+            scene.geometry.blocks,
+            scene.geometry.triangle_lanes[index as usize],
+        )
     }
 
     #[inline(always)]
     fn block<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TriangleBlock {
-        scene.blocks[index as usize]
+        scene.geometry.blocks[index as usize]
     }
 
     #[inline(always)]
     fn block_lanes<F: Features>(&self, scene: &SceneView<F>, index: u32) -> glam::UVec4 {
-        scene.blocks[index as usize].index
+        scene.geometry.blocks[index as usize].index
     }
 
     #[inline(always)]
     fn triangle_info<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TriangleInfo {
-        scene.triangle_info[index as usize]
+        scene.geometry.triangle_info[index as usize]
     }
 
     #[inline(always)]
     fn material<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Material {
-        scene.materials[index as usize]
+        scene.materials.list[index as usize]
     }
 
     #[inline(always)]
     fn normal<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 4] {
-        scene.normals[index as usize]
+        scene.geometry.normals[index as usize]
     }
 
     #[inline(always)]
     fn uv<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 2] {
-        scene.uvs[index as usize]
+        scene.geometry.uvs[index as usize]
     }
 
     #[inline(always)]
     fn texture<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TextureInfo {
-        scene.textures[index as usize]
+        scene.materials.textures[index as usize]
     }
 
     #[inline(always)]
     fn texel<F: Features>(&self, scene: &SceneView<F>, index: u32) -> u32 {
-        scene.texels[index as usize]
+        scene.materials.texels[index as usize]
     }
 
     #[inline(always)]
     fn texel_pair<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [u32; 2] {
         [
-            scene.texels[index as usize],
-            scene.texels[index as usize + 1],
+            scene.materials.texels[index as usize],
+            scene.materials.texels[index as usize + 1],
         ]
     }
 }

@@ -1,5 +1,12 @@
 //! [`SceneView`]: borrowed slices of the packed scene, the one argument every traversal and shading
 //! function takes. The CPU host builds it from `Vec`s, the GPU kernel from storage buffers.
+//!
+//! The arrays come in four groups, one per concept: [`GeometryArrays`] (what traversal and hit
+//! reconstruction read), [`MaterialArrays`] (materials and their textures), [`LightArrays`] (what
+//! next-event estimation picks from) and [`EnvironmentArrays`] (the environment map and its sampling
+//! tables). A new array joins one group: its field here, its packer in `fovea_scene::pack`, its binding in
+//! [`crate::kernel_abi`] and the kernel's parameter list; the views, uploads and sizes follow from
+//! the group.
 use super::features::{FeatureFlags, Features};
 use super::layout::{
     Bvh4Node, Light, Material, SceneGlobals, TextureInfo, TriangleBlock, TriangleInfo,
@@ -7,16 +14,9 @@ use super::layout::{
 #[cfg(not(target_arch = "spirv"))]
 use crate::bvh::wide::Bvh8Node;
 
-/// The packed scene as borrowed slices. Arrays a scene does not need are empty.
-///
-/// `F` is the set of optional features the shading code may meet (see [`super::features`]): the
-/// default [`FeatureFlags`] is a run-time mask, [`super::StaticFeatures`] a compile-time one for the
-/// CPU's specialised paths.
-#[derive(Clone, Copy)]
-pub struct SceneView<'a, F: Features = FeatureFlags> {
-    /// Which optional features may occur; a superset of the scene's own (tested, never required).
-    pub features: F,
-    pub globals: SceneGlobals,
+/// The geometry: the BVH, the triangles' positions and per-vertex attributes.
+#[derive(Clone, Copy, Default)]
+pub struct GeometryArrays<'a> {
     /// 4-wide BVH nodes, root first (see [`Bvh4Node`]); empty for an empty scene.
     pub nodes: &'a [Bvh4Node],
     /// The CPU's 8-wide tree over the same leaves as `nodes` ([`crate::bvh::wide`]);
@@ -40,51 +40,69 @@ pub struct SceneView<'a, F: Features = FeatureFlags> {
     pub normals: &'a [[f32; 4]],
     /// Per-vertex texture coordinates. Empty when no material has a texture.
     pub uvs: &'a [[f32; 2]],
-    pub materials: &'a [Material],
+}
+
+/// The materials and the textures they read.
+#[derive(Clone, Copy, Default)]
+pub struct MaterialArrays<'a> {
+    /// The materials, indexed by [`TriangleInfo::material`].
+    pub list: &'a [Material],
+    /// One record per texture: where its texels are and how they are stored.
     pub textures: &'a [TextureInfo],
-    /// RGBA8 texels of all textures, one `u32` per texel.
+    /// Texels of all textures: one `u32` per RGBA8 texel, two per RGBA16 one.
     pub texels: &'a [u32],
-    /// The light list next-event estimation picks from.
-    pub lights: &'a [Light],
+}
+
+/// The lights next-event estimation picks from.
+#[derive(Clone, Copy, Default)]
+pub struct LightArrays<'a> {
+    /// The light list.
+    pub list: &'a [Light],
     /// Cumulative light-selection table: `light_count + 1` entries from 0 to 1.
-    pub light_cdf: &'a [f32],
-    /// For each triangle, its index in `lights`, or `INVALID_INDEX`. Empty without emissive triangles.
+    pub cdf: &'a [f32],
+    /// For each triangle, its index in `list`, or `INVALID_INDEX`. Empty without emissive triangles.
     pub triangle_light: &'a [u32],
+}
+
+/// The environment map and its importance-sampling tables (empty unless the scene has a map).
+#[derive(Clone, Copy, Default)]
+pub struct EnvironmentArrays<'a> {
     /// Equirectangular environment map texels (linear RGB, `w` unused), row-major, top row first.
-    pub environment_texels: &'a [[f32; 4]],
-    /// Environment importance sampling: marginal CDF over rows (`height + 1` entries).
-    pub environment_marginal_cdf: &'a [f32],
-    /// Environment importance sampling: one CDF per row (`height * (width + 1)` entries).
-    pub environment_conditional_cdf: &'a [f32],
+    pub texels: &'a [[f32; 4]],
+    /// Marginal CDF over rows (`height + 1` entries).
+    pub marginal_cdf: &'a [f32],
+    /// One CDF per row (`height * (width + 1)` entries).
+    pub conditional_cdf: &'a [f32],
+}
+
+/// The packed scene as borrowed slices. Arrays a scene does not need are empty.
+///
+/// `F` is the set of optional features the shading code may meet (see [`super::features`]): the
+/// default [`FeatureFlags`] is a run-time mask, [`super::StaticFeatures`] a compile-time one for the
+/// CPU's specialised paths.
+#[derive(Clone, Copy)]
+pub struct SceneView<'a, F: Features = FeatureFlags> {
+    /// Which optional features may occur; a superset of the scene's own (tested, never required).
+    pub features: F,
+    pub globals: SceneGlobals,
+    pub geometry: GeometryArrays<'a>,
+    pub materials: MaterialArrays<'a>,
+    pub lights: LightArrays<'a>,
+    pub environment: EnvironmentArrays<'a>,
 }
 
 impl SceneView<'_> {
     /// A scene without geometry, materials, lights or environment, with every feature on: the base that
-    /// tests fill in with struct update syntax (`SceneView { nodes, ..SceneView::empty() }`).
+    /// tests fill in with struct update syntax (`SceneView { geometry, ..SceneView::empty() }`).
     #[must_use]
     pub fn empty() -> Self {
         SceneView {
             features: FeatureFlags::ALL,
             globals: SceneGlobals::default(),
-            nodes: &[],
-            #[cfg(not(target_arch = "spirv"))]
-            wide_nodes: &[],
-            #[cfg(all(target_arch = "spirv", feature = "ray-query"))]
-            hardware: &[],
-            triangle_lanes: &[],
-            blocks: &[],
-            triangle_info: &[],
-            normals: &[],
-            uvs: &[],
-            materials: &[],
-            textures: &[],
-            texels: &[],
-            lights: &[],
-            light_cdf: &[],
-            triangle_light: &[],
-            environment_texels: &[],
-            environment_marginal_cdf: &[],
-            environment_conditional_cdf: &[],
+            geometry: GeometryArrays::default(),
+            materials: MaterialArrays::default(),
+            lights: LightArrays::default(),
+            environment: EnvironmentArrays::default(),
         }
     }
 }
@@ -97,25 +115,10 @@ impl<'a, F: Features> SceneView<'a, F> {
         SceneView {
             features,
             globals: self.globals,
-            nodes: self.nodes,
-            #[cfg(not(target_arch = "spirv"))]
-            wide_nodes: self.wide_nodes,
-            #[cfg(all(target_arch = "spirv", feature = "ray-query"))]
-            hardware: self.hardware,
-            triangle_lanes: self.triangle_lanes,
-            blocks: self.blocks,
-            triangle_info: self.triangle_info,
-            normals: self.normals,
-            uvs: self.uvs,
+            geometry: self.geometry,
             materials: self.materials,
-            textures: self.textures,
-            texels: self.texels,
             lights: self.lights,
-            light_cdf: self.light_cdf,
-            triangle_light: self.triangle_light,
-            environment_texels: self.environment_texels,
-            environment_marginal_cdf: self.environment_marginal_cdf,
-            environment_conditional_cdf: self.environment_conditional_cdf,
+            environment: self.environment,
         }
     }
 }

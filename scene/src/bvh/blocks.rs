@@ -34,7 +34,7 @@ pub fn leaf_slots(node: &Bvh4Node) -> impl Iterator<Item = (usize, usize, usize)
 pub struct LeafBlocks {
     /// Every leaf's triangles, four to a block, in leaf order.
     pub blocks: Vec<TriangleBlock>,
-    /// For each triangle, its block and lane ([`triangle_lane`]): `SceneView::triangle_lanes`.
+    /// For each triangle, its block and lane ([`triangle_lane`]): `GeometryArrays::triangle_lanes`.
     pub triangle_lanes: Vec<u32>,
 }
 

@@ -285,7 +285,9 @@ mod tests {
     use fovea_core::geometry::triangle::WatertightRay;
     use fovea_core::geometry::Ray;
     use fovea_core::scene::{leaf_first, leaf_slot, SLOT_EMPTY};
-    use fovea_core::scene::{Material, SceneView, TriangleBlock, TriangleInfo};
+    use fovea_core::scene::{
+        GeometryArrays, Material, MaterialArrays, SceneView, TriangleBlock, TriangleInfo,
+    };
     use glam::{UVec4, Vec3, Vec4};
 
     /// SplitMix64 for reproducible test data.
@@ -390,21 +392,30 @@ mod tests {
 
         fn view(&self) -> SceneView<'_> {
             SceneView {
-                features: fovea_core::scene::FeatureFlags::ALL,
-                nodes: &self.nodes,
-                triangle_lanes: &self.triangle_lanes,
-                blocks: &self.blocks,
-                triangle_info: &self.info,
-                materials: &self.materials,
+                geometry: GeometryArrays {
+                    nodes: &self.nodes,
+                    triangle_lanes: &self.triangle_lanes,
+                    blocks: &self.blocks,
+                    triangle_info: &self.info,
+                    ..GeometryArrays::default()
+                },
+                materials: MaterialArrays {
+                    list: &self.materials,
+                    ..MaterialArrays::default()
+                },
                 ..SceneView::empty()
             }
         }
 
         /// [`Self::view`] with the 8-wide tree, which traversal then takes instead.
         fn wide_view(&self) -> SceneView<'_> {
+            let view = self.view();
             SceneView {
-                wide_nodes: &self.wide_nodes,
-                ..self.view()
+                geometry: GeometryArrays {
+                    wide_nodes: &self.wide_nodes,
+                    ..view.geometry
+                },
+                ..view
             }
         }
     }
