@@ -111,46 +111,20 @@ pub struct ViewArgs {
     /// instead of 0..1 of the window with the origin at the top left (as Tobii reports).
     #[arg(long)]
     pub gaze_pixels: bool,
-    /// Start with every pixel at the fovea's samples per pixel (toggle with U).
-    #[arg(long)]
-    pub uniform: bool,
-    /// Samples per pixel (fovea) and per block (intermediate, periphery); the first configuration C
-    /// cycles through.
-    #[arg(long, default_value = "32,16,8", value_name = "F,I,P")]
-    pub spp: SppTriple,
-    /// Block edge in pixels per region; each must divide the next.
-    #[arg(long, default_value = "1,2,4", value_name = "F,I,P")]
-    pub blocks: BlockTriple,
-    /// Region radii in pixels (instead of eccentricity angles).
-    #[arg(long, value_name = "R1,R2")]
-    pub radii: Option<RadiiPx>,
     #[command(flatten)]
-    pub display: DisplayArgs,
+    pub foveation: FoveationArgs,
     /// Frame-time budget in milliseconds: frames that would take longer render a fraction of the
     /// configuration's samples and accumulation completes it while the eye rests (0: no budget).
     #[arg(long, default_value_t = 33.0, value_name = "MS")]
     pub budget_ms: f64,
-    /// Exposure compensation in EV (stops) before tone mapping.
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        value_name = "EV",
-        allow_hyphen_values = true
-    )]
-    pub exposure: f32,
-    /// Seed of all random numbers.
-    #[arg(long, default_value_t = 0, value_name = "N")]
-    pub seed: u32,
+    #[command(flatten)]
+    pub image: ImageArgs,
     #[command(flatten)]
     pub camera: CameraArgs,
     #[command(flatten)]
     pub lighting: LightingArgs,
-    /// MTL file to use instead of the one the OBJ names.
-    #[arg(long, value_name = "FILE.mtl")]
-    pub mtl: Option<PathBuf>,
-    /// The diffuse lobe of purely diffuse MTL materials (as for `render`).
-    #[arg(long, value_enum, default_value = "disney")]
-    pub mtl_diffuse: MtlDiffuse,
+    #[command(flatten)]
+    pub materials: MtlArgs,
     /// Render with every optional feature on.
     #[arg(long)]
     pub no_specialize: bool,
@@ -253,31 +227,10 @@ pub struct RenderArgs {
     /// CSV gaze trace with lines `frame,x,y`; one output image per line.
     #[arg(long, value_name = "FILE.csv")]
     pub gaze_trace: Option<PathBuf>,
-    /// Render every pixel at the fovea's samples per pixel (the paper's baseline).
-    #[arg(long)]
-    pub uniform: bool,
-    /// Samples per pixel (fovea) and per block (intermediate, periphery).
-    #[arg(long, default_value = "32,16,8", value_name = "F,I,P")]
-    pub spp: SppTriple,
-    /// Block edge in pixels per region; each must divide the next.
-    #[arg(long, default_value = "1,2,4", value_name = "F,I,P")]
-    pub blocks: BlockTriple,
-    /// Region radii in pixels (instead of eccentricity angles).
-    #[arg(long, value_name = "R1,R2")]
-    pub radii: Option<RadiiPx>,
     #[command(flatten)]
-    pub display: DisplayArgs,
-    /// Exposure compensation in EV (stops) before tone mapping.
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        value_name = "EV",
-        allow_hyphen_values = true
-    )]
-    pub exposure: f32,
-    /// Seed of all random numbers.
-    #[arg(long, default_value_t = 0, value_name = "N")]
-    pub seed: u32,
+    pub foveation: FoveationArgs,
+    #[command(flatten)]
+    pub image: ImageArgs,
     /// Frame index (part of the random-number key).
     #[arg(long, default_value_t = 0, value_name = "N")]
     pub frame: u32,
@@ -285,13 +238,8 @@ pub struct RenderArgs {
     pub camera: CameraArgs,
     #[command(flatten)]
     pub lighting: LightingArgs,
-    /// MTL file to use instead of the one the OBJ names (e.g. Lost Empire's torch variant).
-    #[arg(long, value_name = "FILE.mtl")]
-    pub mtl: Option<PathBuf>,
-    /// The diffuse lobe of purely diffuse MTL materials (`Ks 0 0 0` and no `Pm`, `Pr`, `Ps`, `Pc`,
-    /// `aniso`): `lambert` makes an OBJ scene the same scene to Mitsuba or pbrt, whose `diffuse` it is.
-    #[arg(long, value_enum, default_value = "disney")]
-    pub mtl_diffuse: MtlDiffuse,
+    #[command(flatten)]
+    pub materials: MtlArgs,
     /// Output image: .png (tone-mapped sRGB) or .exr (linear HDR).
     #[arg(short, long, default_value = "fovea.png", value_name = "FILE")]
     pub output: PathBuf,
@@ -501,6 +449,57 @@ pub struct LightingArgs {
         allow_hyphen_values = true
     )]
     pub env_scale: f32,
+}
+
+/// The foveation: which samples each region gets (`render`, `view`; `report` measures its own
+/// configurations and takes these as an extra one).
+#[derive(Args, Debug, Clone)]
+pub struct FoveationArgs {
+    /// Render every pixel at the fovea's samples per pixel (the paper's baseline; `view`: start so,
+    /// toggle with U).
+    #[arg(long)]
+    pub uniform: bool,
+    /// Samples per pixel (fovea) and per block (intermediate, periphery); in `view`, the first
+    /// configuration C cycles through.
+    #[arg(long, default_value = "32,16,8", value_name = "F,I,P")]
+    pub spp: SppTriple,
+    /// Block edge in pixels per region; each must divide the next.
+    #[arg(long, default_value = "1,2,4", value_name = "F,I,P")]
+    pub blocks: BlockTriple,
+    /// Region radii in pixels (instead of eccentricity angles).
+    #[arg(long, value_name = "R1,R2")]
+    pub radii: Option<RadiiPx>,
+    #[command(flatten)]
+    pub display: DisplayArgs,
+}
+
+/// How paths become an image: their random numbers and the exposure (`render`, `view`; `report`
+/// has its own, documented for its references).
+#[derive(Args, Debug, Clone, Copy)]
+pub struct ImageArgs {
+    /// Exposure compensation in EV (stops) before tone mapping.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "EV",
+        allow_hyphen_values = true
+    )]
+    pub exposure: f32,
+    /// Seed of all random numbers.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub seed: u32,
+}
+
+/// How an OBJ's materials are read (`render`, `view`; `report` takes `--mtl-diffuse` alone).
+#[derive(Args, Debug, Clone)]
+pub struct MtlArgs {
+    /// MTL file to use instead of the one the OBJ names (e.g. Lost Empire's torch variant).
+    #[arg(long, value_name = "FILE.mtl")]
+    pub mtl: Option<PathBuf>,
+    /// The diffuse lobe of purely diffuse MTL materials (`Ks 0 0 0` and no `Pm`, `Pr`, `Ps`, `Pc`,
+    /// `aniso`): `lambert` makes an OBJ scene the same scene to Mitsuba or pbrt, whose `diffuse` it is.
+    #[arg(long, value_enum, default_value = "disney")]
+    pub mtl_diffuse: MtlDiffuse,
 }
 
 /// The display model that turns eccentricity angles into region radii (`render` and `report`).

@@ -38,24 +38,24 @@ struct Plan {
 fn plan(args: &RenderArgs) -> Result<Plan> {
     let resolution = args.resolution.0;
     let [w, h] = resolution;
-    let (spp, blocks) = (args.spp.0, args.blocks.0);
+    let (spp, blocks) = (args.foveation.spp.0, args.foveation.blocks.0);
     let mut warnings = Vec::new();
     // The image fills the display, so pixels per centimetre come from the rendered width.
     let (display, aspect_warning) = values::display_geometry(
-        args.display.display_cm,
-        args.display.distance_cm,
+        args.foveation.display.display_cm,
+        args.foveation.display.distance_cm,
         resolution,
     )?;
-    let radii_px = match args.radii {
+    let radii_px = match args.foveation.radii {
         Some(r) => r.0,
         None => {
             warnings.extend(aspect_warning);
-            values::eccentricity_radii(args.display.eccentricity, &display)
+            values::eccentricity_radii(args.foveation.display.eccentricity, &display)
         }
     };
 
-    let mut foveation_template = if args.uniform {
-        if spp[1..] != [16, 8] || blocks != [1, 2, 4] || args.radii.is_some() {
+    let mut foveation_template = if args.foveation.uniform {
+        if spp[1..] != [16, 8] || blocks != [1, 2, 4] || args.foveation.radii.is_some() {
             warnings.push(format!(
                 "--uniform renders every pixel at --spp's first value ({}); the other --spp values, \
                  --blocks and --radii are not used",
@@ -126,7 +126,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
     if let Some(p) = &args.stats {
         check_json_path(p, "--stats")?;
     }
-    if !args.exposure.is_finite() || args.exposure.abs() > 64.0 {
+    if !args.image.exposure.is_finite() || args.image.exposure.abs() > 64.0 {
         return Err(FoveaError::option(
             "--exposure",
             "must be a finite EV between -64 and 64",
@@ -135,7 +135,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
 
     let lighting = Lighting::from_args(&args.lighting)?;
     let only_exr = output_format == ImageFormat::Exr && args.regions_overlay.is_none();
-    if args.exposure != 0.0 && only_exr {
+    if args.image.exposure != 0.0 && only_exr {
         warnings.push(
             "--exposure applies to tone-mapped images (PNG, --regions-overlay); the --output EXR is linear"
                 .into(),
@@ -186,8 +186,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
     let scene = prepare_scene(
         args.scene.as_deref(),
-        args.mtl.as_deref(),
-        args.mtl_diffuse.into(),
+        args.materials.mtl.as_deref(),
+        args.materials.mtl_diffuse.into(),
         &plan.lighting.environment(args.scene.is_none()),
         &plan.lighting.point_lights,
         renderer.wants_wide_bvh(),
@@ -246,7 +246,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let mut frames = Vec::new();
     for g in &plan.gazes {
         let mut foveation = plan.foveation_template;
-        if !args.uniform {
+        if !args.foveation.uniform {
             foveation.gaze = g.gaze;
         }
         let frame = FrameParams {
@@ -256,7 +256,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             width: w,
             height: h,
             frame_index: g.frame,
-            seed: args.seed,
+            seed: args.image.seed,
         };
         let total: u64 = count_samples(w, h, &foveation).iter().sum();
         let bar = if args.quiet || total < 2_000_000 {
@@ -277,14 +277,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             &scene.packed,
             &frame,
             plan.fill_mode,
-            args.exposure,
+            args.image.exposure,
             want_hdr,
             &|n| bar.inc(n),
         )?;
         bar.finish_and_clear();
         let rgb8 = match (rendered.rgb8, &rendered.hdr) {
             (Some(bytes), _) => bytes,
-            (None, Some(hdr)) => tonemapped_rgb8(hdr, args.exposure),
+            (None, Some(hdr)) => tonemapped_rgb8(hdr, args.image.exposure),
             (None, None) => unreachable!("every backend returns HDR or tone-mapped pixels"),
         };
 
@@ -295,7 +295,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         };
         match (plan.output_format, &rendered.hdr) {
             (ImageFormat::Exr, Some(hdr)) => {
-                write_image(&output, ImageFormat::Exr, hdr, args.exposure)?
+                write_image(&output, ImageFormat::Exr, hdr, args.image.exposure)?
             }
             (ImageFormat::Exr, None) => unreachable!("HDR is requested for EXR output"),
             (ImageFormat::Png, _) => write_png(&output, w, h, &rgb8)?,
@@ -322,7 +322,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         backend_name,
         &renderer.device_name(),
         &plan.foveation_template,
-        args.uniform,
+        args.foveation.uniform,
         plan.radii_px,
         plan.resolution,
         &scene,
@@ -339,7 +339,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let samples: u64 = last.render.primary_samples;
         println!(
             "fovea: {} {}x{} {} on {} in {:.0} ms ({:.2} M samples, {:.2} M paths/s) -> {}",
-            if args.uniform { "uniform" } else { "foveated" },
+            if args.foveation.uniform {
+                "uniform"
+            } else {
+                "foveated"
+            },
             w,
             h,
             if frames.len() > 1 {
@@ -362,7 +366,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 fn refuse_overwriting_inputs(args: &RenderArgs) -> Result<()> {
     let inputs: Vec<&Path> = [
         args.scene.as_deref(),
-        args.mtl.as_deref(),
+        args.materials.mtl.as_deref(),
         args.lighting.env_map.as_deref(),
         args.gaze_trace.as_deref(),
     ]

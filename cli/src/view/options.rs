@@ -98,16 +98,20 @@ pub struct ViewOptions {
 
 impl ViewOptions {
     pub fn from_args(args: &ViewArgs) -> Result<Self> {
-        let (spp, blocks) = (args.spp.0, args.blocks.0);
+        let (spp, blocks) = (args.foveation.spp.0, args.foveation.blocks.0);
         // The display model, checked as `render` checks it (the window's size only scales the radii;
         // its aspect follows the window, so no aspect warning here).
-        values::display_geometry(args.display.display_cm, args.display.distance_cm, [1, 1])?;
-        let radii = match args.radii {
+        values::display_geometry(
+            args.foveation.display.display_cm,
+            args.foveation.display.distance_cm,
+            [1, 1],
+        )?;
+        let radii = match args.foveation.radii {
             Some(r) => RadiiRule::Pixels(r.0),
             None => RadiiRule::Eccentricity {
-                degrees: args.display.eccentricity,
-                display_cm: args.display.display_cm,
-                distance_cm: args.display.distance_cm,
+                degrees: args.foveation.display.eccentricity,
+                display_cm: args.foveation.display.display_cm,
+                distance_cm: args.foveation.display.distance_cm,
             },
         };
         let convention = if args.gaze_pixels {
@@ -149,7 +153,7 @@ impl ViewOptions {
                 GazeInput::Mouse
             }
         };
-        if !args.exposure.is_finite() || args.exposure.abs() > 64.0 {
+        if !args.image.exposure.is_finite() || args.image.exposure.abs() > 64.0 {
             return Err(FoveaError::option(
                 "--exposure",
                 "must be a finite EV between -64 and 64",
@@ -197,8 +201,8 @@ impl ViewOptions {
         }
         Ok(Self {
             scene: args.scene.clone(),
-            mtl: args.mtl.clone(),
-            mtl_diffuse: args.mtl_diffuse.into(),
+            mtl: args.materials.mtl.clone(),
+            mtl_diffuse: args.materials.mtl_diffuse.into(),
             lighting: Lighting::from_args(&args.lighting)?,
             backend: args.target.backend,
             device: args.target.device,
@@ -210,13 +214,13 @@ impl ViewOptions {
             gaze,
             configs: configurations(spp, blocks),
             radii,
-            uniform: args.uniform,
+            uniform: args.foveation.uniform,
             overlay: args.overlay,
             budget_ms: args.budget_ms,
             integrator: args.path.integrator(),
             fill_mode: args.path.fill_mode(),
-            exposure: args.exposure,
-            seed: args.seed,
+            exposure: args.image.exposure,
+            seed: args.image.seed,
             camera,
             fov: args.camera.fov,
             script,
