@@ -416,10 +416,15 @@ pub struct CameraArgs {
 }
 
 impl CameraArgs {
-    /// `--eye`, `--target` and `--up` (their consistency is checked where the camera is made).
+    /// `--eye`, `--target` (world space, f64) and `--up` (their consistency is checked where the camera
+    /// is made).
     #[must_use]
-    pub fn points(&self) -> (Option<[f32; 3]>, Option<[f32; 3]>, [f32; 3]) {
-        (self.eye.map(|p| p.0), self.target.map(|p| p.0), self.up.0)
+    pub fn points(&self) -> (Option<[f64; 3]>, Option<[f64; 3]>, [f32; 3]) {
+        (
+            self.eye.map(|p| p.0),
+            self.target.map(|p| p.0),
+            self.up.0.map(|c| c as f32),
+        )
     }
 }
 

@@ -3,7 +3,6 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use fovea_core::camera::Camera;
-use fovea_core::scene::Light;
 use fovea_scene::bvh::BvhBuildOptions;
 use fovea_scene::environment::Environment;
 use fovea_scene::mesh::{LoadOptions, LoadedScene, MtlDiffuse};
@@ -12,6 +11,8 @@ use glam::Vec3;
 
 use crate::args::LightingArgs;
 use crate::error::{FoveaError, Result};
+use crate::values::WorldPointLight;
+use fovea_scene::rebase::to_local;
 
 /// The bundled default scene: the paper's Lost Empire (CC BY 3.0, see assets/lost_empire/SOURCE.md).
 pub fn default_scene_path() -> PathBuf {
@@ -31,6 +32,9 @@ pub const DEFAULT_SKY: [f32; 3] = [1.0, 1.0, 1.0];
 /// A loaded and packed scene with its timings.
 pub struct PreparedScene {
     pub packed: PackedScene,
+    /// The world position of the scene's origin (`LoadedScene::origin`): the packed scene and its
+    /// camera are relative to it.
+    pub origin: [f64; 3],
     pub camera_desc: Option<fovea_scene::mesh::CameraDesc>,
     pub warnings: Vec<String>,
     pub load_ms: f64,
@@ -49,7 +53,7 @@ pub fn prepare_scene(
     mtl_override: Option<&Path>,
     mtl_diffuse: MtlDiffuse,
     environment: &Environment,
-    extra_lights: &[Light],
+    extra_lights: &[WorldPointLight],
     wide_bvh: bool,
 ) -> Result<PreparedScene> {
     let is_default = path.is_none();
@@ -63,7 +67,10 @@ pub fn prepare_scene(
     };
     let start = Instant::now();
     let mut loaded: LoadedScene = fovea_scene::load_scene(&path, &options)?;
-    loaded.punctual_lights.extend_from_slice(extra_lights);
+    let origin = loaded.origin;
+    loaded
+        .punctual_lights
+        .extend(extra_lights.iter().map(|l| l.in_scene(origin)));
     let load_ms = start.elapsed().as_secs_f64() * 1e3;
     let camera_desc = loaded.camera;
     let warnings = loaded.warnings.clone();
@@ -77,6 +84,7 @@ pub fn prepare_scene(
         bvh_ms: packed.stats.bvh.build_ms,
         pack_ms: packed.stats.pack_ms,
         packed,
+        origin,
         camera_desc,
         warnings,
         load_ms,
@@ -85,12 +93,13 @@ pub fn prepare_scene(
     })
 }
 
-/// The camera: explicit `--eye/--target` first, then the scene's own camera, then the bundled view of
-/// the default scene, then a view that frames the scene's bounds.
+/// The camera, in the scene's coordinates: explicit `--eye/--target` (world space) first, then the
+/// scene's own camera, then the bundled view of the default scene, then a view that frames the scene's
+/// bounds.
 pub fn choose_camera(
     scene: &PreparedScene,
-    eye: Option<[f32; 3]>,
-    target: Option<[f32; 3]>,
+    eye: Option<[f64; 3]>,
+    target: Option<[f64; 3]>,
     up: [f32; 3],
     fov_deg: Option<f32>,
     aspect: f32,
@@ -116,13 +125,8 @@ pub fn choose_camera(
                     "eye and target are the same point",
                 ));
             }
-            return Ok(Camera::look_at(
-                Vec3::from(e),
-                Vec3::from(t),
-                up,
-                fov(45.0),
-                aspect,
-            ));
+            let local = |p: [f64; 3]| Vec3::from(to_local(p, scene.origin));
+            return Ok(Camera::look_at(local(e), local(t), up, fov(45.0), aspect));
         }
         (Some(_), None) | (None, Some(_)) => {
             return Err(FoveaError::option(
@@ -143,9 +147,10 @@ pub fn choose_camera(
         ));
     }
     if scene.is_default {
+        let local = |p: [f32; 3]| Vec3::from(to_local(p.map(f64::from), scene.origin));
         return Ok(Camera::look_at(
-            Vec3::from(LOST_EMPIRE_EYE),
-            Vec3::from(LOST_EMPIRE_TARGET),
+            local(LOST_EMPIRE_EYE),
+            local(LOST_EMPIRE_TARGET),
             up,
             fov(LOST_EMPIRE_FOV_DEG),
             aspect,
@@ -173,7 +178,7 @@ pub struct Lighting {
     sky: Option<[f32; 3]>,
     /// The loaded map with its path and scale (for the reference cache key).
     map: Option<(Environment, PathBuf, f32)>,
-    pub point_lights: Vec<Light>,
+    pub point_lights: Vec<WorldPointLight>,
 }
 
 impl Lighting {

@@ -43,6 +43,15 @@ fn finite<const N: usize>(text: &str, sep: char) -> Result<[f32; N], String> {
     Ok(v)
 }
 
+/// `N` finite f64 values separated by `sep`.
+fn finite_f64<const N: usize>(text: &str, sep: char) -> Result<[f64; N], String> {
+    let v: [f64; N] = split(text, sep)?;
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(format!("'{text}' contains a non-finite value"));
+    }
+    Ok(v)
+}
+
 /// Declares a newtype over an array parsed by `$parse` (a `fn(&str) -> Result<$inner, String>`).
 macro_rules! typed_value {
     ($(#[$doc:meta])* $name:ident($inner:ty) = $parse:expr) => {
@@ -144,8 +153,9 @@ typed_value!(
 );
 
 typed_value!(
-    /// `X,Y,Z`: a point or vector, finite.
-    Point3([f32; 3]) = |s| finite(s, ',')
+    /// `X,Y,Z`: a point or vector, finite; kept in f64, so that a world point far from the origin keeps
+    /// its precision until it is moved into the scene's coordinates (`fovea_scene::rebase`).
+    Point3([f64; 3]) = |s| finite_f64(s, ',')
 );
 
 typed_value!(
@@ -159,19 +169,39 @@ typed_value!(
     }
 );
 
-typed_value!(
-    /// `X,Y,Z,R,G,B`: a point light at X,Y,Z with intensity R,G,B in W/sr (radiant intensity per channel,
-    /// as KHR_lights_punctual's candela without the photometric factor).
-    PointLight(Light) = |s| {
-        let [x, y, z, r, g, b]: [f32; 6] = finite(s, ',')?;
-        if [r, g, b].iter().any(|&v| v < 0.0) {
-            return Err("intensity must not be negative".into());
-        }
-        Ok(Light {
+/// A point light given on the command line: its world position (f64) and intensity.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorldPointLight {
+    pub position: [f64; 3],
+    pub intensity: [f32; 3],
+}
+
+impl WorldPointLight {
+    /// The light in the coordinates of a scene whose origin is `origin` (`LoadedScene::origin`).
+    #[must_use]
+    pub fn in_scene(&self, origin: [f64; 3]) -> Light {
+        let [x, y, z] = fovea_scene::rebase::to_local(self.position, origin);
+        let [r, g, b] = self.intensity;
+        Light {
             kind: LIGHT_POINT,
             position: [x, y, z, 0.0],
             intensity: [r, g, b, 0.0],
             ..Default::default()
+        }
+    }
+}
+
+typed_value!(
+    /// `X,Y,Z,R,G,B`: a point light at X,Y,Z (world space) with intensity R,G,B in W/sr (radiant
+    /// intensity per channel, as KHR_lights_punctual's candela without the photometric factor).
+    PointLight(WorldPointLight) = |s| {
+        let [x, y, z, r, g, b]: [f64; 6] = finite_f64(s, ',')?;
+        if [r, g, b].iter().any(|&v| v < 0.0) {
+            return Err("intensity must not be negative".into());
+        }
+        Ok(WorldPointLight {
+            position: [x, y, z],
+            intensity: [r as f32, g as f32, b as f32],
         })
     }
 );

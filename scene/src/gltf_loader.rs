@@ -35,7 +35,7 @@ use fovea_core::scene::{
     Light, Material, INVALID_INDEX, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT,
     MATERIAL_ALPHA_CUTOUT, MATERIAL_DOUBLE_SIDED_EMISSION,
 };
-use glam::{Mat3, Mat4, Vec3};
+use glam::{DMat4, DVec3, Mat3, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
@@ -91,8 +91,12 @@ pub fn load_gltf_from(
         texture_slots: HashMap::new(),
         any_normals: false,
         any_uvs: false,
+        world_positions: Vec::new(),
+        light_positions: Vec::new(),
+        camera_position: DVec3::ZERO,
     };
     loader.walk()?;
+    loader.rebase();
     let mut scene = loader.scene;
     // An optional extension fovea does not read changes how the asset should look: say so (a required
     // one is refused by the glTF validation above).
@@ -291,9 +295,41 @@ struct Loader<'a> {
     texture_slots: HashMap<(usize, bool), u32>,
     any_normals: bool,
     any_uvs: bool,
+    /// World-space positions in f64, until the scene's origin is known ([`crate::rebase`]).
+    world_positions: Vec<[f64; 3]>,
+    /// The world position of each punctual light (parallel to `scene.punctual_lights`) and of the
+    /// camera, in f64 for the same reason.
+    light_positions: Vec<DVec3>,
+    camera_position: DVec3,
 }
 
 impl Loader<'_> {
+    /// Moves the scene to the origin [`crate::rebase::scene_origin`] chooses: positions, the camera and
+    /// the lights.
+    fn rebase(&mut self) {
+        let origin = crate::rebase::scene_origin(&self.world_positions, &self.scene.triangles);
+        let local = |p: DVec3| crate::rebase::to_local(p.to_array(), origin);
+        self.scene.origin = origin;
+        self.scene.positions = std::mem::take(&mut self.world_positions)
+            .into_iter()
+            .map(|p| crate::rebase::to_local(p, origin))
+            .collect();
+        for (l, &p) in self
+            .scene
+            .punctual_lights
+            .iter_mut()
+            .zip(&self.light_positions)
+        {
+            if l.kind != LIGHT_DIRECTIONAL {
+                let [x, y, z] = local(p);
+                l.position = [x, y, z, l.position[3]];
+            }
+        }
+        if let Some(c) = &mut self.scene.camera {
+            c.position = local(self.camera_position);
+        }
+    }
+
     fn warn(&mut self, message: String) {
         self.scene
             .warnings
@@ -328,10 +364,11 @@ impl Loader<'_> {
                 document.nodes().filter(|n| !is_child[n.index()]).collect()
             }
         };
-        let mut stack: Vec<(gltf::Node, Mat4)> = roots
+        // World transforms in f64: a node far from the origin keeps its scene's detail until the rebase.
+        let mut stack: Vec<(gltf::Node, DMat4)> = roots
             .into_iter()
             .rev()
-            .map(|n| (n, Mat4::IDENTITY))
+            .map(|n| (n, DMat4::IDENTITY))
             .collect();
         let mut visits = 0usize;
         let visit_limit = 16 * document.nodes().len().max(1) + 1024;
@@ -343,7 +380,8 @@ impl Loader<'_> {
                     message: "node hierarchy is cyclic or absurdly instanced".to_owned(),
                 });
             }
-            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            let local = node.transform().matrix().map(|c| c.map(f64::from));
+            let world = parent * DMat4::from_cols_array_2d(&local);
             if let Some(mesh) = node.mesh() {
                 self.add_mesh(&mesh, world)?;
             }
@@ -361,7 +399,8 @@ impl Loader<'_> {
         Ok(())
     }
 
-    fn add_camera(&mut self, camera: &gltf::Camera, world: Mat4) {
+    fn add_camera(&mut self, camera: &gltf::Camera, world_f64: DMat4) {
+        let world = world_f64.as_mat4();
         if self.scene.camera.is_some() {
             return;
         }
@@ -369,8 +408,10 @@ impl Loader<'_> {
             gltf::camera::Projection::Perspective(p) => {
                 let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
                 let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
+                self.camera_position = world_f64.transform_point3(DVec3::ZERO);
                 self.scene.camera = Some(CameraDesc {
-                    position: world.transform_point3(Vec3::ZERO).to_array(),
+                    // Set by `rebase` from `camera_position`.
+                    position: [0.0; 3],
                     forward: forward.to_array(),
                     up: up.to_array(),
                     yfov_radians: p.yfov(),
@@ -386,10 +427,13 @@ impl Loader<'_> {
         }
     }
 
-    fn add_light(&mut self, light: &gltf::khr_lights_punctual::Light, world: Mat4) {
+    fn add_light(&mut self, light: &gltf::khr_lights_punctual::Light, world_f64: DMat4) {
         use gltf::khr_lights_punctual::Kind;
+        let world = world_f64.as_mat4();
         let c = Vec3::from(light.color()) * light.intensity();
-        let position = world.transform_point3(Vec3::ZERO);
+        // The position is set by `rebase` from the f64 one.
+        let world_position = world_f64.transform_point3(DVec3::ZERO);
+        let position = Vec3::ZERO;
         let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
         let mut l = Light {
             index: INVALID_INDEX,
@@ -423,6 +467,7 @@ impl Loader<'_> {
             return;
         }
         self.scene.punctual_lights.push(l);
+        self.light_positions.push(world_position);
     }
 
     /// Checks that `accessor` has one of the accepted (dimensions, component type) pairs and that its
@@ -516,7 +561,8 @@ impl Loader<'_> {
         Ok(())
     }
 
-    fn add_mesh(&mut self, mesh: &gltf::Mesh, world: Mat4) -> Result<(), SceneError> {
+    fn add_mesh(&mut self, mesh: &gltf::Mesh, world_f64: DMat4) -> Result<(), SceneError> {
+        let world = world_f64.as_mat4();
         let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
         let det = Mat3::from_mat4(world).determinant();
         let flip = det < 0.0;
@@ -579,7 +625,7 @@ impl Loader<'_> {
             };
             self.options.check_size(
                 self.path,
-                (self.scene.positions.len() + pos_acc.count()) as u64,
+                (self.world_positions.len() + pos_acc.count()) as u64,
                 (self.scene.triangles.len() + new_triangles) as u64,
             )?;
 
@@ -594,15 +640,15 @@ impl Loader<'_> {
                 .ok_or_else(|| short("POSITION"))?
                 .collect();
             let vertex_count = positions.len();
-            let base = self.scene.positions.len();
+            let base = self.world_positions.len();
             if base + vertex_count > u32::MAX as usize {
                 return Err(self.malformed("more than 2^32 vertices".to_owned()));
             }
-            self.scene.positions.extend(
-                positions
-                    .iter()
-                    .map(|&p| world.transform_point3(Vec3::from(p)).to_array()),
-            );
+            self.world_positions.extend(positions.iter().map(|&p| {
+                world_f64
+                    .transform_point3(Vec3::from(p).as_dvec3())
+                    .to_array()
+            }));
 
             let mut normals_added = false;
             if let Some(acc) = &normal_acc {
@@ -1120,6 +1166,45 @@ mod tests {
         );
         std::fs::write(&file, required).unwrap();
         assert!(load_scene(&file, &LoadOptions::default()).is_err());
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// A scene whose root node sits 1e5 from the world origin loads with the coordinates, camera and
+    /// lights it has at the origin, and `origin` says where it is (the f64 rebase, [`crate::rebase`]).
+    #[test]
+    fn a_scene_far_from_the_origin_is_rebased_with_its_camera_and_lights() {
+        let dir = temp_dir("far");
+        let file = dir.join("t.gltf");
+        let json = |root: &str| {
+            triangle_gltf(TRI, None, "").replace(
+                r#""nodes":[{"mesh":0}]"#,
+                &format!(
+                    r#""nodes":[{{"mesh":0,"children":[1,2]{root}}},
+                    {{"camera":0,"translation":[0.3,0.2,3]}},
+                    {{"translation":[0.1,0.9,0.5],"extensions":{{"KHR_lights_punctual":{{"light":0}}}}}}],
+                    "cameras":[{{"type":"perspective","perspective":{{"yfov":0.7,"znear":0.1}}}}],
+                    "extensionsUsed":["KHR_lights_punctual"],
+                    "extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"point","intensity":3}}]}}}}"#
+                ),
+            )
+        };
+        std::fs::write(&file, json("")).unwrap();
+        let near = load_scene(&file, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        std::fs::write(&file, json(r#","translation":[100000,200000,-100000]"#)).unwrap();
+        let far = load_scene(&file, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(near.origin, [0.0; 3]);
+        assert_eq!(far.origin, [100000.0, 200000.0, -100000.0]);
+        assert_eq!(far.positions, near.positions);
+        assert_eq!(
+            far.camera.expect("camera").position,
+            near.camera.expect("camera").position
+        );
+        assert_eq!(
+            far.punctual_lights[0].position,
+            near.punctual_lights[0].position
+        );
+        // In f32 world coordinates the light's 0.1 would have been rounded to a multiple of 2^-7.
+        assert_eq!(far.punctual_lights[0].position[0], 0.1);
         std::fs::remove_dir_all(dir).ok();
     }
 

@@ -16,6 +16,7 @@ pub mod mesh;
 pub mod obj_loader;
 pub mod pack;
 pub mod procedural;
+pub mod rebase;
 pub mod source;
 pub mod texture;
 

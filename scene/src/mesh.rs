@@ -113,7 +113,11 @@ impl LoadOptions {
 /// every texture index in a material is `< textures.len()` or `INVALID_INDEX`.
 #[derive(Clone, Debug, Default)]
 pub struct LoadedScene {
-    /// Per vertex, world space.
+    /// The world position of this scene's origin: `positions`, the camera and the lights are relative
+    /// to it, so that they stay small and precise in f32 wherever the scene sits ([`crate::rebase`]).
+    /// Zero for a scene near the world origin.
+    pub origin: [f64; 3],
+    /// Per vertex, relative to `origin`.
     pub positions: Vec<[f32; 3]>,
     /// Per vertex (same length as `positions`) or empty if the file has none; `[0, 0, 0]` = "no normal here".
     pub normals: Vec<[f32; 3]>,

@@ -286,7 +286,8 @@ pub fn load_obj_from(
     options.check_size(path, total_vertices as u64, total_triangles as u64)?;
     let any_normals = models.iter().any(|m| !m.mesh.normals.is_empty());
     let any_uvs = models.iter().any(|m| !m.mesh.texcoords.is_empty());
-    scene.positions.reserve_exact(total_vertices);
+    // Positions in f64 until the scene's origin is known (`crate::rebase`).
+    let mut world_positions: Vec<[f64; 3]> = Vec::with_capacity(total_vertices);
     scene.triangles.reserve_exact(total_triangles);
     scene.triangle_materials.reserve_exact(total_triangles);
     if any_normals {
@@ -299,33 +300,35 @@ pub fn load_obj_from(
     let mut mismatched_uvs = 0usize;
     for model in &models {
         let mesh = &model.mesh;
-        let base = scene.positions.len() as u32;
+        let base = world_positions.len() as u32;
         let n = mesh.positions.len() / 3;
-        scene
-            .positions
-            .extend(mesh.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
+        world_positions.extend(mesh.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
         if any_normals {
             if mesh.normals.len() == 3 * n {
-                scene
-                    .normals
-                    .extend(mesh.normals.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
+                scene.normals.extend(
+                    mesh.normals
+                        .chunks_exact(3)
+                        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]),
+                );
             } else {
                 if !mesh.normals.is_empty() {
                     mismatched_normals += 1;
                 }
-                scene.normals.resize(scene.positions.len(), [0.0; 3]);
+                scene.normals.resize(world_positions.len(), [0.0; 3]);
             }
         }
         if any_uvs {
             if mesh.texcoords.len() == 2 * n {
-                scene
-                    .uvs
-                    .extend(mesh.texcoords.chunks_exact(2).map(|t| [t[0], 1.0 - t[1]]));
+                scene.uvs.extend(
+                    mesh.texcoords
+                        .chunks_exact(2)
+                        .map(|t| [t[0] as f32, 1.0 - t[1] as f32]),
+                );
             } else {
                 if !mesh.texcoords.is_empty() {
                     mismatched_uvs += 1;
                 }
-                scene.uvs.resize(scene.positions.len(), [0.0; 2]);
+                scene.uvs.resize(world_positions.len(), [0.0; 2]);
             }
         }
         let material = match mesh.material_id {
@@ -374,6 +377,12 @@ pub fn load_obj_from(
         });
         scene.material_names.push("default".to_owned());
     }
+    scene.origin = crate::rebase::scene_origin(&world_positions, &scene.triangles);
+    scene.positions = world_positions
+        .iter()
+        .map(|&p| crate::rebase::to_local(p, scene.origin))
+        .collect();
+    drop(world_positions);
     scene.validate(path)?;
     Ok(scene)
 }
@@ -591,6 +600,11 @@ fn locate_obj_error(text: &str, error: &tobj::LoadError) -> Option<(usize, Strin
     None
 }
 
+/// tobj's f64 colour (it is built with `use_f64` for the positions) as f32.
+fn f64x3_to_f32(c: [f64; 3]) -> [f32; 3] {
+    c.map(|v| v as f32)
+}
+
 /// Parses a numeric PBR-extension key (tobj keeps unknown keys as strings).
 fn param(m: &tobj::Material, key: &str, warnings: &mut Vec<String>, mtl: &Path) -> Option<f32> {
     let text = m.unknown_param.get(key)?;
@@ -681,8 +695,8 @@ fn convert_materials(
     for ((m, mtl), (kd_tex, d_tex)) in materials.iter().zip(mtl_files).zip(per_material) {
         let mtl_name = mtl.display();
         let mut warnings = Vec::new();
-        let kd = m.diffuse.unwrap_or([0.8; 3]);
-        let ks = m.specular.unwrap_or([0.0; 3]);
+        let kd = m.diffuse.map_or([0.8; 3], f64x3_to_f32);
+        let ks = m.specular.map_or([0.0; 3], f64x3_to_f32);
         // `Ks 0 0 0` given explicitly (and no PBR `Pm`): the material has no specular reflection.
         let no_specular = m.specular == Some([0.0; 3]) && m.unknown_param.get("Pm").is_none();
         let base_texture = kd_tex.map_or(INVALID_INDEX, |i| slots[i]);
@@ -707,9 +721,11 @@ fn convert_materials(
         };
         let roughness = match param(m, "Pr", &mut warnings, mtl) {
             Some(r) => r.clamp(0.0, 1.0),
-            None => m.shininess.map_or(1.0, roughness_from_phong_exponent),
+            None => m
+                .shininess
+                .map_or(1.0, |n| roughness_from_phong_exponent(n as f32)),
         };
-        let e = m.emissive.unwrap_or([0.0; 3]);
+        let e = m.emissive.map_or([0.0; 3], f64x3_to_f32);
         let mut out = Material {
             base_color: [base.x, base.y, base.z, 1.0],
             emission: [e[0].max(0.0), e[1].max(0.0), e[2].max(0.0), 0.0],
@@ -737,7 +753,7 @@ fn convert_materials(
         if purely_diffuse && options.mtl_diffuse == MtlDiffuse::Lambert {
             out.flags |= MATERIAL_LAMBERTIAN;
         }
-        let dissolve = m.dissolve.unwrap_or(1.0);
+        let dissolve = m.dissolve.map_or(1.0, |d| d as f32);
         if alpha_texture != INVALID_INDEX {
             out.flags |= MATERIAL_ALPHA_CUTOUT;
             out.alpha_cutoff = 0.5;

@@ -127,10 +127,13 @@ fn bench_rays(
         .unwrap_or_else(default_scene_path);
     let loaded = load_scene(&path, &LoadOptions::default())?;
     let n = loaded.triangle_count();
-    let set = from_file.unwrap_or_else(|| {
-        let (lo, hi) = loaded.bounds();
-        rays::generate_rays(Vec3::from(lo), Vec3::from(hi), count, seed)
-    });
+    let origin = loaded.origin;
+    let set = from_file
+        .map(|set| set.in_scene(origin))
+        .unwrap_or_else(|| {
+            let (lo, hi) = loaded.bounds();
+            rays::generate_rays(Vec3::from(lo), Vec3::from(hi), count, seed)
+        });
     let packed = pack_scene(loaded, &Environment::None, &BvhBuildOptions::default());
     let view = packed.view().with_features(packed.features());
     // The untimed warm-up pass; every pass finds the same.

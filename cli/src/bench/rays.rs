@@ -42,6 +42,21 @@ pub struct RaySet {
     pub occlusion: Vec<RayQuery>,
 }
 
+impl RaySet {
+    /// The queries of a ray file (world space) in the coordinates of a scene whose origin is `origin`
+    /// (`LoadedScene::origin`; zero leaves them as they are).
+    #[must_use]
+    pub fn in_scene(mut self, origin: [f64; 3]) -> Self {
+        if origin != [0.0; 3] {
+            for q in self.closest.iter_mut().chain(&mut self.occlusion) {
+                let o = fovea_scene::rebase::to_local(q.ray.origin.as_dvec3().to_array(), origin);
+                q.ray = Ray::new(glam::Vec3::from(o), q.ray.direction);
+            }
+        }
+        self
+    }
+}
+
 /// Reads a ray file (see the module documentation), naming the file and the record in any error.
 pub fn read_ray_file(path: &Path) -> Result<RaySet> {
     let bytes = std::fs::read(path).map_err(|e| FoveaError::file(path, e))?;

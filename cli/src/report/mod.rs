@@ -120,8 +120,8 @@ struct Plan {
     ppd: f32,
     fill_mode: u32,
     integrator: IntegratorSettings,
-    eye: Option<[f32; 3]>,
-    target: Option<[f32; 3]>,
+    eye: Option<[f64; 3]>,
+    target: Option<[f64; 3]>,
     up: [f32; 3],
     cache_dir: PathBuf,
 }
@@ -372,7 +372,7 @@ fn run_scene(
     scene_path: Option<&Path>,
     environment: &Environment,
     env_text: &str,
-    point_lights: &[fovea_core::scene::Light],
+    point_lights: &[crate::values::WorldPointLight],
     out_dir: &Path,
 ) -> Result<SceneReport> {
     let [w, h] = plan.resolution;

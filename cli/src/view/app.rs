@@ -635,7 +635,7 @@ impl Viewer {
             window,
             rendered: size,
             presented: outcome.presented,
-            eye: pose.eye.to_array(),
+            eye: fovea_scene::rebase::to_world(pose.eye.to_array(), self.scene.origin),
             radii_px: [
                 frame.foveation.radius_fovea,
                 frame.foveation.radius_intermediate,
@@ -752,7 +752,7 @@ impl Viewer {
             "scene": self.options.scene,
             "seed": self.options.seed,
             "camera": {
-                "eye": pose.eye.to_array(),
+                "eye": fovea_scene::rebase::to_world(pose.eye.to_array(), self.scene.origin),
                 "forward": pose.forward.to_array(),
                 "fov_y_degrees": pose.fov_y_degrees,
             },

@@ -86,7 +86,7 @@ pub struct ViewOptions {
     pub exposure: f32,
     pub seed: u32,
     /// `--eye`, `--target`, `--up`.
-    pub camera: (Option<[f32; 3]>, Option<[f32; 3]>, [f32; 3]),
+    pub camera: (Option<[f64; 3]>, Option<[f64; 3]>, [f32; 3]),
     pub fov: Option<f32>,
     pub script: Option<Script>,
     pub exit_after_frames: Option<u64>,

@@ -36,7 +36,8 @@ pub struct FrameRecord {
     /// The rendered size (the window's times `--render-scale`).
     pub rendered: [u32; 2],
     pub presented: bool,
-    pub eye: [f32; 3],
+    /// The camera's position in world space.
+    pub eye: [f64; 3],
     pub radii_px: [f32; 2],
 }
 
