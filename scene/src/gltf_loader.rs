@@ -44,7 +44,8 @@ use crate::mesh::{CameraDesc, LoadOptions, LoadedScene};
 use crate::source::{FileSource, Filesystem};
 use crate::texture::{decode_texture_bytes, load_texture_from, TextureLimits, TextureRole};
 
-/// The glTF extensions the loader reads.
+/// The glTF extensions the loader reads whole; the material extensions of
+/// [`crate::gltf_pbr::MAPPED_EXTENSIONS`] are read in part (see there).
 pub const SUPPORTED_EXTENSIONS: [&str; 2] =
     ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
 
@@ -94,15 +95,36 @@ pub fn load_gltf_from(
         world_positions: Vec::new(),
         light_positions: Vec::new(),
         camera_position: DVec3::ZERO,
+        unsupported: std::collections::BTreeMap::new(),
     };
     loader.walk()?;
     loader.rebase();
     let mut scene = loader.scene;
-    // An optional extension fovea does not read changes how the asset should look: say so (a required
-    // one is refused by the glTF validation above).
+    // An optional extension fovea does not read changes how the asset should look: say so, once per
+    // extension, naming the materials that use it (a required one is refused by the glTF validation
+    // above).
+    for ((extension, what), materials) in &loader.unsupported {
+        let names: Vec<String> = materials.iter().take(8).map(|m| format!("{m:?}")).collect();
+        let more = materials.len().saturating_sub(names.len());
+        let more = if more > 0 {
+            format!(" and {more} more")
+        } else {
+            String::new()
+        };
+        scene.warnings.push(format!(
+            "{}: {extension} is not fully supported: {} material(s) {}{more}: {what}",
+            path.display(),
+            materials.len(),
+            names.join(", "),
+        ));
+    }
     let unsupported: Vec<&str> = document
         .extensions_used()
-        .filter(|e| !SUPPORTED_EXTENSIONS.contains(e))
+        .filter(|e| {
+            !SUPPORTED_EXTENSIONS.contains(e)
+                && !crate::gltf_pbr::MAPPED_EXTENSIONS.contains(e)
+                && !loader.unsupported.keys().any(|(x, _)| x == e)
+        })
         .collect();
     if !unsupported.is_empty() {
         scene.warnings.push(format!(
@@ -301,6 +323,9 @@ struct Loader<'a> {
     /// camera, in f64 for the same reason.
     light_positions: Vec<DVec3>,
     camera_position: DVec3,
+    /// What materials use and fovea leaves out, for one warning per extension: (extension, what is
+    /// lost) → the materials.
+    unsupported: std::collections::BTreeMap<(String, String), Vec<String>>,
 }
 
 impl Loader<'_> {
@@ -832,6 +857,39 @@ impl Loader<'_> {
                 info.tex_coord(),
                 true,
             )?;
+        }
+        // The PBR extensions, after the textures (unlit emits the base colour texture).
+        let name = m.name().map_or_else(|| label.clone(), str::to_owned);
+        let mut notes = m
+            .extensions()
+            .map(|e| crate::gltf_pbr::apply_material_extensions(e, &mut out))
+            .unwrap_or_default();
+        let infos = [
+            pbr.base_color_texture().map(|i| i.extensions().cloned()),
+            pbr.metallic_roughness_texture()
+                .map(|i| i.extensions().cloned()),
+            m.emissive_texture().map(|i| i.extensions().cloned()),
+        ];
+        if infos
+            .iter()
+            .flatten()
+            .flatten()
+            .any(|e| e.contains_key("KHR_texture_transform"))
+            || m.normal_texture().is_some_and(|t| {
+                t.extensions()
+                    .is_some_and(|e| e.contains_key("KHR_texture_transform"))
+            })
+        {
+            notes.push(crate::gltf_pbr::Unsupported {
+                extension: "KHR_texture_transform".to_owned(),
+                what: "texture coordinates are used untransformed".to_owned(),
+            });
+        }
+        for note in notes {
+            self.unsupported
+                .entry((note.extension, note.what))
+                .or_default()
+                .push(name.clone());
         }
         let slot = self.scene.materials.len() as u32;
         self.scene.materials.push(out);

@@ -11,6 +11,7 @@ pub mod bvh;
 pub mod environment;
 pub mod error;
 pub mod gltf_loader;
+pub mod gltf_pbr;
 pub mod load;
 pub mod mesh;
 pub mod obj_loader;

@@ -128,6 +128,15 @@ fn cases() -> Vec<SceneCase> {
             Environment::None,
             View::AlongMinusZ,
         ),
+        SceneCase {
+            path: fovea_tests::repo_root().join("assets/pbr_extensions/pbr_extensions.gltf"),
+            ..case(
+                "pbr_extensions (bundled)",
+                "",
+                Environment::None,
+                View::FileOrFrame,
+            )
+        },
         case(
             "roughness_scale_kajiya",
             "roughness_scale_kajiya/scene.gltf",

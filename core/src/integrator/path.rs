@@ -111,6 +111,18 @@ pub fn trace_path_from_hit<F: crate::scene::Features, S: SceneSource>(
     trace_path_impl(scene, source, camera_ray, Some(first_hit), rng, settings)
 }
 
+/// Whether `triangle`'s material is unlit (`MATERIAL_UNLIT`, glTF `KHR_materials_unlit`): its emission is
+/// its look, seen by camera rays only, so it neither lights the scene nor shows in reflections.
+#[inline]
+fn is_unlit<F: crate::scene::Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    triangle: u32,
+) -> bool {
+    let material = source.material(scene, source.triangle_info(scene, triangle).material);
+    material.flags & crate::scene::MATERIAL_UNLIT != 0
+}
+
 /// The path loop of [`trace_path_with`] and [`trace_path_from_hit`]: the camera ray's hit is traced at
 /// the top of the first iteration unless `first_hit` gives it, so that the GPU kernel, which never
 /// gives it, keeps a single inlined copy of the traversal (with a second one its SPIR-V grew from 668
@@ -171,7 +183,7 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
         if le != Vec3::ZERO {
             if bounce == 0 {
                 radiance += throughput * le;
-            } else if use_bsdf_hits {
+            } else if use_bsdf_hits && !is_unlit(scene, source, hit.triangle) {
                 let mut weight = 1.0;
                 if mis && !scene.lights.triangle_light.is_empty() {
                     let light = scene.lights.triangle_light[hit.triangle as usize];

@@ -385,6 +385,11 @@ pub const MATERIAL_DOUBLE_SIDED_EMISSION: u32 = 2;
 /// [`Material::flags`]: the diffuse lobe is Lambertian instead of Burley's retro-reflective diffuse (see
 /// [`crate::bsdf::DisneyParams::lambertian`]); set for purely diffuse OBJ materials on request.
 pub const MATERIAL_LAMBERTIAN: u32 = 4;
+/// [`Material::flags`]: the material's emission is its look, not a light (glTF `KHR_materials_unlit`):
+/// the packer leaves its triangles out of the light list, so next-event estimation never picks them,
+/// and the integrator adds their emission on camera rays only (it neither lights the scene nor shows
+/// in reflections).
+pub const MATERIAL_UNLIT: u32 = 8;
 
 /// A Disney "principled" material (Burley 2012) with optional textures (112 bytes).
 ///

@@ -6,7 +6,7 @@ use fovea_core::lights::power;
 use fovea_core::scene::{
     positions_at, Light, LightArrays, SceneGlobals, ENVIRONMENT_NONE, INVALID_INDEX,
     LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_SPOT, LIGHT_TRIANGLE,
-    MATERIAL_DOUBLE_SIDED_EMISSION,
+    MATERIAL_DOUBLE_SIDED_EMISSION, MATERIAL_UNLIT,
 };
 use glam::Vec3;
 
@@ -130,7 +130,9 @@ fn emissive_triangles(
     light_power: &mut Vec<f64>,
 ) -> (Vec<u32>, usize) {
     let materials = &sources.materials.list;
-    if !materials.iter().any(|m| m.is_emissive()) {
+    let is_light =
+        |m: &fovea_core::scene::Material| m.is_emissive() && m.flags & MATERIAL_UNLIT == 0;
+    if !materials.iter().any(is_light) {
         return (Vec::new(), 0);
     }
     let geometry = sources.geometry;
@@ -145,7 +147,7 @@ fn emissive_triangles(
         .enumerate()
     {
         let m = &materials[info.material as usize];
-        if !m.is_emissive() {
+        if !is_light(m) {
             continue;
         }
         let t = positions_at(&geometry.blocks, at);

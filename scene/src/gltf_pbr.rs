@@ -1,0 +1,283 @@
+//! glTF PBR material extensions mapped onto the Disney parameters of `fovea_core::scene::Material`.
+//!
+//! glTF's layered model (glTF 2.0 Appendix B and the `KHR_materials_*` specifications) and Burley's
+//! principled BRDF share their base (metallic-roughness GGX over a diffuse base); the extensions map as
+//! follows, the approximations named:
+//!
+//! | extension | fovea |
+//! |---|---|
+//! | `KHR_materials_ior` (`ior`) | `specular` = F0 / 0.08 with F0 = ((ior − 1) / (ior + 1))² (Burley's dielectric F0 is 0.08 · specular; ior 1.5 gives 0.5; clamped at 1, i.e. ior 1.78) |
+//! | `KHR_materials_specular` (`specularFactor`, `specularColorFactor`) | F0 above × `specularFactor` × the colour's largest component (Burley's specular is not coloured) |
+//! | `KHR_materials_clearcoat` (`clearcoatFactor`, `clearcoatRoughnessFactor`) | `clearcoat`, `clearcoat_gloss` = 1 − roughness |
+//! | `KHR_materials_sheen` (`sheenColorFactor`) | `sheen` = the colour's largest component, `sheen_tint` 0 (`sheenRoughnessFactor` has no Burley counterpart) |
+//! | `KHR_materials_anisotropy` (`anisotropyStrength`) | `anisotropic` (along the shading frame's tangent: `anisotropyRotation` is not read) |
+//! | `KHR_materials_unlit` | the base colour (and texture) becomes the emission, the BRDF black, and `MATERIAL_UNLIT` shows it to camera rays only (not a light, not in reflections) |
+//! | `KHR_materials_emissive_strength` | read by the loader (`emission` × strength) |
+//!
+//! What a material asks for and fovea cannot render (the extensions' textures, transmission, volume,
+//! iridescence, dispersion, `KHR_texture_transform`) is returned as [`Unsupported`] notes: the loader
+//! warns once per extension, naming the materials.
+use fovea_core::scene::{Material, MATERIAL_LAMBERTIAN, MATERIAL_UNLIT};
+use gltf::json::Value;
+
+/// The material extensions [`apply_material_extensions`] maps (in part, see the module table).
+pub const MAPPED_EXTENSIONS: [&str; 6] = [
+    "KHR_materials_ior",
+    "KHR_materials_specular",
+    "KHR_materials_clearcoat",
+    "KHR_materials_sheen",
+    "KHR_materials_anisotropy",
+    "KHR_materials_unlit",
+];
+
+/// What a material uses that fovea leaves out: the extension and what is lost.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Unsupported {
+    pub extension: String,
+    pub what: String,
+}
+
+impl Unsupported {
+    fn new(extension: &str, what: &str) -> Self {
+        Self {
+            extension: extension.to_owned(),
+            what: what.to_owned(),
+        }
+    }
+}
+
+/// What an unknown extension's absence means, for the warning.
+fn consequence(extension: &str) -> &'static str {
+    match extension {
+        "KHR_materials_transmission" => "renders opaque (no transmission lobe)",
+        "KHR_materials_volume" => "has no volume absorption",
+        "KHR_materials_iridescence" => "has no thin-film iridescence",
+        "KHR_materials_dispersion" => "has no dispersion",
+        "KHR_materials_diffuse_transmission" => "has no diffuse transmission",
+        "KHR_materials_variants" => "shows its default variant",
+        _ => "ignores what the extension describes",
+    }
+}
+
+/// A number field of an extension object, or `default` (also for a non-finite or non-number value).
+fn number(ext: &Value, key: &str, default: f32) -> f32 {
+    match ext.get(key).and_then(Value::as_f64) {
+        Some(v) if v.is_finite() => v as f32,
+        _ => default,
+    }
+}
+
+/// An RGB field, or `default`.
+fn rgb(ext: &Value, key: &str, default: [f32; 3]) -> [f32; 3] {
+    match ext.get(key).and_then(Value::as_array) {
+        Some(a) if a.len() == 3 => {
+            let mut out = default;
+            for (o, v) in out.iter_mut().zip(a) {
+                match v.as_f64() {
+                    Some(x) if x.is_finite() => *o = x as f32,
+                    _ => return default,
+                }
+            }
+            out
+        }
+        _ => default,
+    }
+}
+
+/// Burley's `specular` for a dielectric of index `ior` and a glTF specular weight: F0 / 0.08, clamped to
+/// [0, 1].
+#[must_use]
+pub fn specular_from_ior(ior: f32, weight: f32) -> f32 {
+    // glTF: ior 0 is not a valid index; treat values below 1 as 1 (no reflection).
+    let ior = ior.max(1.0);
+    let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
+    (f0 * weight / 0.08).clamp(0.0, 1.0)
+}
+
+/// Applies the material extensions of `extensions` (the material's `extensions` object, as JSON) to
+/// `material` (whose textures are already set: unlit emits the base colour texture); returns what could
+/// not be rendered.
+pub fn apply_material_extensions(
+    extensions: &serde_json::Map<String, Value>,
+    material: &mut Material,
+) -> Vec<Unsupported> {
+    let mut unsupported = Vec::new();
+    let texture_ignored = |ext: &Value, name: &str, keys: &[&str], out: &mut Vec<Unsupported>| {
+        for key in keys {
+            if ext.get(*key).is_some() {
+                out.push(Unsupported::new(name, &format!("{key} is not read")));
+            }
+        }
+    };
+    let ior = extensions
+        .get("KHR_materials_ior")
+        .map_or(1.5, |e| number(e, "ior", 1.5));
+    let mut specular_weight = 1.0;
+    if let Some(e) = extensions.get("KHR_materials_specular") {
+        let colour = rgb(e, "specularColorFactor", [1.0; 3]);
+        specular_weight = number(e, "specularFactor", 1.0).max(0.0)
+            * colour.iter().fold(0.0f32, |m, &c| m.max(c)).max(0.0);
+        texture_ignored(
+            e,
+            "KHR_materials_specular",
+            &["specularTexture", "specularColorTexture"],
+            &mut unsupported,
+        );
+    }
+    if extensions.contains_key("KHR_materials_ior")
+        || extensions.contains_key("KHR_materials_specular")
+    {
+        material.specular = specular_from_ior(ior, specular_weight);
+    }
+    if let Some(e) = extensions.get("KHR_materials_clearcoat") {
+        material.clearcoat = number(e, "clearcoatFactor", 0.0).clamp(0.0, 1.0);
+        material.clearcoat_gloss = 1.0 - number(e, "clearcoatRoughnessFactor", 0.0).clamp(0.0, 1.0);
+        texture_ignored(
+            e,
+            "KHR_materials_clearcoat",
+            &[
+                "clearcoatTexture",
+                "clearcoatRoughnessTexture",
+                "clearcoatNormalTexture",
+            ],
+            &mut unsupported,
+        );
+    }
+    if let Some(e) = extensions.get("KHR_materials_sheen") {
+        let colour = rgb(e, "sheenColorFactor", [0.0; 3]);
+        material.sheen = colour.iter().fold(0.0f32, |m, &c| m.max(c)).clamp(0.0, 1.0);
+        material.sheen_tint = 0.0;
+        texture_ignored(
+            e,
+            "KHR_materials_sheen",
+            &["sheenColorTexture", "sheenRoughnessTexture"],
+            &mut unsupported,
+        );
+    }
+    if let Some(e) = extensions.get("KHR_materials_anisotropy") {
+        material.anisotropic = number(e, "anisotropyStrength", 0.0).clamp(0.0, 1.0);
+        if number(e, "anisotropyRotation", 0.0) != 0.0 {
+            unsupported.push(Unsupported::new(
+                "KHR_materials_anisotropy",
+                "anisotropyRotation is not read (the highlight follows the tangent)",
+            ));
+        }
+        texture_ignored(
+            e,
+            "KHR_materials_anisotropy",
+            &["anisotropyTexture"],
+            &mut unsupported,
+        );
+    }
+    if extensions.contains_key("KHR_materials_unlit") {
+        let [r, g, b, _] = material.base_color;
+        material.emission = [r, g, b, 0.0];
+        material.emission_texture = material.base_color_texture;
+        material.base_color = [0.0, 0.0, 0.0, material.base_color[3]];
+        material.metallic = 0.0;
+        material.specular = 0.0;
+        material.sheen = 0.0;
+        material.clearcoat = 0.0;
+        material.flags |= MATERIAL_UNLIT | MATERIAL_LAMBERTIAN;
+    }
+    for name in extensions.keys() {
+        if !MAPPED_EXTENSIONS.contains(&name.as_str()) {
+            unsupported.push(Unsupported::new(name, consequence(name)));
+        }
+    }
+    unsupported
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn apply(json: &str) -> (Material, Vec<Unsupported>) {
+        let map: serde_json::Map<String, Value> = serde_json::from_str(json).unwrap();
+        let mut m = Material::default();
+        let notes = apply_material_extensions(&map, &mut m);
+        (m, notes)
+    }
+
+    #[test]
+    fn ior_sets_the_dielectric_reflectance() {
+        assert_eq!(specular_from_ior(1.5, 1.0), 0.5);
+        let (m, notes) = apply(r#"{"KHR_materials_ior":{"ior":1.33}}"#);
+        let f0 = (0.33f32 / 2.33).powi(2);
+        assert!((m.specular - f0 / 0.08).abs() < 1e-6, "{}", m.specular);
+        assert!(notes.is_empty());
+        assert_eq!(
+            apply(r#"{"KHR_materials_ior":{"ior":1.0}}"#).0.specular,
+            0.0
+        );
+        // Beyond what Burley's specular reaches: clamped.
+        assert_eq!(
+            apply(r#"{"KHR_materials_ior":{"ior":2.4}}"#).0.specular,
+            1.0
+        );
+    }
+
+    #[test]
+    fn specular_scales_f0_and_its_textures_are_reported() {
+        let (m, notes) = apply(
+            r#"{"KHR_materials_specular":{"specularFactor":0.5,"specularColorFactor":[0.2,0.8,0.4],
+                "specularTexture":{"index":0}}}"#,
+        );
+        assert!(
+            (m.specular - 0.5 * 0.5 * 0.8).abs() < 1e-6,
+            "{}",
+            m.specular
+        );
+        assert_eq!(notes.len(), 1);
+        assert!(notes[0].what.contains("specularTexture"));
+    }
+
+    #[test]
+    fn clearcoat_sheen_and_anisotropy_set_their_lobes() {
+        let (m, notes) = apply(
+            r#"{"KHR_materials_clearcoat":{"clearcoatFactor":0.8,"clearcoatRoughnessFactor":0.25},
+                "KHR_materials_sheen":{"sheenColorFactor":[0.1,0.6,0.3],"sheenRoughnessFactor":0.5},
+                "KHR_materials_anisotropy":{"anisotropyStrength":0.7,"anisotropyRotation":1.0}}"#,
+        );
+        assert_eq!((m.clearcoat, m.clearcoat_gloss), (0.8, 0.75));
+        assert_eq!((m.sheen, m.sheen_tint), (0.6, 0.0));
+        assert_eq!(m.anisotropic, 0.7);
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(notes[0].what.contains("anisotropyRotation"));
+        // Out-of-range values are clamped; malformed ones take the default.
+        let (m, _) = apply(
+            r#"{"KHR_materials_clearcoat":{"clearcoatFactor":7},"KHR_materials_sheen":{"sheenColorFactor":"red"}}"#,
+        );
+        assert_eq!((m.clearcoat, m.clearcoat_gloss, m.sheen), (1.0, 1.0, 0.0));
+    }
+
+    #[test]
+    fn unlit_emits_its_base_colour_and_is_no_light() {
+        let map: serde_json::Map<String, Value> =
+            serde_json::from_str(r#"{"KHR_materials_unlit":{}}"#).unwrap();
+        let mut m = Material {
+            base_color: [0.2, 0.4, 0.6, 0.9],
+            base_color_texture: 3,
+            ..Material::default()
+        };
+        assert!(apply_material_extensions(&map, &mut m).is_empty());
+        assert_eq!(m.emission, [0.2, 0.4, 0.6, 0.0]);
+        assert_eq!(m.emission_texture, 3);
+        assert_eq!(m.base_color, [0.0, 0.0, 0.0, 0.9]);
+        assert_eq!((m.metallic, m.specular), (0.0, 0.0));
+        assert_ne!(m.flags & MATERIAL_UNLIT, 0);
+        assert_ne!(m.flags & MATERIAL_LAMBERTIAN, 0);
+    }
+
+    #[test]
+    fn unknown_extensions_are_reported_with_their_consequence() {
+        let (m, notes) = apply(
+            r#"{"KHR_materials_transmission":{"transmissionFactor":1},"KHR_materials_volume":{}}"#,
+        );
+        assert_eq!(m, Material::default());
+        assert_eq!(notes.len(), 2);
+        assert!(notes
+            .iter()
+            .any(|n| n.extension == "KHR_materials_transmission" && n.what.contains("opaque")));
+    }
+}

@@ -1,0 +1,152 @@
+#!/usr/bin/env python3
+"""Writes assets/pbr_extensions/pbr_extensions.gltf: a floor and nine spheres, each with one glTF PBR
+extension (KHR_materials_ior, _specular, _clearcoat, _sheen, _anisotropy, _unlit, _emissive_strength,
+_transmission + _volume, and KHR_texture_transform on a checker texture), a camera and a point light.
+
+The test scene of the loader's extension mapping (scene/src/gltf_pbr.rs) and of tests/tests/pbr_scene.rs.
+Generated here, so it is CC0 like the rest of the repository's own assets. Run from the repository root:
+    python3 scripts/make-pbr-scene.py
+"""
+import base64
+import json
+import math
+import struct
+import zlib
+
+
+def icosphere(levels):
+    t = (1 + 5 ** 0.5) / 2
+    verts = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
+             (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    verts = [tuple(c / math.sqrt(sum(x * x for x in v)) for c in v) for v in verts]
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
+             (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
+             (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    for _ in range(levels):
+        cache = {}
+
+        def mid(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in cache:
+                m = [(verts[a][k] + verts[b][k]) / 2 for k in range(3)]
+                n = math.sqrt(sum(x * x for x in m))
+                verts.append(tuple(x / n for x in m))
+                cache[key] = len(verts) - 1
+            return cache[key]
+
+        new = []
+        for a, b, c in faces:
+            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
+            new += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        faces = new
+    return verts, faces
+
+
+def checker_png(n=8):
+    """An n x n RGBA checker, 8-bit, as PNG bytes."""
+    rows = b""
+    for y in range(n):
+        rows += b"\0" + b"".join(
+            bytes([230, 230, 230, 255] if (x + y) % 2 == 0 else [40, 40, 40, 255]) for x in range(n))
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", n, n, 8, 6, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
+def main():
+    sphere_v, sphere_f = icosphere(3)
+    floor_v = [(-6, 0, -4), (6, 0, -4), (6, 0, 4), (-6, 0, 4)]
+    floor_uv = [(0, 0), (6, 0), (6, 4), (0, 4)]
+    floor_f = [(0, 2, 1), (0, 3, 2)]
+    blob = b""
+    views, accessors = [], []
+
+    def add(data, count, kind, ctype, target, minmax=None):
+        nonlocal blob
+        while len(blob) % 4:
+            blob += b"\0"
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data), "target": target})
+        blob += data
+        acc = {"bufferView": len(views) - 1, "componentType": ctype, "count": count, "type": kind}
+        if minmax:
+            acc["min"], acc["max"] = minmax
+        accessors.append(acc)
+        return len(accessors) - 1
+
+    def positions(vs):
+        lo = [min(v[k] for v in vs) for k in range(3)]
+        hi = [max(v[k] for v in vs) for k in range(3)]
+        return add(b"".join(struct.pack("<3f", *v) for v in vs), len(vs), "VEC3", 5126, 34962, (lo, hi))
+
+    s_pos = positions(sphere_v)
+    s_nrm = add(b"".join(struct.pack("<3f", *v) for v in sphere_v), len(sphere_v), "VEC3", 5126, 34962)
+    s_uv = add(b"".join(struct.pack("<2f", 0.5 + math.atan2(v[2], v[0]) / (2 * math.pi), 0.5 - math.asin(v[1]) / math.pi)
+                        for v in sphere_v), len(sphere_v), "VEC2", 5126, 34962)
+    s_idx = add(b"".join(struct.pack("<3H", *f) for f in sphere_f), 3 * len(sphere_f), "SCALAR", 5123, 34963)
+    f_pos = positions(floor_v)
+    f_uv = add(b"".join(struct.pack("<2f", *t) for t in floor_uv), 4, "VEC2", 5126, 34962)
+    f_idx = add(b"".join(struct.pack("<3H", *f) for f in floor_f), 6, "SCALAR", 5123, 34963)
+
+    grey = {"baseColorFactor": [0.6, 0.6, 0.6, 1], "metallicFactor": 0, "roughnessFactor": 0.5}
+    materials = [
+        {"name": "floor", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0, "roughnessFactor": 0.8}},
+        {"name": "ior", "pbrMetallicRoughness": grey, "extensions": {"KHR_materials_ior": {"ior": 1.33}}},
+        {"name": "specular", "pbrMetallicRoughness": grey,
+         "extensions": {"KHR_materials_specular": {"specularFactor": 0.6, "specularColorFactor": [1, 0.8, 0.6]}}},
+        {"name": "clearcoat", "pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.05, 0.05, 1], "metallicFactor": 0, "roughnessFactor": 0.6},
+         "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1, "clearcoatRoughnessFactor": 0.1}}},
+        {"name": "sheen", "pbrMetallicRoughness": {"baseColorFactor": [0.05, 0.05, 0.3, 1], "metallicFactor": 0, "roughnessFactor": 0.9},
+         "extensions": {"KHR_materials_sheen": {"sheenColorFactor": [0.9, 0.9, 0.9], "sheenRoughnessFactor": 0.3}}},
+        {"name": "anisotropy", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.8, 0.5, 1], "metallicFactor": 1, "roughnessFactor": 0.4},
+         "extensions": {"KHR_materials_anisotropy": {"anisotropyStrength": 0.8}}},
+        {"name": "unlit", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.5, 0.1, 1]}, "extensions": {"KHR_materials_unlit": {}}},
+        {"name": "emissive_strength", "pbrMetallicRoughness": grey, "emissiveFactor": [1, 0.6, 0.2],
+         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 5}}},
+        {"name": "glass", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0},
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_volume": {"thicknessFactor": 1},
+                        "KHR_materials_ior": {"ior": 1.5}}},
+        {"name": "texture_transform", "pbrMetallicRoughness": {
+            "baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"scale": [4, 4], "rotation": 0.3}}},
+            "metallicFactor": 0, "roughnessFactor": 0.7}},
+    ]
+    meshes = [{"name": "floor", "primitives": [{"attributes": {"POSITION": f_pos, "TEXCOORD_0": f_uv}, "indices": f_idx, "material": 0}]}]
+    nodes = [{"name": "floor", "mesh": 0}]
+    for i, m in enumerate(materials[1:], start=1):
+        meshes.append({"name": m["name"], "primitives": [
+            {"attributes": {"POSITION": s_pos, "NORMAL": s_nrm, "TEXCOORD_0": s_uv}, "indices": s_idx, "material": i}]})
+        row, col = divmod(i - 1, 5)
+        nodes.append({"name": m["name"], "mesh": i, "translation": [-4.4 + 2.2 * col, 1.0, -1.2 + 2.4 * row],
+                      "scale": [0.9, 0.9, 0.9]})
+    nodes.append({"name": "camera", "camera": 0, "translation": [0, 5.5, 9.5],
+                  "rotation": [-math.sin(0.26), 0, 0, math.cos(0.26)]})
+    nodes.append({"name": "light", "translation": [2, 7, 4], "extensions": {"KHR_lights_punctual": {"light": 0}}})
+    gltf = {
+        "asset": {"version": "2.0", "generator": "fovea scripts/make-pbr-scene.py", "copyright": "CC0 1.0"},
+        "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_anisotropy", "KHR_materials_clearcoat",
+                           "KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_sheen",
+                           "KHR_materials_specular", "KHR_materials_transmission", "KHR_materials_unlit",
+                           "KHR_materials_volume", "KHR_texture_transform"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "color": [1, 0.95, 0.9], "intensity": 60}]}},
+        "scene": 0,
+        "scenes": [{"nodes": list(range(len(nodes)))}],
+        "nodes": nodes,
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.75, "aspectRatio": 16 / 9, "znear": 0.1}}],
+        "meshes": meshes,
+        "materials": materials,
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"magFilter": 9728, "minFilter": 9728, "wrapS": 10497, "wrapT": 10497}],
+        "images": [{"uri": "data:image/png;base64," + base64.b64encode(checker_png()).decode()}],
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
+    }
+    with open("assets/pbr_extensions/pbr_extensions.gltf", "w") as f:
+        json.dump(gltf, f, separators=(",", ":"))
+        f.write("\n")
+
+
+if __name__ == "__main__":
+    main()
