@@ -106,7 +106,8 @@ def main():
         {"name": "emissive_strength", "pbrMetallicRoughness": grey, "emissiveFactor": [1, 0.6, 0.2],
          "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 5}}},
         {"name": "glass", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0},
-         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_volume": {"thicknessFactor": 1},
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1},
+                        "KHR_materials_volume": {"thicknessFactor": 1, "attenuationColor": [0.9, 0.95, 1.0], "attenuationDistance": 2},
                         "KHR_materials_ior": {"ior": 1.5}}},
         {"name": "texture_transform", "pbrMetallicRoughness": {
             "baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"scale": [4, 4], "rotation": 0.3}}},

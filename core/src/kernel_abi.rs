@@ -143,10 +143,12 @@ pub const PROBE_OFFSET_RAY_ORIGIN: u32 = 2;
 pub const PROBE_TRIANGLE: u32 = 3;
 /// [`crate::bsdf::disney::DisneyParams::eval_and_pdf`]: `in[0]` = (base colour rgb, metallic), `in[1]` =
 /// (roughness, anisotropic, specular, specular_tint), `in[2]` = (sheen, sheen_tint, clearcoat,
-/// clearcoat_gloss), `in[3].xyz` = wo, `in[4].xyz` = wi → `out[0]` = (f rgb, pdf).
+/// clearcoat_gloss), `in[3].xyz` = wo, `in[4].xyz` = wi, `in[5]` = (transmission, ior, front ? 1 : 0)
+/// → `out[0]` = (f rgb, pdf), evaluated through [`crate::bsdf::disney::DisneyParams::at_wo_facing`]
+/// (so transmissive materials also refract).
 pub const PROBE_DISNEY_EVAL: u32 = 4;
-/// [`crate::bsdf::disney::DisneyParams::sample`]: `in[0..3]` as for [`PROBE_DISNEY_EVAL`], `in[3].xyz` =
-/// wo, `in[4].xyz` = u → `out[0]` = (wi xyz, pdf), `out[1].xyz` = f.
+/// [`crate::bsdf::disney::DisneyParams::sample`]: `in[0..3]` and `in[5]` as for [`PROBE_DISNEY_EVAL`],
+/// `in[3].xyz` = wo, `in[4].xyz` = u → `out[0]` = (wi xyz, pdf), `out[1].xyz` = f.
 pub const PROBE_DISNEY_SAMPLE: u32 = 5;
 /// [`crate::post::tonemap::tonemap_to_rgba8`]: `in[0]` = (hdr rgb, exposure EV) → `out[0].x` = packed
 /// RGBA8 (bits).
@@ -201,6 +203,7 @@ fn probe_disney_params(inputs: &[[f32; 4]], base: usize) -> crate::bsdf::disney:
     let a = inputs[base];
     let b = inputs[base + 1];
     let c = inputs[base + 2];
+    let t = inputs[base + 5];
     crate::bsdf::disney::DisneyParams {
         base_color: glam::Vec3::new(a[0], a[1], a[2]),
         metallic: a[3],
@@ -213,6 +216,8 @@ fn probe_disney_params(inputs: &[[f32; 4]], base: usize) -> crate::bsdf::disney:
         clearcoat: c[2],
         clearcoat_gloss: c[3],
         lambertian: false,
+        transmission: t[0],
+        ior: t[1],
     }
 }
 
@@ -292,12 +297,24 @@ pub fn probe_eval(
         out[0] = [hit.t, hit.b1, hit.b2, if hit.hit { 1.0 } else { 0.0 }];
     } else if selector == PROBE_DISNEY_EVAL {
         let params = probe_disney_params(inputs, base);
-        let (f, pdf) =
-            params.eval_and_pdf(probe_vec3(inputs[base + 3]), probe_vec3(inputs[base + 4]));
+        let front = inputs[base + 5][2] != 0.0;
+        let at_wo = params.at_wo_facing(
+            crate::scene::FeatureFlags::ALL,
+            probe_vec3(inputs[base + 3]),
+            front,
+        );
+        let (f, pdf) = at_wo.eval_and_pdf(probe_vec3(inputs[base + 4]));
         out[0] = [f.x, f.y, f.z, pdf];
     } else if selector == PROBE_DISNEY_SAMPLE {
         let params = probe_disney_params(inputs, base);
-        let s = params.sample(probe_vec3(inputs[base + 3]), probe_vec3(inputs[base + 4]));
+        let front = inputs[base + 5][2] != 0.0;
+        let s = params
+            .at_wo_facing(
+                crate::scene::FeatureFlags::ALL,
+                probe_vec3(inputs[base + 3]),
+                front,
+            )
+            .sample(probe_vec3(inputs[base + 4]));
         out[0] = [s.wi.x, s.wi.y, s.wi.z, s.pdf];
         out[1] = [s.f.x, s.f.y, s.f.z, 0.0];
     } else if selector == PROBE_TONEMAP {

@@ -76,6 +76,10 @@ pub fn load_gltf_from(
     // validating), so check those first, then validate.
     let mut root = document.into_json();
     let early_warnings = check_json(&mut root).map_err(malformed)?;
+    // The material extensions fovea maps itself (`crate::gltf_pbr`) are unknown to gltf's validation,
+    // which refuses a file that requires one: they are taken off the required list it checks.
+    root.extensions_required
+        .retain(|e| !crate::gltf_pbr::MAPPED_EXTENSIONS.contains(&e.as_str()));
     let document = gltf::Document::from_json(root).map_err(|e| malformed(e.to_string()))?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let buffers = load_buffers(source, path, &base, &document, blob)?;
@@ -1207,23 +1211,30 @@ mod tests {
         let base = triangle_gltf(TRI, None, "");
         let used = base.replace(
             r#""nodes":[{"mesh":0}]"#,
-            r#""nodes":[{"mesh":0}],"extensionsUsed":["KHR_materials_transmission"]"#,
+            r#""nodes":[{"mesh":0}],"extensionsUsed":["KHR_materials_iridescence"]"#,
         );
         std::fs::write(&file, used).unwrap();
         let s = load_scene(&file, &LoadOptions::default()).unwrap();
         assert!(
             s.warnings
                 .iter()
-                .any(|w| w.contains("KHR_materials_transmission") && w.contains("not supported")),
+                .any(|w| w.contains("KHR_materials_iridescence") && w.contains("not supported")),
             "{:?}",
             s.warnings
         );
         let required = base.replace(
             r#""nodes":[{"mesh":0}]"#,
-            r#""nodes":[{"mesh":0}],"extensionsUsed":["KHR_materials_transmission"],"extensionsRequired":["KHR_materials_transmission"]"#,
+            r#""nodes":[{"mesh":0}],"extensionsUsed":["KHR_materials_iridescence"],"extensionsRequired":["KHR_materials_iridescence"]"#,
         );
         std::fs::write(&file, required).unwrap();
         assert!(load_scene(&file, &LoadOptions::default()).is_err());
+        // A required extension fovea maps loads.
+        let mapped = base.replace(
+            r#""nodes":[{"mesh":0}]"#,
+            r#""nodes":[{"mesh":0}],"extensionsUsed":["KHR_materials_transmission"],"extensionsRequired":["KHR_materials_transmission"]"#,
+        );
+        std::fs::write(&file, mapped).unwrap();
+        assert!(load_scene(&file, &LoadOptions::default()).is_ok());
         std::fs::remove_dir_all(dir).ok();
     }
 

@@ -6,6 +6,8 @@
 //!
 //! | extension | fovea |
 //! |---|---|
+//! | `KHR_materials_transmission` (`transmissionFactor`) | `transmission`: the rough dielectric interface of `fovea_core::bsdf::dielectric` (GGX refraction, Walter et al. 2007) with the material's roughness and `ior`, tinted by the base colour, in place of the non-metallic base |
+//! | `KHR_materials_volume` (`thicknessFactor` > 0) | the mesh is a closed volume: its front faces are the outside of the interface. `attenuationColor`/`attenuationDistance` (absorption inside) are not applied. Without the extension glTF means a thin wall; fovea renders the same single refracting interface (a warning says so) |
 //! | `KHR_materials_ior` (`ior`) | `specular` = F0 / 0.08 with F0 = ((ior − 1) / (ior + 1))² (Burley's dielectric F0 is 0.08 · specular; ior 1.5 gives 0.5; clamped at 1, i.e. ior 1.78) |
 //! | `KHR_materials_specular` (`specularFactor`, `specularColorFactor`) | F0 above × `specularFactor` × the colour's largest component (Burley's specular is not coloured) |
 //! | `KHR_materials_clearcoat` (`clearcoatFactor`, `clearcoatRoughnessFactor`) | `clearcoat`, `clearcoat_gloss` = 1 − roughness |
@@ -14,14 +16,16 @@
 //! | `KHR_materials_unlit` | the base colour (and texture) becomes the emission, the BRDF black, and `MATERIAL_UNLIT` shows it to camera rays only (not a light, not in reflections) |
 //! | `KHR_materials_emissive_strength` | read by the loader (`emission` × strength) |
 //!
-//! What a material asks for and fovea cannot render (the extensions' textures, transmission, volume,
-//! iridescence, dispersion, `KHR_texture_transform`) is returned as [`Unsupported`] notes: the loader
-//! warns once per extension, naming the materials.
+//! What a material asks for and fovea cannot render (the extensions' textures, volume absorption, thin
+//! walls, iridescence, dispersion, `KHR_texture_transform`) is returned as [`Unsupported`] notes: the
+//! loader warns once per extension, naming the materials.
 use fovea_core::scene::{Material, MATERIAL_LAMBERTIAN, MATERIAL_UNLIT};
 use gltf::json::Value;
 
 /// The material extensions [`apply_material_extensions`] maps (in part, see the module table).
-pub const MAPPED_EXTENSIONS: [&str; 6] = [
+pub const MAPPED_EXTENSIONS: [&str; 8] = [
+    "KHR_materials_transmission",
+    "KHR_materials_volume",
     "KHR_materials_ior",
     "KHR_materials_specular",
     "KHR_materials_clearcoat",
@@ -49,8 +53,6 @@ impl Unsupported {
 /// What an unknown extension's absence means, for the warning.
 fn consequence(extension: &str) -> &'static str {
     match extension {
-        "KHR_materials_transmission" => "renders opaque (no transmission lobe)",
-        "KHR_materials_volume" => "has no volume absorption",
         "KHR_materials_iridescence" => "has no thin-film iridescence",
         "KHR_materials_dispersion" => "has no dispersion",
         "KHR_materials_diffuse_transmission" => "has no diffuse transmission",
@@ -129,6 +131,35 @@ pub fn apply_material_extensions(
     {
         material.specular = specular_from_ior(ior, specular_weight);
     }
+    if let Some(e) = extensions.get("KHR_materials_transmission") {
+        material.transmission = number(e, "transmissionFactor", 0.0).clamp(0.0, 1.0);
+        material.ior = if ior > 1.0 { ior } else { 1.5 };
+        texture_ignored(
+            e,
+            "KHR_materials_transmission",
+            &["transmissionTexture"],
+            &mut unsupported,
+        );
+        let volume = extensions
+            .get("KHR_materials_volume")
+            .is_some_and(|v| number(v, "thicknessFactor", 0.0) > 0.0);
+        if material.transmission > 0.0 && !volume {
+            unsupported.push(Unsupported::new(
+                "KHR_materials_transmission",
+                "a thin wall (no KHR_materials_volume) is rendered as one refracting interface",
+            ));
+        }
+    }
+    if let Some(e) = extensions.get("KHR_materials_volume") {
+        let absorbs = rgb(e, "attenuationColor", [1.0; 3]) != [1.0; 3]
+            && number(e, "attenuationDistance", f32::INFINITY).is_finite();
+        if absorbs {
+            unsupported.push(Unsupported::new(
+                "KHR_materials_volume",
+                "attenuationColor/attenuationDistance (absorption inside) is not applied",
+            ));
+        }
+    }
     if let Some(e) = extensions.get("KHR_materials_clearcoat") {
         material.clearcoat = number(e, "clearcoatFactor", 0.0).clamp(0.0, 1.0);
         material.clearcoat_gloss = 1.0 - number(e, "clearcoatRoughnessFactor", 0.0).clamp(0.0, 1.0);
@@ -201,7 +232,7 @@ mod tests {
 
     #[test]
     fn ior_sets_the_dielectric_reflectance() {
-        assert_eq!(specular_from_ior(1.5, 1.0), 0.5);
+        assert!((specular_from_ior(1.5, 1.0) - 0.5).abs() < 1e-6);
         let (m, notes) = apply(r#"{"KHR_materials_ior":{"ior":1.33}}"#);
         let f0 = (0.33f32 / 2.33).powi(2);
         assert!((m.specular - f0 / 0.08).abs() < 1e-6, "{}", m.specular);
@@ -270,14 +301,31 @@ mod tests {
     }
 
     #[test]
-    fn unknown_extensions_are_reported_with_their_consequence() {
+    fn transmission_and_volume_make_a_refracting_interface() {
         let (m, notes) = apply(
-            r#"{"KHR_materials_transmission":{"transmissionFactor":1},"KHR_materials_volume":{}}"#,
+            r#"{"KHR_materials_transmission":{"transmissionFactor":0.9},"KHR_materials_ior":{"ior":1.45},
+                "KHR_materials_volume":{"thicknessFactor":0.5}}"#,
         );
+        assert_eq!((m.transmission, m.ior), (0.9, 1.45));
+        assert!(notes.is_empty(), "{notes:?}");
+        // No volume: a thin wall, reported; absorption: reported.
+        let (m, notes) = apply(r#"{"KHR_materials_transmission":{"transmissionFactor":1}}"#);
+        assert_eq!((m.transmission, m.ior), (1.0, 1.5));
+        assert_eq!(notes.len(), 1);
+        assert!(notes[0].what.contains("thin wall"));
+        let (_, notes) = apply(
+            r#"{"KHR_materials_transmission":{"transmissionFactor":1},
+                "KHR_materials_volume":{"thicknessFactor":1,"attenuationColor":[0.5,1,1],"attenuationDistance":2}}"#,
+        );
+        assert_eq!(notes.len(), 1);
+        assert!(notes[0].what.contains("attenuation"));
+    }
+
+    #[test]
+    fn unknown_extensions_are_reported_with_their_consequence() {
+        let (m, notes) = apply(r#"{"KHR_materials_iridescence":{"iridescenceFactor":1}}"#);
         assert_eq!(m, Material::default());
-        assert_eq!(notes.len(), 2);
-        assert!(notes
-            .iter()
-            .any(|n| n.extension == "KHR_materials_transmission" && n.what.contains("opaque")));
+        assert_eq!(notes.len(), 1);
+        assert!(notes[0].what.contains("iridescence"));
     }
 }

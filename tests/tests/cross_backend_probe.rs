@@ -450,16 +450,33 @@ fn disney_head(rng: &mut Rng) -> [[f32; 4]; 3] {
     ]
 }
 
+/// `in[5]` of a Disney probe item: every third item transmissive (weight 1 or random, glass-like or
+/// extreme indices, outside or inside), the others opaque.
+fn disney_transmission(rng: &mut Rng, i: usize) -> [f32; 4] {
+    if i % 3 != 2 {
+        return [0.0, 1.5, 1.0, 0.0];
+    }
+    let weight = if rng.below(2) == 0 { 1.0 } else { rng.f() };
+    let ior = [1.5, 1.33, 2.4, 1.0001, 4.0][rng.below(5) as usize];
+    let front = if rng.below(2) == 0 { 1.0 } else { 0.0 };
+    [weight, ior, front, 0.0]
+}
+
 fn disney_eval_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
     let mut v = Vec::new();
     for i in 0..n {
         let head = disney_head(rng);
+        let transmission = disney_transmission(rng, i);
         let wo = local_dir(rng);
-        let wi = match i % 6 {
+        let mut wi = match i % 6 {
             // The mirror direction (the specular peak, where roughness 0 is a delta).
             0 => [-wo[0], -wo[1], wo[2]],
             _ => local_dir(rng),
         };
+        if transmission[0] > 0.0 && rng.below(2) == 0 {
+            // Below the surface: refraction.
+            wi[2] = -wi[2];
+        }
         push_item(
             &mut v,
             &[
@@ -468,6 +485,7 @@ fn disney_eval_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
                 head[2],
                 [wo[0], wo[1], wo[2], 0.0],
                 [wi[0], wi[1], wi[2], 0.0],
+                transmission,
             ],
         );
     }
@@ -479,6 +497,7 @@ fn disney_sample_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
     let edge = [0.0, 1.0 - f32::EPSILON / 2.0, 0.5];
     for i in 0..n {
         let head = disney_head(rng);
+        let transmission = disney_transmission(rng, i);
         let wo = local_dir(rng);
         let mut u = [rng.f(), rng.f(), rng.f()];
         if i % 5 == 0 {
@@ -492,6 +511,7 @@ fn disney_sample_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {
                 head[2],
                 [wo[0], wo[1], wo[2], 0.0],
                 [u[0], u[1], u[2], 0.0],
+                transmission,
             ],
         );
     }

@@ -565,7 +565,7 @@ fn emitter(radiance: f32, double_sided: bool) -> Material {
 }
 
 /// A scene built to break things: a closed room (diffuse, mirror and rough-metal walls), mirror and
-/// glossy icospheres, emitters of size 1e-6 to 1e3 with radiance up to 1e6 (one-sided and two-sided,
+/// glossy and glass (rough, and smooth with index 4) icospheres, emitters of size 1e-6 to 1e3 with radiance up to 1e6 (one-sided and two-sided,
 /// needles and a collinear "triangle" among them), a stack of coplanar triangles, a huge far triangle,
 /// tiny triangles far from the origin, adversarial vertex normals (non-unit, flipped, opposite at the
 /// corners of one triangle) and a constant sky through an opening.
@@ -590,6 +590,16 @@ fn adversarial_scene(environment: &Environment) -> PackedScene {
             roughness: 0.0,
             ..material(1.0, 0.0, 0.0)
         }, // 6 everything at once
+        Material {
+            transmission: 1.0,
+            ior: 1.5,
+            ..material(1.0, 0.0, 0.3)
+        }, // 7 rough glass
+        Material {
+            transmission: 0.7,
+            ior: 4.0,
+            ..material(0.9, 0.3, 0.0)
+        }, // 8 smooth, partly metallic, extreme index
     ];
     let mut tri = |p: [Vec3; 3], n: [Vec3; 3], m: u32| {
         let base = positions.len() as u32;
@@ -657,10 +667,12 @@ fn adversarial_scene(environment: &Environment) -> PackedScene {
         ],
         0,
     );
-    // Spheres with smooth normals (mirror and everything-at-once).
+    // Spheres with smooth normals (mirror, everything-at-once, rough glass, extreme glass).
     for (c, r, m) in [
         (v(-0.4, -0.5, -0.2), 0.4, 1u32),
         (v(0.5, -0.6, 0.3), 0.3, 6),
+        (v(0.1, -0.3, -0.6), 0.25, 7),
+        (v(-0.5, 0.3, 0.45), 0.2, 8),
     ] {
         let (p, t) = icosphere(c, r, 2);
         for f in t {

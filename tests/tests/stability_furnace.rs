@@ -19,6 +19,10 @@
 //!   cosine-weighted grid); the mean over the sphere's interior pixels must match within 1 %.
 //! - **white Lambertian diffuse** (the same with `MATERIAL_LAMBERTIAN`): the quadrature albedo is 1 at
 //!   every angle, and so must the image's mean be, within 1 %.
+//! - **clear glass** (`transmission = 1`, `ior = 1.5`, roughness 0: the rough dielectric of
+//!   `fovea_core::bsdf::dielectric` at alpha 1e-4): light is split, refracted and reflected inside the
+//!   sphere (here paths do meet the object twice) but never absorbed, so the image must again be
+//!   uniformly 1 within 1 %, like the conductor's.
 use std::time::Instant;
 
 use fovea_core::bsdf::DisneyParams;
@@ -42,6 +46,8 @@ struct Furnace {
     material: Material,
     /// `None`: the expected radiance is 1 everywhere.
     albedo_table: Option<Vec<f64>>,
+    /// Largest error allowed of a background or silhouette pixel.
+    edge_tolerance: f64,
 }
 
 fn conductor() -> Material {
@@ -69,6 +75,20 @@ fn lambertian() -> Material {
     Material {
         flags: fovea_core::scene::MATERIAL_LAMBERTIAN,
         ..diffuse()
+    }
+}
+
+/// Clear glass: a smooth dielectric of index 1.5 with a white tint, nothing else. A path that enters
+/// the sphere leaves it again, every interface splits it by Fresnel and refracts or reflects it without
+/// loss (the 1/η² of radiance entering is undone leaving), so every pixel is 1.
+fn glass() -> Material {
+    Material {
+        base_color: [1.0, 1.0, 1.0, 1.0],
+        metallic: 0.0,
+        roughness: 0.0,
+        transmission: 1.0,
+        ior: 1.5,
+        ..Default::default()
     }
 }
 
@@ -137,8 +157,16 @@ fn camera() -> Camera {
     )
 }
 
+/// Paths of up to 1000 bounces, so that the light the glass sphere keeps inside still finds its way out:
+/// light entering near the rim meets the inside close to the critical angle, and the flat facets turn
+/// some of it past it, where total internal reflection traps it for many bounces. Measured on the CPU
+/// at 64 spp: with 16 bounces 10 % of the sphere's pixels lost at least one sample's light (mean
+/// -0.4 %), with 64 bounces 7 % (-0.2 %), with 1000 fewer than 1 %. The opaque spheres' paths end after
+/// one bounce either way.
 fn frame(spp: u32) -> FrameParams {
-    fovea_tests::frame_params(camera(), FoveationParams::uniform(spp), W, H, 11)
+    let mut frame = fovea_tests::frame_params(camera(), FoveationParams::uniform(spp), W, H, 11);
+    frame.integrator.max_bounces = 1000;
+    frame
 }
 
 /// Per pixel: `Some(expected luminance)` for pixels whose centre and four corners all see the sphere
@@ -268,16 +296,27 @@ fn furnaces() -> Vec<Furnace> {
             name: "white conductor, roughness 0",
             material: conductor(),
             albedo_table: None,
+            edge_tolerance: 0.01,
         },
         Furnace {
             name: "white Disney diffuse, roughness 1",
             material: diffuse(),
             albedo_table: Some(albedo_table(&diffuse())),
+            edge_tolerance: 0.01,
         },
         Furnace {
             name: "white Lambertian diffuse",
             material: lambertian(),
             albedo_table: Some(lambertian_albedo()),
+            edge_tolerance: 0.01,
+        },
+        Furnace {
+            name: "clear glass sphere, ior 1.5",
+            material: glass(),
+            albedo_table: None,
+            // Silhouette pixels see the rim at grazing incidence, where light is trapped longest (see
+            // `frame`): two of their 64 samples may still be inside after 1000 bounces (measured 0.031).
+            edge_tolerance: 0.05,
         },
     ]
 }
@@ -326,7 +365,11 @@ fn check(backend: &str, furnace: &Furnace, f: &Figures, spp: u32, seconds: f64) 
         // light samples that land in that tail; that is variance, not bias (the mean is within 1e-4).
         assert!(f.max_tile_error < 0.01, "{}", f.max_tile_error);
         assert!(f.within_1_percent > 0.99, "{}", f.within_1_percent);
-        assert!(f.max_background_error < 0.01, "{}", f.max_background_error);
+        assert!(
+            f.max_background_error < furnace.edge_tolerance,
+            "{}",
+            f.max_background_error
+        );
     }
 }
 

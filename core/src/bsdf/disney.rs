@@ -1,7 +1,7 @@
 //! The Disney principled BRDF (Burley 2012, "Physically-Based Shading at Disney", §5 and the BRDF
 //! Explorer `disney.brdf`): retro-reflective diffuse, sheen, anisotropic GGX specular and a GTR1
-//! clearcoat, combined by energy-conserving albedo scaling (below). Reflection only: no subsurface, no
-//! transmission.
+//! clearcoat, combined by energy-conserving albedo scaling (below). No subsurface; transmission is a rough
+//! dielectric mixed in by [`DisneyAtWo`] ([`crate::bsdf::dielectric`]).
 //!
 //! Conventions of [`crate::bsdf`]: local frame with `z` the shading normal, `wo` and `wi` away from the
 //! surface, `f` without the cosine, solid-angle pdf over `wi`. Both directions must be above the
@@ -39,12 +39,16 @@ use crate::sampling::ggx_vndf::{ggx_d, normalize_or_zero, sample_ggx_vndf, smith
 use crate::sampling::warp::square_to_cosine_hemisphere;
 use crate::scene::features::{
     FEATURE_LOBE_ANISOTROPY, FEATURE_LOBE_CLEARCOAT, FEATURE_LOBE_METALLIC, FEATURE_LOBE_SHEEN,
-    FEATURE_LOBE_SPECULAR,
+    FEATURE_LOBE_SPECULAR, FEATURE_LOBE_TRANSMISSION,
 };
 use crate::scene::{FeatureFlags, Features};
 use glam::{Vec2, Vec3};
 
+use super::dielectric::RoughDielectric;
 pub use crate::sampling::ggx_vndf::ALPHA_MIN;
+
+/// The largest f32 below 1: a rescaled random number stays in [0, 1).
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Disney BRDF parameters at a shading point (after textures are applied).
 #[derive(Clone, Copy, Debug)]
@@ -66,6 +70,12 @@ pub struct DisneyParams {
     /// comparisons with renderers that model a purely diffuse surface that way. The other lobes and the
     /// layering are unchanged (a Lambertian base's albedo is exactly its colour).
     pub lambertian: bool,
+    /// Weight of the rough dielectric interface ([`crate::bsdf::dielectric`]) that replaces the
+    /// non-metallic part of the BRDF: with `w = transmission · (1 - metallic)`, the BSDF is
+    /// `(1 - w) f_disney + w f_dielectric` (see [`DisneyAtWo`]). 0: reflection only.
+    pub transmission: f32,
+    /// Index of refraction of the inside (the back side of the geometric normal) over the outside.
+    pub ior: f32,
 }
 
 /// The result of importance sampling the BRDF.
@@ -271,6 +281,8 @@ impl DisneyParams {
             clearcoat: 0.0,
             clearcoat_gloss: 0.0,
             lambertian: false,
+            transmission: 0.0,
+            ior: 1.5,
         }
     }
 
@@ -417,12 +429,49 @@ impl DisneyParams {
     #[inline]
     #[must_use]
     pub fn at_wo<F: Features>(&self, features: F, wo: Vec3) -> DisneyAtWo {
+        self.at_wo_facing(features, wo, true)
+    }
+
+    /// [`DisneyParams::at_wo`] for a `wo` on the front (`front`, outside) or back (inside) side of the
+    /// geometric normal, which decides which way a transmissive material's index of refraction points.
+    /// The local frame has `z` on `wo`'s side either way.
+    #[inline]
+    #[must_use]
+    pub fn at_wo_facing<F: Features>(&self, features: F, wo: Vec3, front: bool) -> DisneyAtWo {
         let wo = normalize_or_zero(wo);
         // Below the surface nothing reflects (`eval_and_pdf` and `sample` then return zero without
         // looking at the lobes); `cos_o` is clamped so that the lobes, computed anyway, stay within the
         // albedo fits' domain.
         let lobes = self.lobes(wo.z.max(0.0), features);
-        DisneyAtWo { lobes, wo }
+        let mut transmission_weight = 0.0;
+        let mut dielectric = RoughDielectric {
+            eta: 1.0,
+            ax: lobes.ax,
+            ay: lobes.ay,
+            tint: Vec3::ONE,
+        };
+        if features.has(FEATURE_LOBE_TRANSMISSION) && self.transmission > 0.0 {
+            let metallic = if features.has(FEATURE_LOBE_METALLIC) {
+                self.metallic.clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            transmission_weight = self.transmission.min(1.0) * (1.0 - metallic);
+            // An index at or below 1 (or NaN) would make a surface that refracts nothing: glass's 1.5.
+            let ior = if self.ior > 1.0 && self.ior.is_finite() {
+                self.ior
+            } else {
+                1.5
+            };
+            dielectric.eta = if front { ior } else { 1.0 / ior };
+            dielectric.tint = self.base_color.clamp(Vec3::ZERO, Vec3::ONE);
+        }
+        DisneyAtWo {
+            lobes,
+            wo,
+            transmission_weight,
+            dielectric,
+        }
     }
 
     /// [`DisneyParams::eval_and_pdf`] for unit `wo`, `wi` above the surface and `lobes` of `wo.z`.
@@ -534,27 +583,77 @@ impl DisneyParams {
 }
 
 /// A [`DisneyParams`] prepared for one outgoing direction by [`DisneyParams::at_wo`].
+///
+/// A transmissive material (weight `w` = [`DisneyParams::transmission`] × (1 − metallic) > 0) is the
+/// one-sample mixture `(1 - w) f_disney + w f_dielectric`: both reflect into the upper hemisphere, only
+/// the dielectric refracts into the lower one; `sample` picks the dielectric with probability `w` and
+/// returns the mixture's value and pdf. With `w = 0` every number is the Disney BRDF's alone, computed
+/// as before (the random numbers are used unchanged), so opaque materials keep their exact images.
 pub struct DisneyAtWo {
     lobes: Lobes,
     /// The unit outgoing direction (zero if degenerate).
     wo: Vec3,
+    /// `w` above; 0 for opaque materials and feature sets without transmission.
+    transmission_weight: f32,
+    dielectric: RoughDielectric,
 }
 
 impl DisneyAtWo {
-    /// [`DisneyParams::eval_and_pdf`] at this `wo`.
+    /// Whether the material refracts (so that a direction below the surface can carry light).
+    #[inline]
+    #[must_use]
+    pub fn transmits(&self) -> bool {
+        self.transmission_weight > 0.0
+    }
+
+    /// [`DisneyParams::eval_and_pdf`] at this `wo`; for a transmissive material also below the surface.
     #[inline]
     #[must_use]
     pub fn eval_and_pdf(&self, wi: Vec3) -> (Vec3, f32) {
         let wi = normalize_or_zero(wi);
+        let w = self.transmission_weight;
+        if w > 0.0 && self.wo.z > 0.0 {
+            let (f_t, pdf_t) = self.dielectric.eval_and_pdf(self.wo, wi);
+            if !(wi.z > 0.0) {
+                return (f_t * w, pdf_t * w);
+            }
+            let (f_d, pdf_d) = DisneyParams::eval_and_pdf_unit(&self.lobes, self.wo, wi);
+            return (f_d * (1.0 - w) + f_t * w, pdf_d * (1.0 - w) + pdf_t * w);
+        }
         if !(self.wo.z > 0.0 && wi.z > 0.0) {
             return (Vec3::ZERO, 0.0);
         }
         DisneyParams::eval_and_pdf_unit(&self.lobes, self.wo, wi)
     }
 
-    /// [`DisneyParams::sample`] at this `wo`.
+    /// [`DisneyParams::sample`] at this `wo`; a transmissive material picks the dielectric with
+    /// probability `w` (see the type's documentation).
     #[must_use]
     pub fn sample(&self, u: Vec3) -> BsdfSample {
+        let w = self.transmission_weight;
+        if w > 0.0 {
+            let s = if u.x < w {
+                self.dielectric
+                    .sample(self.wo, Vec3::new(u.x / w, u.y, u.z))
+            } else {
+                let rest = ((u.x - w) / (1.0 - w)).min(ONE_MINUS_EPSILON);
+                self.sample_disney(Vec3::new(rest, u.y, u.z))
+            };
+            if !(s.pdf > 0.0) {
+                return BsdfSample::failed();
+            }
+            let (f, pdf) = self.eval_and_pdf(s.wi);
+            if !(pdf > 0.0) {
+                return BsdfSample::failed();
+            }
+            return BsdfSample { wi: s.wi, f, pdf };
+        }
+        self.sample_disney(u)
+    }
+
+    /// The Disney BRDF's own sampling ([`DisneyParams::sample`]).
+    #[must_use]
+    fn sample_disney(&self, u: Vec3) -> BsdfSample {
         let (lobes, wo) = (&self.lobes, self.wo);
         if wo.z <= 0.0 {
             return BsdfSample::failed();
@@ -615,6 +714,8 @@ mod tests {
                 clearcoat: self.next(),
                 clearcoat_gloss: self.next(),
                 lambertian: false,
+                transmission: 0.0,
+                ior: 1.5,
             }
         }
     }
@@ -637,6 +738,8 @@ mod tests {
                 clearcoat: cc,
                 clearcoat_gloss: gloss,
                 lambertian: false,
+                transmission: 0.0,
+                ior: 1.5,
             });
         }
         out
@@ -923,6 +1026,8 @@ mod tests {
             clearcoat: 0.0,
             clearcoat_gloss: 0.0,
             lambertian: false,
+            transmission: 0.0,
+            ior: 1.5,
         };
         let wild = DisneyParams {
             base_color: Vec3::new(-1.0, 1e30, 3.0),
@@ -936,6 +1041,8 @@ mod tests {
             clearcoat: 4.0,
             clearcoat_gloss: -8.0,
             lambertian: false,
+            transmission: 0.0,
+            ior: 1.5,
         };
         let mirror_like = DisneyParams {
             metallic: 1.0,

@@ -30,6 +30,7 @@ use crate::lights::{
 use crate::material::surface_point;
 use crate::math::color::is_finite3;
 use crate::rng::SampleRng;
+use crate::scene::features::FEATURE_LOBE_TRANSMISSION;
 use crate::scene::{SceneSlices, SceneSource, SceneView, INVALID_INDEX};
 
 /// [`IntegratorSettings::strategy`]: next-event estimation and BSDF sampling combined by MIS.
@@ -207,10 +208,12 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
             break;
         }
 
-        // Two-sided shading: put both normals on the side the path arrives from.
+        // Two-sided shading: put both normals on the side the path arrives from (which, for a
+        // transmissive material, says whether the path is outside or inside).
         let mut frame = surface.frame;
         let mut ng = surface.geometric_normal;
-        if ng.dot(wo_world) < 0.0 {
+        let front = !(ng.dot(wo_world) < 0.0);
+        if !front {
             ng = -ng;
             frame.x = -frame.x;
             frame.z = -frame.z;
@@ -220,22 +223,34 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
             // The shading normal faces away from the viewer although the geometric one does not.
             break;
         }
-        let bsdf = surface.params.at_wo(scene.features, wo);
+        let bsdf = surface.params.at_wo_facing(scene.features, wo, front);
         let origin = offset_ray_origin(surface.position, ng, surface.magnitude);
+        // A transmissive material also sends light through the surface: such rays leave from the
+        // other side.
+        let transmits = scene.features.has(FEATURE_LOBE_TRANSMISSION) && bsdf.transmits();
+        let origin_below = if transmits {
+            offset_ray_origin(surface.position, -ng, surface.magnitude)
+        } else {
+            origin
+        };
 
         // Next-event estimation.
         if use_nee {
             let u_select = rng.next_1d();
             let u_light = rng.next_2d();
             let ls = sample_light(scene, source, surface.position, u_select, u_light);
-            if ls.pdf > 0.0 && ls.direction.dot(ng) > 0.0 {
+            let light_below = !(ls.direction.dot(ng) > 0.0);
+            if ls.pdf > 0.0 && (!light_below || transmits) {
                 let wi = frame.to_local(ls.direction);
                 let (f, pdf_b) = bsdf.eval_and_pdf(wi);
-                if wi.z > 0.0 && f != Vec3::ZERO {
+                // The shading frame must agree with the geometric side the light is on.
+                let same_side = if light_below { wi.z < 0.0 } else { wi.z > 0.0 };
+                if same_side && f != Vec3::ZERO {
+                    let from = if light_below { origin_below } else { origin };
                     let shadow = if ls.is_infinite {
-                        Ray::new(origin, ls.direction)
+                        Ray::new(from, ls.direction)
                     } else {
-                        Ray::new(origin, ls.target - origin)
+                        Ray::new(from, ls.target - from)
                     };
                     let t_max = if ls.is_infinite {
                         INFINITE_DISTANCE
@@ -248,7 +263,7 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
                         } else {
                             power_heuristic(ls.pdf, pdf_b)
                         };
-                        radiance += throughput * f * ls.radiance * (wi.z * weight / ls.pdf);
+                        radiance += throughput * f * ls.radiance * (wi.z.abs() * weight / ls.pdf);
                     }
                 }
             }
@@ -264,13 +279,20 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
             break;
         }
         let wi_world = frame.to_world(s.wi);
-        if wi_world.dot(ng) <= 0.0 {
-            // Below the geometric surface although above the shading one: the sample would leak.
+        // Refracted (below the shading surface: transmissive materials only) or reflected.
+        let refracted = s.wi.z < 0.0;
+        let leaks = if refracted {
+            !(wi_world.dot(ng) < 0.0)
+        } else {
+            wi_world.dot(ng) <= 0.0
+        };
+        if leaks {
+            // On the other geometric side than the shading one: the sample would leak.
             break;
         }
-        // `s.pdf > 0` and `0 < s.wi.z <= 1` (unit, above the surface), so the factor is finite unless the
-        // pdf is denormal; no finiteness test here (see the module documentation, "Numerical guards").
-        throughput *= s.f * (s.wi.z / s.pdf);
+        // `s.pdf > 0` and `0 < |s.wi.z| <= 1` (unit), so the factor is finite unless the pdf is
+        // denormal; no finiteness test here (see the module documentation, "Numerical guards").
+        throughput *= s.f * (s.wi.z.abs() / s.pdf);
         if throughput == Vec3::ZERO {
             break;
         }
@@ -284,7 +306,7 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
             throughput /= survive;
         }
 
-        ray = Ray::new(origin, wi_world);
+        ray = Ray::new(if refracted { origin_below } else { origin }, wi_world);
         bounce += 1;
     }
     if settings.flags & INTEGRATOR_FLAG_NO_FINAL_GUARD != 0 {

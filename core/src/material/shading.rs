@@ -48,6 +48,8 @@ pub fn material_params(material: &Material) -> DisneyParams {
         clearcoat: material.clearcoat,
         clearcoat_gloss: material.clearcoat_gloss,
         lambertian: material.flags & MATERIAL_LAMBERTIAN != 0,
+        transmission: material.transmission,
+        ior: material.ior,
     }
 }
 

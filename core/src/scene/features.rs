@@ -49,12 +49,14 @@ pub const FEATURE_LOBE_METALLIC: u32 = 1 << 13;
 pub const FEATURE_SHADING_NORMALS: u32 = 1 << 14;
 /// Per-vertex texture coordinates (needed by textures and by the tangent of anisotropy).
 pub const FEATURE_UVS: u32 = 1 << 15;
+/// The rough dielectric interface of transmissive materials ([`crate::bsdf::dielectric`]).
+pub const FEATURE_LOBE_TRANSMISSION: u32 = 1 << 16;
 
 /// Every feature: the general render path (`--no-specialize`).
-pub const FEATURES_ALL: u32 = (1 << 16) - 1;
+pub const FEATURES_ALL: u32 = (1 << 17) - 1;
 
 /// Names of the feature bits, bit `i` at index `i` (for `--verbose` and `--stats`).
-pub const FEATURE_NAMES: [&str; 16] = [
+pub const FEATURE_NAMES: [&str; 17] = [
     "base_color_texture",
     "metallic_roughness_texture",
     "normal_texture",
@@ -71,6 +73,7 @@ pub const FEATURE_NAMES: [&str; 16] = [
     "lobe_metallic",
     "shading_normals",
     "uvs",
+    "lobe_transmission",
 ];
 
 /// A set of features to test against; see the module documentation.
@@ -196,6 +199,9 @@ impl FeatureFlags {
         }
         if metallic || !(m.specular == 0.0) {
             bits |= FEATURE_LOBE_SPECULAR;
+        }
+        if !(m.transmission == 0.0) {
+            bits |= FEATURE_LOBE_TRANSMISSION;
         }
         bits
     }

@@ -424,7 +424,14 @@ pub struct Material {
     pub emission_texture: u32,
     /// A separate opacity texture (OBJ `map_d`), read from its alpha channel; [`INVALID_INDEX`] if none.
     pub alpha_texture: u32,
-    pub _pad: [u32; 3],
+    /// Weight of the rough dielectric interface (`crate::bsdf::dielectric`, glTF
+    /// `KHR_materials_transmission`): the non-metallic part of the material refracts this fraction of
+    /// the light it does not reflect, tinted by the base colour. 0: opaque.
+    pub transmission: f32,
+    /// Index of refraction of the material's inside (relative to the outside, the side the
+    /// counter-clockwise front face points to); read only where `transmission` is above 0.
+    pub ior: f32,
+    pub _pad: u32,
 }
 
 impl Default for Material {
@@ -449,7 +456,9 @@ impl Default for Material {
             normal_texture: INVALID_INDEX,
             emission_texture: INVALID_INDEX,
             alpha_texture: INVALID_INDEX,
-            _pad: [0; 3],
+            transmission: 0.0,
+            ior: 1.5,
+            _pad: 0,
         }
     }
 }
@@ -480,7 +489,9 @@ impl Material {
             normal_texture: textures.z,
             emission_texture: textures.w,
             alpha_texture: alpha.x,
-            _pad: [0; 3],
+            transmission: f32::from_bits(alpha.y),
+            ior: f32::from_bits(alpha.z),
+            _pad: 0,
         }
     }
 

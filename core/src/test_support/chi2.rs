@@ -50,13 +50,15 @@ pub(crate) const SIGNIFICANCE: f64 = 0.01;
 /// angles; alpha 1e-4 is a near-delta, not chi-square tested); Disney lobes 18 (specular 4 roughnesses ×
 /// 3 angles, clearcoat 2 glosses × 3 angles); Disney full BSDF 112 (the 96 corners less the 8 pure
 /// near-delta mirrors, and the 24 corners with a Lambertian diffuse lobe); lights 4 (2 triangle
-/// configurations, 2 environment maps).
-pub(crate) const FAMILY_PARTS: [(&str, u32); 5] = [
+/// configurations, 2 environment maps); rough dielectric 12 (4 roughness and index pairs × 3 incident
+/// angles).
+pub(crate) const FAMILY_PARTS: [(&str, u32); 6] = [
     ("cosine hemisphere", 1),
     ("ggx vndf", 20),
     ("disney lobes", 18),
     ("disney full bsdf", 112),
     ("lights", 4),
+    ("rough dielectric", 12),
 ];
 
 /// Total number of chi-square tests in the family.
