@@ -1,10 +1,15 @@
 #!/usr/bin/env python3
-"""Writes assets/pbr_extensions/pbr_extensions.gltf: a floor and nine spheres, each with one glTF PBR
-extension (KHR_materials_ior, _specular, _clearcoat, _sheen, _anisotropy, _unlit, _emissive_strength,
-_transmission + _volume, and KHR_texture_transform on a checker texture), a camera and a point light.
+"""Writes two generated test scenes (CC0, like the rest of the repository's own assets):
 
-The test scene of the loader's extension mapping (scene/src/gltf_pbr.rs) and of tests/tests/pbr_scene.rs.
-Generated here, so it is CC0 like the rest of the repository's own assets. Run from the repository root:
+- assets/pbr_extensions/pbr_extensions.gltf: a floor and nine spheres, each with one glTF PBR extension
+  (KHR_materials_ior, _specular, _clearcoat, _sheen, _anisotropy, _unlit, _emissive_strength,
+  _transmission + _volume, and KHR_texture_transform on a checker texture), a camera and a point light:
+  the test scene of the loader's extension mapping (scene/src/gltf_pbr.rs) and of tests/tests/pbr_scene.rs.
+- assets/pbr_extensions/checker_floor.gltf: a 400 x 400 floor under a 512 x 512 texture of one-texel
+  checks repeated 40 times, seen from 1.7 units up towards the horizon, lit by a directional light: the
+  minification case of the texture level of detail (`fovea report ... --texture-lod`).
+
+Run from the repository root:
     python3 scripts/make-pbr-scene.py
 """
 import base64
@@ -43,7 +48,7 @@ def icosphere(levels):
 
 
 def checker_png(n=8):
-    """An n x n RGBA checker, 8-bit, as PNG bytes."""
+    """An n x n RGBA checker of one-texel squares, 8-bit, as PNG bytes."""
     rows = b""
     for y in range(n):
         rows += b"\0" + b"".join(
@@ -149,5 +154,53 @@ def main():
         f.write("\n")
 
 
+def checker_floor():
+    size, repeat = 200.0, 40.0
+    vs = [(-size, 0, -size), (size, 0, -size), (size, 0, size), (-size, 0, size)]
+    uvs = [(0, 0), (repeat, 0), (repeat, repeat), (0, repeat)]
+    blob = b"".join(struct.pack("<3f", *v) for v in vs)
+    uv_off = len(blob)
+    blob += b"".join(struct.pack("<2f", *t) for t in uvs)
+    idx_off = len(blob)
+    blob += struct.pack("<6H", 0, 2, 1, 0, 3, 2)
+    gltf = {
+        "asset": {"version": "2.0", "generator": "fovea scripts/make-pbr-scene.py", "copyright": "CC0 1.0"},
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "directional", "intensity": 3}]}},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [
+            {"name": "floor", "mesh": 0},
+            {"name": "camera", "camera": 0, "translation": [0, 1.7, 0],
+             "rotation": [-math.sin(0.09), 0, 0, math.cos(0.09)]},
+            {"name": "sun", "rotation": [-math.sin(0.6), 0, 0, math.cos(0.6)],
+             "extensions": {"KHR_lights_punctual": {"light": 0}}},
+        ],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "aspectRatio": 16 / 9, "znear": 0.1}}],
+        "meshes": [{"name": "floor", "primitives": [
+            {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "materials": [{"name": "checker", "pbrMetallicRoughness": {
+            "baseColorTexture": {"index": 0}, "metallicFactor": 0, "roughnessFactor": 0.9}}],
+        "textures": [{"source": 0}],
+        "images": [{"uri": "data:image/png;base64," + base64.b64encode(checker_png(512)).decode()}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [-size, 0, -size], "max": [size, 0, size]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": uv_off},
+            {"buffer": 0, "byteOffset": uv_off, "byteLength": idx_off - uv_off},
+            {"buffer": 0, "byteOffset": idx_off, "byteLength": 12},
+        ],
+        "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
+    }
+    with open("assets/pbr_extensions/checker_floor.gltf", "w") as f:
+        json.dump(gltf, f, separators=(",", ":"))
+        f.write("\n")
+
+
 if __name__ == "__main__":
     main()
+    checker_floor()

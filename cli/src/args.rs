@@ -370,15 +370,35 @@ pub struct PathArgs {
     /// How block pixels are filled.
     #[arg(long, value_enum, default_value = "bilinear")]
     pub fill: Fill,
+    /// Which mip level a camera ray's first hit reads: `off`, level 0 (bilinear only); `pixel`, the
+    /// footprint of its pixel; `block`, of the sample's block (a periphery sample stands for 4x4 pixels:
+    /// two levels coarser than the fovea). Off by default: on texture atlases such as Lost Empire's,
+    /// coarse levels mix neighbouring tiles (see docs/performance.md, "Texture level of detail").
+    #[arg(long, value_enum, default_value = "off")]
+    pub texture_lod: TextureLod,
+}
+
+/// `--texture-lod`: see [`PathArgs::texture_lod`].
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureLod {
+    Off,
+    Pixel,
+    Block,
 }
 
 impl PathArgs {
     /// The integrator's settings.
     #[must_use]
     pub fn integrator(&self) -> fovea_core::integrator::IntegratorSettings {
+        use fovea_core::integrator::path::{TEXTURE_LOD_BLOCK, TEXTURE_LOD_OFF, TEXTURE_LOD_PIXEL};
         fovea_core::integrator::IntegratorSettings {
             max_bounces: self.depth,
             russian_roulette_start: self.russian_roulette,
+            texture_lod: match self.texture_lod {
+                TextureLod::Off => TEXTURE_LOD_OFF,
+                TextureLod::Pixel => TEXTURE_LOD_PIXEL,
+                TextureLod::Block => TEXTURE_LOD_BLOCK,
+            },
             ..Default::default()
         }
     }

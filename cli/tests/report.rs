@@ -80,6 +80,7 @@ fn quick_report_on_the_cornell_box() {
         "32/8/4",
         "32/2/1",
         "32/16/8 half radii",
+        "32/16/8 block texture LOD",
         "uniform 1",
         "uniform 2",
         "uniform 4",

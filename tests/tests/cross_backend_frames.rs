@@ -59,6 +59,9 @@ struct SceneCase {
     /// How purely diffuse MTL materials reflect (Lambertian for one Cornell box, so that both backends
     /// run that lobe too).
     mtl_diffuse: MtlDiffuse,
+    /// `TEXTURE_LOD_*` of the frame (the block-footprint mip levels for the textured generated scenes,
+    /// so that both backends run the trilinear lookups too).
+    texture_lod: u32,
 }
 
 fn cases() -> Vec<SceneCase> {
@@ -69,6 +72,7 @@ fn cases() -> Vec<SceneCase> {
         environment,
         view,
         mtl_diffuse: MtlDiffuse::Disney,
+        texture_lod: fovea_core::integrator::path::TEXTURE_LOD_OFF,
     };
     vec![
         case(
@@ -130,10 +134,21 @@ fn cases() -> Vec<SceneCase> {
         ),
         SceneCase {
             path: fovea_tests::repo_root().join("assets/pbr_extensions/pbr_extensions.gltf"),
+            texture_lod: fovea_core::integrator::path::TEXTURE_LOD_BLOCK,
             ..case(
-                "pbr_extensions (bundled)",
+                "pbr_extensions, block LOD",
                 "",
                 Environment::None,
+                View::FileOrFrame,
+            )
+        },
+        SceneCase {
+            path: fovea_tests::repo_root().join("assets/pbr_extensions/checker_floor.gltf"),
+            texture_lod: fovea_core::integrator::path::TEXTURE_LOD_BLOCK,
+            ..case(
+                "checker_floor, block LOD",
+                "",
+                Environment::Constant([0.3, 0.4, 0.6]),
                 View::FileOrFrame,
             )
         },
@@ -278,7 +293,8 @@ fn small_scenes_render_alike(traversal: fovea_vulkan::Traversal) {
             );
         }
         let cam = camera(&case.view, &packed, desc.as_ref());
-        let frame = frame_params(cam, foveation(), W, H, 7);
+        let mut frame = frame_params(cam, foveation(), W, H, 7);
+        frame.integrator.texture_lod = case.texture_lod;
         let (cpu, _) = render(&packed, &frame);
         let features = packed.features();
         let specialised_view = packed.view().with_features(features);

@@ -139,6 +139,9 @@ impl GpuScene {
             // Every array, even an empty one, gets 16 bytes, so its binding lies inside the buffer.
             texels_size = offsets[k] + (data.len() as u64).max(16);
         }
+        // Whole texels: the last array may end inside one (the view would then cut off its tail, which
+        // reads as zeros; the last texture's 1 × 1 mip level was lost that way).
+        let texels_size = align_up(texels_size, 16);
         let texel_count = texels_size / 16;
         if texel_count > ctx.limits.max_texel_buffer_elements {
             return Err(VulkanError::TooLarge {

@@ -1,7 +1,9 @@
 //! The configurations a report measures (the paper's Tables 1 and 2 and more): uniform 32 spp, foveated
-//! 32/16/8, 32/8/4, 32/2/1, 32/16/8 with both radii halved, the user's own (`--spp/--blocks/--radii/
-//! --eccentricity`), uniform at equal time, and a uniform sweep.
+//! 32/16/8, 32/8/4, 32/2/1, 32/16/8 with both radii halved, 32/16/8 with the other texture rule (the
+//! block-footprint mip levels if the report reads level 0, level 0 if it reads the block's levels), the
+//! user's own (`--spp/--blocks/--radii/--eccentricity`), uniform at equal time, and a uniform sweep.
 use fovea_core::foveation::regions::FoveationParams;
+use fovea_core::integrator::path::{TEXTURE_LOD_BLOCK, TEXTURE_LOD_OFF};
 
 /// What a configuration is, for the tables and the plot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -38,6 +40,8 @@ pub struct ConfigSpec {
     pub slug: String,
     pub kind: ConfigKind,
     pub foveation: FoveationParams,
+    /// The `TEXTURE_LOD_*` rule this configuration renders with; `None`: the report's (`--texture-lod`).
+    pub texture_lod: Option<u32>,
 }
 
 /// The uniform baseline's samples per pixel (the paper's 32).
@@ -59,6 +63,7 @@ pub fn uniform(spp: u32, kind: ConfigKind) -> ConfigSpec {
         slug,
         kind,
         foveation: FoveationParams::uniform(spp),
+        texture_lod: None,
     }
 }
 
@@ -76,13 +81,19 @@ pub fn user_config(foveation: FoveationParams) -> ConfigSpec {
         slug: "yours".into(),
         kind: ConfigKind::Foveated,
         foveation,
+        texture_lod: None,
     }
 }
 
 /// The fixed configurations: uniform 32, then the foveated ones derived from `paper` (the paper's
-/// 32/16/8 foveation with radii for this display and resolution), then the user's own if any.
+/// 32/16/8 foveation with radii for this display and resolution), 32/16/8 with the texture rule that
+/// `texture_lod` (the report's `TEXTURE_LOD_*`) is not, then the user's own if any.
 #[must_use]
-pub fn table_configs(paper: &FoveationParams, user: Option<&FoveationParams>) -> Vec<ConfigSpec> {
+pub fn table_configs(
+    paper: &FoveationParams,
+    user: Option<&FoveationParams>,
+    texture_lod: u32,
+) -> Vec<ConfigSpec> {
     let foveated = |spp: [u32; 3], radius_scale: f32, suffix: &str| {
         let mut f = *paper;
         f.spp = [spp[0], spp[1], spp[2], 0];
@@ -106,6 +117,7 @@ pub fn table_configs(paper: &FoveationParams, user: Option<&FoveationParams>) ->
             ),
             kind: ConfigKind::Foveated,
             foveation: f,
+            texture_lod: None,
         }
     };
     let mut configs = vec![
@@ -114,6 +126,17 @@ pub fn table_configs(paper: &FoveationParams, user: Option<&FoveationParams>) ->
         foveated([32, 8, 4], 1.0, ""),
         foveated([32, 2, 1], 1.0, ""),
         foveated([32, 16, 8], 0.5, "half radii"),
+        if texture_lod == TEXTURE_LOD_OFF {
+            ConfigSpec {
+                texture_lod: Some(TEXTURE_LOD_BLOCK),
+                ..foveated([32, 16, 8], 1.0, "block texture LOD")
+            }
+        } else {
+            ConfigSpec {
+                texture_lod: Some(TEXTURE_LOD_OFF),
+                ..foveated([32, 16, 8], 1.0, "texture level 0")
+            }
+        },
     ];
     configs.extend(user.map(|f| user_config(*f)));
     configs
@@ -185,7 +208,7 @@ mod tests {
     #[test]
     fn table_has_the_papers_configurations() {
         let paper = FoveationParams::paper([960.0, 540.0], 73.8, 243.0);
-        let c = table_configs(&paper, None);
+        let c = table_configs(&paper, None, TEXTURE_LOD_OFF);
         let names: Vec<_> = c.iter().map(|c| c.name.as_str()).collect();
         assert_eq!(
             names,
@@ -194,9 +217,16 @@ mod tests {
                 "32/16/8",
                 "32/8/4",
                 "32/2/1",
-                "32/16/8 half radii"
+                "32/16/8 half radii",
+                "32/16/8 block texture LOD"
             ]
         );
+        assert_eq!(c[5].texture_lod, Some(TEXTURE_LOD_BLOCK));
+        assert!(c[..5].iter().all(|c| c.texture_lod.is_none()));
+        // A report that reads the block's levels compares with level 0.
+        let c = table_configs(&paper, None, TEXTURE_LOD_BLOCK);
+        assert_eq!(c[5].name, "32/16/8 texture level 0");
+        assert_eq!(c[5].texture_lod, Some(TEXTURE_LOD_OFF));
         assert_eq!(c[0].foveation, FoveationParams::uniform(32));
         assert_eq!(c[1].foveation, paper);
         assert_eq!(c[3].foveation.spp, [32, 2, 1, 0]);

@@ -274,7 +274,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         ));
     }
     // Samples of every render known now (the reference and equal time are added when known).
-    let per_scene: u64 = configs::table_configs(&paper, user.as_ref())
+    let per_scene: u64 = configs::table_configs(&paper, user.as_ref(), plan.integrator.texture_lod)
         .iter()
         .map(|c| c.foveation)
         .chain(
@@ -411,10 +411,13 @@ fn run_scene(
         w as f32 / h as f32,
     )?;
     renderer.set_scene(&scene.packed, true)?;
-    let frame = |foveation: FoveationParams, seed: u32| FrameParams {
+    let frame = |foveation: FoveationParams, seed: u32, texture_lod: Option<u32>| FrameParams {
         camera,
         foveation,
-        integrator: plan.integrator,
+        integrator: IntegratorSettings {
+            texture_lod: texture_lod.unwrap_or(plan.integrator.texture_lod),
+            ..plan.integrator
+        },
         width: w,
         height: h,
         frame_index: 0,
@@ -425,9 +428,12 @@ fn run_scene(
 
     // The reference: from the cache, or rendered and stored.
     let scene_bytes = std::fs::read(&file).map_err(|e| FoveaError::file(&file, e))?;
+    // The reference reads every texture at level 0: many samples per pixel integrate the pixel's
+    // footprint themselves (the ground truth the texture level of detail approximates).
     let reference_frame = frame(
         FoveationParams::uniform(plan.reference_spp),
         args.seed ^ REFERENCE_SEED_XOR,
+        Some(fovea_core::integrator::path::TEXTURE_LOD_OFF),
     );
     let entry = CacheEntry::new(
         &plan.cache_dir,
@@ -513,7 +519,7 @@ fn run_scene(
     let mut uniform_by_spp: HashMap<u32, ConfigResult> = HashMap::new();
     let mut results = Vec::new();
     let user = plan.user.map(|u| u.around(plan.gaze));
-    for spec in configs::table_configs(&paper, user.as_ref()) {
+    for spec in configs::table_configs(&paper, user.as_ref(), plan.integrator.texture_lod) {
         let r = measurer.measure(renderer, &spec)?;
         if spec.kind == ConfigKind::Uniform {
             uniform_by_spp.insert(spec.foveation.spp[0], r.clone());
@@ -599,7 +605,7 @@ struct Measurer<'a> {
     reference_rgb8: &'a [u8],
     regions: &'a RegionMap,
     out_dir: &'a Path,
-    frame: &'a dyn Fn(FoveationParams, u32) -> FrameParams,
+    frame: &'a dyn Fn(FoveationParams, u32, Option<u32>) -> FrameParams,
 }
 
 /// The median of `v` (the mean of the middle two for an even count).
@@ -621,7 +627,7 @@ impl Measurer<'_> {
     /// and FLIP map.
     fn measure(&self, renderer: &mut Renderer, spec: &ConfigSpec) -> Result<ConfigResult> {
         let [w, h] = self.plan.resolution;
-        let frame = (self.frame)(spec.foveation, self.args.seed);
+        let frame = (self.frame)(spec.foveation, self.args.seed, spec.texture_lod);
         let mut runs_ms = Vec::new();
         let mut first: Option<(FrameImage, fovea_cpu::RenderStats)> = None;
         for run in 0..self.plan.runs {

@@ -51,7 +51,32 @@ pub fn render_block_sample_with<F: crate::scene::Features, S: SceneSource>(
     sample: u32,
 ) -> Vec3 {
     let (ray, mut rng) = camera_sample(frame, block, sample);
-    trace_path_with(scene, source, ray, &mut rng, &frame.integrator)
+    path::trace_camera_path(
+        scene,
+        source,
+        ray,
+        cone_spread(frame, block),
+        &mut rng,
+        &frame.integrator,
+    )
+}
+
+/// The spread angle of the ray cone of `block`'s camera samples (`crate::material::texture`): a
+/// pixel's, `2 tan(fov / 2) / height`, times the block's edge under [`path::TEXTURE_LOD_BLOCK`]; 0
+/// under [`path::TEXTURE_LOD_OFF`].
+#[inline]
+#[must_use]
+pub fn cone_spread(frame: &FrameParams, block: &OwnedBlock) -> f32 {
+    let lod = frame.integrator.texture_lod;
+    if lod == path::TEXTURE_LOD_OFF {
+        return 0.0;
+    }
+    let pixel = 2.0 * crate::math::vec3_from(frame.camera.up).length() / frame.height.max(1) as f32;
+    if lod == path::TEXTURE_LOD_BLOCK {
+        pixel * block.size as f32
+    } else {
+        pixel
+    }
 }
 
 /// Sample `sample` of `block`'s jittered camera ray and the random numbers its path goes on with.
@@ -109,6 +134,7 @@ pub fn render_block_samples_packet<F: crate::scene::Features>(
             scene,
             &SceneSlices,
             rays[k],
+            cone_spread(frame, block),
             hits[k],
             &mut rngs[k],
             &frame.integrator,

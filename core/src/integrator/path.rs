@@ -27,7 +27,7 @@ use crate::lights::{
     environment, power_heuristic, sample_light, triangle::emitted_radiance,
     triangle::solid_angle_pdf, INFINITE_DISTANCE,
 };
-use crate::material::surface_point;
+use crate::material::shading::surface_point_lod;
 use crate::math::color::is_finite3;
 use crate::rng::SampleRng;
 use crate::scene::features::FEATURE_LOBE_TRANSMISSION;
@@ -45,7 +45,15 @@ pub const STRATEGY_BSDF_ONLY: u32 = 2;
 /// (a diagnostic for the stability tests, which prove that the estimate is finite without it).
 pub const INTEGRATOR_FLAG_NO_FINAL_GUARD: u32 = 1;
 
-/// Integrator settings (16 bytes).
+/// [`IntegratorSettings::texture_lod`]: every texture lookup reads mip level 0 (bilinear; the default).
+pub const TEXTURE_LOD_OFF: u32 = 0;
+/// [`IntegratorSettings::texture_lod`]: first hits read the level of their pixel's ray cone.
+pub const TEXTURE_LOD_PIXEL: u32 = 1;
+/// [`IntegratorSettings::texture_lod`]: first hits read the level of their *block's* ray cone, `s` times
+/// a pixel's for an `s × s` block (see `crate::material::texture`).
+pub const TEXTURE_LOD_BLOCK: u32 = 2;
+
+/// Integrator settings (20 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct IntegratorSettings {
@@ -57,6 +65,8 @@ pub struct IntegratorSettings {
     pub strategy: u32,
     /// `INTEGRATOR_FLAG_*` bits; 0 by default.
     pub flags: u32,
+    /// `TEXTURE_LOD_*`: which mip level a first hit's texture lookups read.
+    pub texture_lod: u32,
 }
 
 impl Default for IntegratorSettings {
@@ -66,6 +76,7 @@ impl Default for IntegratorSettings {
             russian_roulette_start: 0,
             strategy: STRATEGY_MIS,
             flags: 0,
+            texture_lod: TEXTURE_LOD_OFF,
         }
     }
 }
@@ -94,7 +105,21 @@ pub fn trace_path_with<F: crate::scene::Features, S: SceneSource>(
     rng: &mut SampleRng,
     settings: &IntegratorSettings,
 ) -> Vec3 {
-    trace_path_impl(scene, source, camera_ray, None, rng, settings)
+    trace_path_impl(scene, source, camera_ray, 0.0, None, rng, settings)
+}
+
+/// [`trace_path_with`] for a camera ray whose cone has spread angle `cone_spread` (radians; 0: no
+/// texture level of detail), which picks the first hit's mip levels (`crate::material::texture`).
+#[must_use]
+pub fn trace_camera_path<F: crate::scene::Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    camera_ray: Ray,
+    cone_spread: f32,
+    rng: &mut SampleRng,
+    settings: &IntegratorSettings,
+) -> Vec3 {
+    trace_path_impl(scene, source, camera_ray, cone_spread, None, rng, settings)
 }
 
 /// [`trace_path_with`] given the camera ray's closest hit, `first_hit` (what
@@ -105,11 +130,20 @@ pub fn trace_path_from_hit<F: crate::scene::Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     camera_ray: Ray,
+    cone_spread: f32,
     first_hit: crate::bvh::Hit,
     rng: &mut SampleRng,
     settings: &IntegratorSettings,
 ) -> Vec3 {
-    trace_path_impl(scene, source, camera_ray, Some(first_hit), rng, settings)
+    trace_path_impl(
+        scene,
+        source,
+        camera_ray,
+        cone_spread,
+        Some(first_hit),
+        rng,
+        settings,
+    )
 }
 
 /// Whether `triangle`'s material is unlit (`MATERIAL_UNLIT`, glTF `KHR_materials_unlit`): its emission is
@@ -133,6 +167,7 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     camera_ray: Ray,
+    cone_spread: f32,
     first_hit: Option<crate::bvh::Hit>,
     rng: &mut SampleRng,
     settings: &IntegratorSettings,
@@ -168,7 +203,13 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
             break;
         }
 
-        let surface = surface_point(scene, source, &hit);
+        // The camera ray's cone picks the first hit's mip levels; later hits read level 0.
+        let cone_width = if bounce == 0 {
+            cone_spread * hit.t
+        } else {
+            0.0
+        };
+        let surface = surface_point_lod(scene, source, &hit, ray.direction, cone_width);
         let wo_world = -ray.direction;
 
         // Emission found by this ray.

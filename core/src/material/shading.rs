@@ -3,7 +3,7 @@
 use glam::{Vec2, Vec3};
 
 use super::alpha::interpolate_uv;
-use super::texture::sample_texture;
+use super::texture::sample_texture_lod;
 use crate::bsdf::DisneyParams;
 use crate::bvh::traverse::Hit;
 use crate::lights::triangle::{scaled_geometric_normal, triangle_vertices};
@@ -53,12 +53,25 @@ pub fn material_params(material: &Material) -> DisneyParams {
     }
 }
 
-/// Builds the shading point for `hit` (which must be a hit).
+/// Builds the shading point for `hit` (which must be a hit), every texture read at mip level 0.
 #[must_use]
 pub fn surface_point<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
     source: &S,
     hit: &Hit,
+) -> SurfacePoint {
+    surface_point_lod(scene, source, hit, Vec3::Z, 0.0)
+}
+
+/// [`surface_point`] for a ray along `direction` whose cone is `cone_width` wide at the hit (0: mip level
+/// 0): the textures are read at the level of the cone's footprint (`crate::material::texture`).
+#[must_use]
+pub fn surface_point_lod<F: Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    hit: &Hit,
+    direction: Vec3,
+    cone_width: f32,
 ) -> SurfacePoint {
     let triangle = hit.triangle;
     let (b1, b2) = (hit.b1, hit.b2);
@@ -70,6 +83,22 @@ pub fn surface_point<F: Features, S: SceneSource>(
     let info = source.triangle_info(scene, triangle);
     let material = source.material(scene, info.material);
     let uv = interpolate_uv(scene, source, triangle, b1, b2);
+    // The cone's footprint in texture coordinates: width / |cos| on the surface, times the triangle's
+    // texture-to-surface scale sqrt(A_uv / A_world) (Akenine-Möller et al. 2019). Only textured
+    // materials need it.
+    let mut footprint_uv = 0.0;
+    if cone_width > 0.0 && scene.features.has(FEATURE_UVS) && !scene.geometry.uvs.is_empty() {
+        let t0 = Vec2::from(source.uv(scene, info.vertices[0]));
+        let t1 = Vec2::from(source.uv(scene, info.vertices[1]));
+        let t2 = Vec2::from(source.uv(scene, info.vertices[2]));
+        let uv_area = (t1 - t0).perp_dot(t2 - t0).abs();
+        let world_area = scaled_geometric_normal(&v).length();
+        let cos = ng.dot(direction.normalize_or_zero()).abs().max(0.01);
+        let scale = crate::math::float::sqrt(uv_area / world_area);
+        if scale.is_finite() {
+            footprint_uv = cone_width / cos * scale;
+        }
+    }
 
     // Interpolated vertex normal, if the scene has them for all three vertices.
     let mut ns = ng;
@@ -111,7 +140,7 @@ pub fn surface_point<F: Features, S: SceneSource>(
         && material.normal_texture != INVALID_INDEX
         && tangent != Vec3::ZERO
     {
-        let t = sample_texture(scene, source, material.normal_texture, uv);
+        let t = sample_texture_lod(scene, source, material.normal_texture, uv, footprint_uv);
         let m = Vec3::new(
             (2.0 * t.x - 1.0) * material.normal_scale,
             (2.0 * t.y - 1.0) * material.normal_scale,
@@ -126,14 +155,22 @@ pub fn surface_point<F: Features, S: SceneSource>(
     if scene.features.has(FEATURE_BASE_COLOR_TEXTURE)
         && material.base_color_texture != INVALID_INDEX
     {
-        base_color *= sample_texture(scene, source, material.base_color_texture, uv).truncate();
+        base_color *=
+            sample_texture_lod(scene, source, material.base_color_texture, uv, footprint_uv)
+                .truncate();
     }
     let mut metallic = material.metallic;
     let mut roughness = material.roughness;
     if scene.features.has(FEATURE_METALLIC_ROUGHNESS_TEXTURE)
         && material.metallic_roughness_texture != INVALID_INDEX
     {
-        let t = sample_texture(scene, source, material.metallic_roughness_texture, uv);
+        let t = sample_texture_lod(
+            scene,
+            source,
+            material.metallic_roughness_texture,
+            uv,
+            footprint_uv,
+        );
         roughness *= t.y;
         metallic *= t.z;
     }

@@ -1,9 +1,19 @@
 //! Texture fetches from the packed texel array (RGBA8 or linear RGBA16; bilinear filtering, REPEAT
-//! addressing).
+//! addressing), and trilinear filtering between mip levels ([`sample_texture_lod`]).
+//!
+//! **Which level.** A first hit's level follows the footprint of the camera ray's cone (Akenine-Möller
+//! et al. 2019, "Texture Level of Detail Strategies for Real-Time Ray Tracing", Ray Tracing Gems ch. 20,
+//! the ray cone at the primary hit): the cone of spread angle γ has width `γ t` at distance `t`, which
+//! covers `γ t / |n·d|` of the surface and, through the triangle's texture-to-surface scale
+//! `sqrt(A_uv / A_world)`, that many units of texture space; the level is log2 of it in texels. fovea's
+//! rule is the *block's* footprint: a sample of an `s × s` block stands for `s` pixels' width, so its cone
+//! is `s` times a pixel's (`crate::integrator::TEXTURE_LOD_BLOCK`): periphery samples (4 × 4 blocks)
+//! read two levels coarser than fovea samples, which removes the texture aliasing and noise the block
+//! would otherwise average from too few samples, at no cost. Paths' later hits read level 0.
 use glam::{Vec2, Vec4};
 
-use crate::math::float::floor;
-use crate::scene::{SceneSource, SceneView, TextureInfo, TEXTURE_RGBA16};
+use crate::math::float::{floor, ln};
+use crate::scene::{SceneSource, SceneView, TextureInfo, TEXTURE_MIPMAPPED, TEXTURE_RGBA16};
 
 /// Decodes one packed RGBA8 texel to [0, 1] floats (no colour-space conversion).
 #[inline]
@@ -75,6 +85,95 @@ pub fn sample_texture<F: crate::scene::Features, S: SceneSource>(
     uv: Vec2,
 ) -> Vec4 {
     let info = source.texture(scene, texture);
+    bilinear(scene, source, &info, uv)
+}
+
+/// Number of mip levels of a `width × height` texture with a full chain: `1 + floor(log2(max))`.
+#[inline]
+#[must_use]
+pub fn mip_level_count(width: u32, height: u32) -> u32 {
+    // A loop rather than `leading_zeros`, which the SPIR-V build did not compile to the same count
+    // (the CPU/lavapipe frame test caught it: far surfaces read past their texture's levels).
+    let mut size = width.max(height).max(1);
+    let mut levels = 1;
+    while size > 1 {
+        size /= 2;
+        levels += 1;
+    }
+    levels
+}
+
+/// The record of mip level `level` of `info` (which must be mipmapped): levels follow level 0 in the
+/// texel array, each `max(1, size >> 1)` of the one before, in the same texel format.
+#[inline]
+#[must_use]
+pub fn mip_level(info: &TextureInfo, level: u32) -> TextureInfo {
+    let words = if info.flags & TEXTURE_RGBA16 != 0 {
+        2
+    } else {
+        1
+    };
+    let (mut offset, mut width, mut height) = (info.offset, info.width, info.height);
+    let mut k = 0;
+    while k < level {
+        offset += words * width * height;
+        width = (width / 2).max(1);
+        height = (height / 2).max(1);
+        k += 1;
+    }
+    TextureInfo {
+        offset,
+        width,
+        height,
+        flags: info.flags,
+    }
+}
+
+/// Samples texture `texture` at `uv` filtered for a footprint `footprint_uv` wide in texture
+/// coordinates (see the module documentation): trilinearly between the two mip levels around
+/// `log2(footprint_uv · sqrt(width · height))`. A footprint of at most one texel, or a texture without
+/// mip levels, is exactly [`sample_texture`].
+#[must_use]
+pub fn sample_texture_lod<F: crate::scene::Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    texture: u32,
+    uv: Vec2,
+    footprint_uv: f32,
+) -> Vec4 {
+    let info = source.texture(scene, texture);
+    let texels = footprint_uv * crate::math::float::sqrt(info.width as f32 * info.height as f32);
+    // `!(x > 1)` also takes NaN to level 0.
+    if info.flags & TEXTURE_MIPMAPPED == 0 || !(texels > 1.0) {
+        return bilinear(scene, source, &info, uv);
+    }
+    let top = mip_level_count(info.width, info.height) - 1;
+    let lod = ln(texels) * core::f32::consts::LOG2_E;
+    // Written so that any lod at or past the last level (or NaN) reads the last level alone.
+    if !(lod < top as f32) {
+        return bilinear(scene, source, &mip_level(&info, top), uv);
+    }
+    let l0 = floor(lod);
+    let t = lod - l0;
+    let level = (l0 as u32).min(top);
+    let fine = bilinear(scene, source, &mip_level(&info, level), uv);
+    if t > 0.0 && level < top {
+        let coarse = bilinear(scene, source, &mip_level(&info, level + 1), uv);
+        fine + (coarse - fine) * t
+    } else {
+        fine
+    }
+}
+
+/// Bilinear lookup of the image `info` describes (one mip level) at `uv`, REPEAT addressing.
+#[inline]
+#[must_use]
+fn bilinear<F: crate::scene::Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    info: &TextureInfo,
+    uv: Vec2,
+) -> Vec4 {
     let fx = uv.x * info.width as f32 - 0.5;
     let fy = uv.y * info.height as f32 - 0.5;
     // Keep coordinates in a range where f32 -> i32 cannot overflow (absurd or non-finite UVs).
@@ -96,10 +195,10 @@ pub fn sample_texture<F: crate::scene::Features, S: SceneSource>(
     // targets, a scalar division per lane on lavapipe).
     let (x0, y0) = (wrap(x0 as i32, info.width), wrap(y0 as i32, info.height));
     let (x1, y1) = (next_wrapped(x0, info.width), next_wrapped(y0, info.height));
-    let c00 = fetch(scene, source, &info, x0, y0);
-    let c10 = fetch(scene, source, &info, x1, y0);
-    let c01 = fetch(scene, source, &info, x0, y1);
-    let c11 = fetch(scene, source, &info, x1, y1);
+    let c00 = fetch(scene, source, info, x0, y0);
+    let c10 = fetch(scene, source, info, x1, y0);
+    let c01 = fetch(scene, source, info, x0, y1);
+    let c11 = fetch(scene, source, info, x1, y1);
     let top = c00 + (c10 - c00) * tx;
     let bottom = c01 + (c11 - c01) * tx;
     top + (bottom - top) * ty

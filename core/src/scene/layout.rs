@@ -520,6 +520,9 @@ impl Material {
 /// filters linear values, as pbrt and GPUs' sRGB formats do. Without the flag, texels are RGBA8, one `u32`
 /// each (R in the low byte), used as stored.
 pub const TEXTURE_RGBA16: u32 = 1;
+/// [`TextureInfo::flags`]: mip levels follow level 0 in the texel array, halving down to 1 × 1 (box
+/// filtered at load, in linear space; see `crate::material::texture::mip_level`).
+pub const TEXTURE_MIPMAPPED: u32 = 2;
 
 /// Where one texture's texels lie in [`super::MaterialArrays::texels`] (16 bytes): `offset` is the index of its
 /// first `u32`; texels are row-major, top row first, RGBA8 or, with [`TEXTURE_RGBA16`] in `flags`,

@@ -1,7 +1,10 @@
 //! The materials group: the materials, one record per texture and all texels in one array
-//! ([`fovea_core::scene::MaterialArrays`]). sRGB colour textures become linear RGBA16 here, once.
+//! ([`fovea_core::scene::MaterialArrays`]). sRGB colour textures become linear RGBA16 here, once, and
+//! every texture larger than one texel gets its mip levels (box-filtered 2 × 2 in the stored, linear,
+//! values, colour weighted by alpha; odd edges repeat their last texel), which `fovea_core::material::texture::sample_texture_lod`
+//! reads.
 use fovea_core::kernel_abi::{BINDING_MATERIALS, BINDING_TEXELS, BINDING_TEXTURES};
-use fovea_core::scene::{Material, MaterialArrays, TextureInfo, TEXTURE_RGBA16};
+use fovea_core::scene::{Material, MaterialArrays, TextureInfo, TEXTURE_MIPMAPPED, TEXTURE_RGBA16};
 use glam::Vec3;
 
 use super::{ArrayRead, PackedArray};
@@ -48,20 +51,43 @@ pub(super) fn pack_materials(materials: Vec<Material>, textures: &[Texture]) -> 
             // RGBA16 textures start at an even word, so a texel's two words share one GPU texel.
             texels.push(0);
         }
+        let mipmapped = t.width.max(t.height) > 1;
+        let mut flags = if t.srgb { TEXTURE_RGBA16 } else { 0 };
+        if mipmapped {
+            flags |= TEXTURE_MIPMAPPED;
+        }
         infos.push(TextureInfo {
             offset: texels.len() as u32,
             width: t.width,
             height: t.height,
-            flags: if t.srgb { TEXTURE_RGBA16 } else { 0 },
+            flags,
         });
-        if t.srgb {
-            for &texel in &t.texels {
-                let [r, g, b, a] = srgb_texel_to_linear16(texel, &linear16).map(u32::from);
-                texels.push(r | g << 16);
-                texels.push(b | a << 16);
-            }
+        // Level 0 as 16-bit linear channels (sRGB) or bytes (data), then each level from the one before.
+        let mut level: Vec<[u16; 4]> = if t.srgb {
+            t.texels
+                .iter()
+                .map(|&texel| srgb_texel_to_linear16(texel, &linear16))
+                .collect()
         } else {
-            texels.extend_from_slice(&t.texels);
+            t.texels
+                .iter()
+                .map(|&texel| texel.to_le_bytes().map(u16::from))
+                .collect()
+        };
+        let (mut w, mut h) = (t.width as usize, t.height as usize);
+        loop {
+            for c in &level {
+                if t.srgb {
+                    texels.push(u32::from(c[0]) | u32::from(c[1]) << 16);
+                    texels.push(u32::from(c[2]) | u32::from(c[3]) << 16);
+                } else {
+                    texels.push(u32::from_le_bytes(c.map(|v| v as u8)));
+                }
+            }
+            if !mipmapped || (w == 1 && h == 1) {
+                break;
+            }
+            (level, w, h) = downsample(&level, w, h);
         }
     }
     PackedMaterials {
@@ -71,15 +97,65 @@ pub(super) fn pack_materials(materials: Vec<Material>, textures: &[Texture]) -> 
     }
 }
 
+/// The next mip level of a `w × h` level: each texel the mean of a 2 × 2 square (rounded; colour weighted
+/// by alpha), an odd last row or column repeating its texels.
+fn downsample(level: &[[u16; 4]], w: usize, h: usize) -> (Vec<[u16; 4]>, usize, usize) {
+    let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+    let mut out = Vec::with_capacity(nw * nh);
+    for y in 0..nh {
+        let (y0, y1) = ((2 * y).min(h - 1), (2 * y + 1).min(h - 1));
+        for x in 0..nw {
+            let (x0, x1) = ((2 * x).min(w - 1), (2 * x + 1).min(w - 1));
+            let square = [
+                level[y0 * w + x0],
+                level[y0 * w + x1],
+                level[y1 * w + x0],
+                level[y1 * w + x1],
+            ];
+            // Colour weighted by alpha, so that the colour of transparent texels (cut-out leaves'
+            // surroundings, whatever the painter left there) does not bleed into coarser levels;
+            // alpha itself, and colour where all four are transparent, is the plain mean.
+            let alpha: u64 = square.iter().map(|t| u64::from(t[3])).sum();
+            out.push(std::array::from_fn(|k| {
+                let plain = square.iter().map(|t| u64::from(t[k])).sum::<u64>();
+                let v = if k < 3 && alpha > 0 {
+                    let weighted: u64 = square
+                        .iter()
+                        .map(|t| u64::from(t[k]) * u64::from(t[3]))
+                        .sum();
+                    (weighted + alpha / 2) / alpha
+                } else {
+                    (plain + 2) / 4
+                };
+                v as u16
+            }));
+        }
+    }
+    (out, nw, nh)
+}
+
+/// The texels of a `width × height` texture and all its mip levels down to 1 × 1.
+#[must_use]
+pub fn mip_chain_texels(width: u32, height: u32) -> u64 {
+    let (mut w, mut h) = (u64::from(width.max(1)), u64::from(height.max(1)));
+    let mut total = w * h;
+    while w > 1 || h > 1 {
+        w = (w / 2).max(1);
+        h = (h / 2).max(1);
+        total += w * h;
+    }
+    total
+}
+
 /// At most the `u32` words the packed texel array of `textures` needs: one per RGBA8 texel, two per
-/// sRGB texel (stored as linear RGBA16, see `fovea_core::scene::TEXTURE_RGBA16`), and one of padding per
-/// texture (RGBA16 textures start at an even word). The loaders refuse scenes whose textures need more
-/// than `u32::MAX`.
+/// sRGB texel (stored as linear RGBA16, see `fovea_core::scene::TEXTURE_RGBA16`), over every mip level,
+/// and one of padding per texture (RGBA16 textures start at an even word). The loaders refuse scenes
+/// whose textures need more than `u32::MAX`.
 #[must_use]
 pub fn packed_texel_words(textures: &[Texture]) -> u64 {
     textures
         .iter()
-        .map(|t| t.texels.len() as u64 * if t.srgb { 2 } else { 1 } + 1)
+        .map(|t| mip_chain_texels(t.width, t.height) * if t.srgb { 2 } else { 1 } + 1)
         .sum()
 }
 

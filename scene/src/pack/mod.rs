@@ -303,7 +303,8 @@ mod tests {
         let words = packed_texel_words(&scene.textures);
         let packed = pack_scene(scene, &Environment::None, &BvhBuildOptions::default());
         assert!(packed.materials.texels.len() as u64 <= words);
-        assert_eq!(packed.materials.texels.len(), 2 * 2 + 1);
+        // The 2 × 1 colour texture and its 1 × 1 level (two words each), then the 1 × 1 data texture.
+        assert_eq!(packed.materials.texels.len(), 2 * (2 + 1) + 1);
         assert_eq!(packed.materials.textures[0].offset % 2, 0);
         assert_eq!(packed.materials.textures[0].flags, TEXTURE_RGBA16);
         assert_eq!(packed.materials.textures[1].flags, 0);
@@ -320,5 +321,52 @@ mod tests {
         assert!((mid.y - 0.5 * 14146.0 / 65535.0).abs() < 1e-6, "{mid}");
         let d = sample_texture(&view, &SceneSlices, 1, Vec2::new(0.5, 0.5));
         assert!((d.x - 128.0 / 255.0).abs() < 1e-7 && (d.w - 77.0 / 255.0).abs() < 1e-7);
+    }
+
+    /// Mip levels are built in linear space (the mean of the decoded values, not of the sRGB codes),
+    /// halving down to 1 × 1 with odd edges repeated; `sample_texture_lod` picks level 0 for a footprint of
+    /// at most one texel, the last level for one as large as the texture, and blends in between.
+    #[test]
+    fn mip_levels_are_linear_means_and_the_footprint_picks_them() {
+        use crate::texture::{pack_rgba8, Texture};
+        use fovea_core::material::texture::{mip_level, sample_texture_lod};
+        use fovea_core::scene::{SceneSlices, TEXTURE_MIPMAPPED};
+        use glam::Vec2;
+        let mut t = Texture::single_color("c", [0, 0, 0, 255], true);
+        // 4 × 2: left half black, right half white (sRGB 255 = linear 1).
+        t.width = 4;
+        t.height = 2;
+        let (black, white) = (pack_rgba8([0, 0, 0, 255]), pack_rgba8([255, 255, 255, 255]));
+        t.texels = vec![black, black, white, white, black, black, white, white];
+        let scene = LoadedScene {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            triangles: vec![[0, 1, 2]],
+            triangle_materials: vec![0],
+            materials: vec![Material::default()],
+            material_names: vec!["m".into()],
+            textures: vec![t],
+            ..LoadedScene::default()
+        };
+        let words = packed_texel_words(&scene.textures);
+        let packed = pack_scene(scene, &Environment::None, &BvhBuildOptions::default());
+        let info = packed.materials.textures[0];
+        assert_ne!(info.flags & TEXTURE_MIPMAPPED, 0);
+        // Levels 4 × 2, 2 × 1, 1 × 1: 11 texels of two words.
+        assert_eq!(packed.materials.texels.len(), 22);
+        assert!(packed.materials.texels.len() as u64 <= words);
+        let l2 = mip_level(&info, 2);
+        assert_eq!((l2.width, l2.height, l2.offset), (1, 1, 20));
+        let view = packed.view();
+        let at =
+            |uv: Vec2, footprint: f32| sample_texture_lod(&view, &SceneSlices, 0, uv, footprint);
+        // Level 0: the texel's own value; a footprint of one texel or less changes nothing.
+        assert_eq!(at(Vec2::new(0.125, 0.25), 0.0).x, 0.0);
+        assert_eq!(at(Vec2::new(0.125, 0.25), 0.3).x, 0.0);
+        // The last level: the linear mean, 0.5 (an sRGB-code mean would be 128 -> 0.216).
+        let coarse = at(Vec2::new(0.125, 0.25), 1.0e3);
+        assert!((coarse.x - 0.5).abs() < 1e-4, "{coarse}");
+        // Between levels 0 and 1 (sqrt(8) texels per unit footprint): a blend.
+        let mid = at(Vec2::new(0.125, 0.25), 1.5 / 8f32.sqrt()).x;
+        assert!(mid > 0.0 && mid < 0.5, "{mid}");
     }
 }
