@@ -158,6 +158,33 @@ pub fn load_gltf_from(
     Ok(scene)
 }
 
+/// The [`crate::texture::Texture::sampler`] bits of a glTF sampler: its wrap modes per axis, `NEAREST`
+/// magnification as nearest-texel lookups, and a minification filter without mip-mapping (`NEAREST`,
+/// `LINEAR`) as no mip levels. A texture without a sampler repeats and filters (glTF's default).
+fn sampler_bits(sampler: &gltf::texture::Sampler) -> u32 {
+    use fovea_core::scene::{
+        TEXTURE_CLAMP_S, TEXTURE_CLAMP_T, TEXTURE_MIRROR_S, TEXTURE_MIRROR_T, TEXTURE_NEAREST,
+    };
+    use gltf::texture::{MagFilter, MinFilter, WrappingMode};
+    let wrap = |mode: WrappingMode, clamp: u32, mirror: u32| match mode {
+        WrappingMode::ClampToEdge => clamp,
+        WrappingMode::MirroredRepeat => mirror,
+        WrappingMode::Repeat => 0,
+    };
+    let mut bits = wrap(sampler.wrap_s(), TEXTURE_CLAMP_S, TEXTURE_MIRROR_S)
+        | wrap(sampler.wrap_t(), TEXTURE_CLAMP_T, TEXTURE_MIRROR_T);
+    if sampler.mag_filter() == Some(MagFilter::Nearest) {
+        bits |= TEXTURE_NEAREST;
+    }
+    if matches!(
+        sampler.min_filter(),
+        Some(MinFilter::Nearest | MinFilter::Linear)
+    ) {
+        bits |= crate::texture::NO_MIP_LEVELS;
+    }
+    bits
+}
+
 /// Checks (and where harmless repairs) what gltf 1.4.1 would panic on but its validation does not
 /// catch: a primitive's `POSITION` naming a missing accessor, an image with neither `uri` nor
 /// `bufferView`, a camera without the projection object its `type` names. An image in a buffer view
@@ -317,8 +344,9 @@ struct Loader<'a> {
     scene: LoadedScene,
     /// glTF material index (`None` = the default material) → index in `scene.materials`.
     material_slots: HashMap<Option<usize>, u32>,
-    /// (image index, sRGB) → index in `scene.textures`, or `INVALID_INDEX` if the image is missing.
-    texture_slots: HashMap<(usize, bool), u32>,
+    /// (image index, sRGB, sampler bits) → index in `scene.textures`, or `INVALID_INDEX` if the image
+    /// is missing.
+    texture_slots: HashMap<(usize, bool, u32), u32>,
     any_normals: bool,
     any_uvs: bool,
     /// World-space positions in f64, until the scene's origin is known ([`crate::rebase`]).
@@ -922,7 +950,8 @@ impl Loader<'_> {
             ));
         }
         let image = texture.source();
-        let key = (image.index(), srgb);
+        let sampler = sampler_bits(&texture.sampler());
+        let key = (image.index(), srgb, sampler);
         if let Some(&slot) = self.texture_slots.get(&key) {
             return Ok(slot);
         }
@@ -979,7 +1008,8 @@ impl Loader<'_> {
             }
         };
         let slot = match decoded {
-            Some(t) => {
+            Some(mut t) => {
+                t.sampler = sampler;
                 self.scene.textures.push(t);
                 (self.scene.textures.len() - 1) as u32
             }

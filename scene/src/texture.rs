@@ -23,7 +23,13 @@ pub struct Texture {
     pub srgb: bool,
     /// `width * height` RGBA8 texels, R in the low byte, row-major, top row first.
     pub texels: Vec<u32>,
+    /// How it is sampled: `fovea_core::scene::TEXTURE_CLAMP_S` ... `TEXTURE_NEAREST` bits (0: repeat,
+    /// bilinear), and [`NO_MIP_LEVELS`] when the sampler asks for no mip-mapping.
+    pub sampler: u32,
 }
+
+/// [`Texture::sampler`]: the packer builds no mip levels (glTF `minFilter` `NEAREST` or `LINEAR`).
+pub const NO_MIP_LEVELS: u32 = 1 << 31;
 
 /// Packs one RGBA8 texel with R in the low byte (the layout `fovea_core::material::texture` reads).
 #[inline]
@@ -42,6 +48,7 @@ impl Texture {
             height: 1,
             srgb,
             texels: vec![pack_rgba8(rgba)],
+            sampler: 0,
         }
     }
 
@@ -181,6 +188,7 @@ fn to_texture(image: DynamicImage, name: &str, role: TextureRole) -> Texture {
                 height,
                 srgb,
                 texels,
+                sampler: 0,
             }
         }
         TextureRole::Opacity => {
@@ -208,6 +216,7 @@ fn to_texture(image: DynamicImage, name: &str, role: TextureRole) -> Texture {
                 height,
                 srgb: false,
                 texels,
+                sampler: 0,
             }
         }
     }

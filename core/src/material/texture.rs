@@ -1,5 +1,6 @@
-//! Texture fetches from the packed texel array (RGBA8 or linear RGBA16; bilinear filtering, REPEAT
-//! addressing), and trilinear filtering between mip levels ([`sample_texture_lod`]).
+//! Texture fetches from the packed texel array (RGBA8 or linear RGBA16; bilinear or nearest filtering;
+//! repeated, clamped or mirrored addressing per axis, as the glTF sampler says), and trilinear
+//! filtering between mip levels ([`sample_texture_lod`]).
 //!
 //! **Which level.** A first hit's level follows the footprint of the camera ray's cone (Akenine-Möller
 //! et al. 2019, "Texture Level of Detail Strategies for Real-Time Ray Tracing", Ray Tracing Gems ch. 20,
@@ -13,7 +14,10 @@
 use glam::{Vec2, Vec4};
 
 use crate::math::float::{floor, ln};
-use crate::scene::{SceneSource, SceneView, TextureInfo, TEXTURE_MIPMAPPED, TEXTURE_RGBA16};
+use crate::scene::{
+    SceneSource, SceneView, TextureInfo, TEXTURE_ADDRESSING, TEXTURE_CLAMP_S, TEXTURE_CLAMP_T,
+    TEXTURE_MIPMAPPED, TEXTURE_MIRROR_S, TEXTURE_MIRROR_T, TEXTURE_NEAREST, TEXTURE_RGBA16,
+};
 
 /// Decodes one packed RGBA8 texel to [0, 1] floats (no colour-space conversion).
 #[inline]
@@ -45,6 +49,21 @@ fn wrap(i: i32, size: u32) -> u32 {
     let s = size as i32;
     let m = i % s;
     (if m < 0 { m + s } else { m }) as u32
+}
+
+/// Integer coordinate `i` of an axis of `size` texels under the addressing of the axis: `clamp` to the
+/// edge texels, `mirror`ed repeat, else repeat.
+#[inline]
+fn address(i: i32, size: u32, clamp: bool, mirror: bool) -> u32 {
+    let s = size as i32;
+    if clamp {
+        i.clamp(0, s - 1) as u32
+    } else if mirror {
+        let m = wrap(i, 2 * size) as i32;
+        (if m < s { m } else { 2 * s - 1 - m }) as u32
+    } else {
+        wrap(i, size)
+    }
 }
 
 /// The wrapped coordinate after `i` (already in `[0, size)`).
@@ -187,6 +206,10 @@ fn bilinear<F: crate::scene::Features, S: SceneSource>(
     } else {
         0.0
     };
+    let flags = info.flags;
+    if flags & (TEXTURE_ADDRESSING | TEXTURE_NEAREST) != 0 {
+        return filtered_with_sampler(scene, source, info, fx, fy);
+    }
     let x0 = floor(fx);
     let y0 = floor(fy);
     let tx = fx - x0;
@@ -195,6 +218,43 @@ fn bilinear<F: crate::scene::Features, S: SceneSource>(
     // targets, a scalar division per lane on lavapipe).
     let (x0, y0) = (wrap(x0 as i32, info.width), wrap(y0 as i32, info.height));
     let (x1, y1) = (next_wrapped(x0, info.width), next_wrapped(y0, info.height));
+    let c00 = fetch(scene, source, info, x0, y0);
+    let c10 = fetch(scene, source, info, x1, y0);
+    let c01 = fetch(scene, source, info, x0, y1);
+    let c11 = fetch(scene, source, info, x1, y1);
+    let top = c00 + (c10 - c00) * tx;
+    let bottom = c01 + (c11 - c01) * tx;
+    top + (bottom - top) * ty
+}
+
+/// [`bilinear`] for a texture whose sampler clamps, mirrors or reads the nearest texel (`fx`, `fy`: the
+/// lookup in texel units, half a texel shifted, already bounded).
+#[must_use]
+fn filtered_with_sampler<F: crate::scene::Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    info: &TextureInfo,
+    fx: f32,
+    fy: f32,
+) -> Vec4 {
+    let flags = info.flags;
+    let (clamp_s, mirror_s) = (flags & TEXTURE_CLAMP_S != 0, flags & TEXTURE_MIRROR_S != 0);
+    let (clamp_t, mirror_t) = (flags & TEXTURE_CLAMP_T != 0, flags & TEXTURE_MIRROR_T != 0);
+    if flags & TEXTURE_NEAREST != 0 {
+        // The texel the (unshifted) coordinate falls in.
+        let x = address(floor(fx + 0.5) as i32, info.width, clamp_s, mirror_s);
+        let y = address(floor(fy + 0.5) as i32, info.height, clamp_t, mirror_t);
+        return fetch(scene, source, info, x, y);
+    }
+    let x0 = floor(fx);
+    let y0 = floor(fy);
+    let tx = fx - x0;
+    let ty = fy - y0;
+    let (xi, yi) = (x0 as i32, y0 as i32);
+    let x0 = address(xi, info.width, clamp_s, mirror_s);
+    let x1 = address(xi + 1, info.width, clamp_s, mirror_s);
+    let y0 = address(yi, info.height, clamp_t, mirror_t);
+    let y1 = address(yi + 1, info.height, clamp_t, mirror_t);
     let c00 = fetch(scene, source, info, x0, y0);
     let c10 = fetch(scene, source, info, x1, y0);
     let c01 = fetch(scene, source, info, x0, y1);

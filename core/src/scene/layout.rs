@@ -523,6 +523,19 @@ pub const TEXTURE_RGBA16: u32 = 1;
 /// [`TextureInfo::flags`]: mip levels follow level 0 in the texel array, halving down to 1 × 1 (box
 /// filtered at load, in linear space; see `crate::material::texture::mip_level`).
 pub const TEXTURE_MIPMAPPED: u32 = 2;
+/// [`TextureInfo::flags`]: the `s` (u) coordinate clamps to the edge texels (glTF `CLAMP_TO_EDGE`).
+pub const TEXTURE_CLAMP_S: u32 = 1 << 4;
+/// [`TextureInfo::flags`]: the `s` coordinate repeats mirrored (glTF `MIRRORED_REPEAT`).
+pub const TEXTURE_MIRROR_S: u32 = 1 << 5;
+/// [`TextureInfo::flags`]: the `t` (v) coordinate clamps to the edge texels.
+pub const TEXTURE_CLAMP_T: u32 = 1 << 6;
+/// [`TextureInfo::flags`]: the `t` coordinate repeats mirrored.
+pub const TEXTURE_MIRROR_T: u32 = 1 << 7;
+/// [`TextureInfo::flags`]: lookups read the nearest texel instead of interpolating (glTF `NEAREST`).
+pub const TEXTURE_NEAREST: u32 = 1 << 8;
+/// Every addressing bit: without any, coordinates repeat (glTF `REPEAT`, the default).
+pub const TEXTURE_ADDRESSING: u32 =
+    TEXTURE_CLAMP_S | TEXTURE_MIRROR_S | TEXTURE_CLAMP_T | TEXTURE_MIRROR_T;
 
 /// Where one texture's texels lie in [`super::MaterialArrays::texels`] (16 bytes): `offset` is the index of its
 /// first `u32`; texels are row-major, top row first, RGBA8 or, with [`TEXTURE_RGBA16`] in `flags`,

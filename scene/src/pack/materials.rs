@@ -1,14 +1,17 @@
 //! The materials group: the materials, one record per texture and all texels in one array
 //! ([`fovea_core::scene::MaterialArrays`]). sRGB colour textures become linear RGBA16 here, once, and
 //! every texture larger than one texel gets its mip levels (box-filtered 2 × 2 in the stored, linear,
-//! values, colour weighted by alpha; odd edges repeat their last texel), which `fovea_core::material::texture::sample_texture_lod`
-//! reads.
+//! values, colour weighted by alpha; odd edges repeat their last texel) unless its sampler asks for none;
+//! `fovea_core::material::texture::sample_texture_lod` reads them.
 use fovea_core::kernel_abi::{BINDING_MATERIALS, BINDING_TEXELS, BINDING_TEXTURES};
-use fovea_core::scene::{Material, MaterialArrays, TextureInfo, TEXTURE_MIPMAPPED, TEXTURE_RGBA16};
+use fovea_core::scene::{
+    Material, MaterialArrays, TextureInfo, TEXTURE_ADDRESSING, TEXTURE_MIPMAPPED, TEXTURE_NEAREST,
+    TEXTURE_RGBA16,
+};
 use glam::Vec3;
 
 use super::{ArrayRead, PackedArray};
-use crate::texture::Texture;
+use crate::texture::{Texture, NO_MIP_LEVELS};
 
 /// The material arrays, owned.
 #[derive(Clone, Debug, Default)]
@@ -51,8 +54,9 @@ pub(super) fn pack_materials(materials: Vec<Material>, textures: &[Texture]) -> 
             // RGBA16 textures start at an even word, so a texel's two words share one GPU texel.
             texels.push(0);
         }
-        let mipmapped = t.width.max(t.height) > 1;
+        let mipmapped = t.width.max(t.height) > 1 && t.sampler & NO_MIP_LEVELS == 0;
         let mut flags = if t.srgb { TEXTURE_RGBA16 } else { 0 };
+        flags |= t.sampler & (TEXTURE_ADDRESSING | TEXTURE_NEAREST);
         if mipmapped {
             flags |= TEXTURE_MIPMAPPED;
         }
@@ -155,7 +159,14 @@ pub fn mip_chain_texels(width: u32, height: u32) -> u64 {
 pub fn packed_texel_words(textures: &[Texture]) -> u64 {
     textures
         .iter()
-        .map(|t| mip_chain_texels(t.width, t.height) * if t.srgb { 2 } else { 1 } + 1)
+        .map(|t| {
+            let texels = if t.sampler & NO_MIP_LEVELS != 0 {
+                u64::from(t.width) * u64::from(t.height)
+            } else {
+                mip_chain_texels(t.width, t.height)
+            };
+            texels * if t.srgb { 2 } else { 1 } + 1
+        })
         .sum()
 }
 

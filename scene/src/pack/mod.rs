@@ -306,7 +306,10 @@ mod tests {
         // The 2 × 1 colour texture and its 1 × 1 level (two words each), then the 1 × 1 data texture.
         assert_eq!(packed.materials.texels.len(), 2 * (2 + 1) + 1);
         assert_eq!(packed.materials.textures[0].offset % 2, 0);
-        assert_eq!(packed.materials.textures[0].flags, TEXTURE_RGBA16);
+        assert_eq!(
+            packed.materials.textures[0].flags,
+            TEXTURE_RGBA16 | fovea_core::scene::TEXTURE_MIPMAPPED
+        );
         assert_eq!(packed.materials.textures[1].flags, 0);
         let view = packed.view();
         // Texel centres: sRGB 128 is linear 0.21586 (16-bit 14146), 255 is 1; alpha 77 is 77/255.
@@ -368,5 +371,61 @@ mod tests {
         // Between levels 0 and 1 (sqrt(8) texels per unit footprint): a blend.
         let mid = at(Vec2::new(0.125, 0.25), 1.5 / 8f32.sqrt()).x;
         assert!(mid > 0.0 && mid < 0.5, "{mid}");
+    }
+
+    /// The glTF sampler's addressing and filter reach the lookups: repeat (the default) wraps, clamp
+    /// holds the edge texel, mirror reflects, nearest reads one texel; a sampler without mip-mapping
+    /// gets no levels.
+    #[test]
+    fn sampler_addressing_and_filters() {
+        use crate::texture::{pack_rgba8, Texture, NO_MIP_LEVELS};
+        use fovea_core::material::texture::sample_texture;
+        use fovea_core::scene::{
+            SceneSlices, TEXTURE_CLAMP_S, TEXTURE_MIPMAPPED, TEXTURE_MIRROR_S, TEXTURE_NEAREST,
+        };
+        use glam::Vec2;
+        // Data textures (stored as they are): 4 × 1 texels of red 0, 85, 170, 255.
+        let texture = |sampler: u32| {
+            let mut t = Texture::single_color("t", [0, 0, 0, 255], false);
+            t.width = 4;
+            t.texels = [0u8, 85, 170, 255]
+                .iter()
+                .map(|&r| pack_rgba8([r, 0, 0, 255]))
+                .collect();
+            t.sampler = sampler;
+            t
+        };
+        let scene = LoadedScene {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            triangles: vec![[0, 1, 2]],
+            triangle_materials: vec![0],
+            materials: vec![Material::default()],
+            material_names: vec!["m".into()],
+            textures: vec![
+                texture(0),
+                texture(TEXTURE_CLAMP_S),
+                texture(TEXTURE_MIRROR_S),
+                texture(TEXTURE_NEAREST | NO_MIP_LEVELS),
+            ],
+            ..LoadedScene::default()
+        };
+        let packed = pack_scene(scene, &Environment::None, &BvhBuildOptions::default());
+        let view = packed.view();
+        let red =
+            |k: u32, u: f32| sample_texture(&view, &SceneSlices, k, Vec2::new(u, 0.5)).x * 255.0;
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-3;
+        // u = 1.125 is texel 0's centre one period on: repeat reads texel 0, clamp the last texel, mirror
+        // texel 3 (the reflected copy starts with the last texel).
+        assert!(close(red(0, 1.125), 0.0), "{}", red(0, 1.125));
+        assert!(close(red(1, 1.125), 255.0), "{}", red(1, 1.125));
+        assert!(close(red(2, 1.125), 255.0), "{}", red(2, 1.125));
+        // Between texels 0 and 1: bilinear blends, nearest takes the texel the point is in.
+        assert!(close(red(0, 0.25), 42.5), "{}", red(0, 0.25));
+        assert!(close(red(3, 0.24), 0.0) && close(red(3, 0.26), 85.0));
+        // Repeat at the left edge blends with the last texel; clamp does not.
+        assert!(close(red(0, 0.0), 127.5) && close(red(1, 0.0), 0.0));
+        let flags: Vec<u32> = packed.materials.textures.iter().map(|t| t.flags).collect();
+        assert!(flags[..3].iter().all(|f| f & TEXTURE_MIPMAPPED != 0));
+        assert_eq!(flags[3] & TEXTURE_MIPMAPPED, 0);
     }
 }
