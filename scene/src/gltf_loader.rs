@@ -17,7 +17,11 @@
 //! | `emissiveFactor` × `KHR_materials_emissive_strength`, `emissiveTexture` | `emission`, texture sRGB |
 //! | `alphaMode` MASK (`alphaCutoff`) / BLEND | `MATERIAL_ALPHA_CUTOUT` with that cutoff / 0.5 (BLEND is approximated by a cut-out) |
 //! | `doubleSided` | `MATERIAL_DOUBLE_SIDED_EMISSION` (only matters if the material emits) |
-//! | - | `specular` 0.5, no specular tint, sheen, clearcoat or anisotropy |
+//! | - | `specular` 0.5, no specular tint, sheen, clearcoat or anisotropy, unless an extension sets them |
+//!
+//! A texture's sampler sets its wrap modes (repeat, clamp to edge, mirrored repeat, per axis), nearest or
+//! linear magnification, and whether it gets mip levels (not for `minFilter` `NEAREST`/`LINEAR`). The PBR
+//! extensions are mapped in [`crate::gltf_pbr`].
 //!
 //! Only `TEXCOORD_0` is read (a texture asking for another set gets a warning and uses set 0);
 //! `occlusionTexture` is ignored. Images are decoded by [`crate::texture`] with the option's limits: from a

@@ -24,7 +24,9 @@
 //! | `Pm` | `metallic` |
 //! | no `Pm` | heuristic: metallic = lum(Ks) / (lum(Ks) + lum(Kd)) if lum(Ks) > 0, else 0; base colour = lerp(Kd, Ks, metallic). A mirror with Ks .95, Kd 0 becomes a metal of base colour .95 |
 //! | `Ps`, `Pc`, `Pcr`, `aniso` | `sheen`, `clearcoat`, `clearcoat_gloss` = 1 - Pcr, `anisotropic` |
-//! | `map_Bump`, `bump`, `norm` | ignored with a warning (no bump-to-normal conversion) |
+//! | `map_Ke` | `emission_texture` (sRGB), times `Ke` (1 if `Ke` is absent) |
+//! | `map_Pr`, `map_Pm` | one `metallic_roughness_texture` built at load (G = the roughness map, B = the metallic map, as glTF packs them; the metallic map is resampled to the roughness map's size), times `Pr`/`Pm` (1 if absent) |
+//! | `norm`, or `map_Bump`/`bump` holding a tangent-space normal map | `normal_texture` (linear; `-bm` is not read). A `map_Bump` image is taken for a normal map when its mean colour is bluish-neutral (mean B > 0.6, R and G within 0.2 of 0.5); a height map gets a warning and is not used (no bump-to-normal conversion) |
 //! | `map_Ka`, `Ka`, `Ni`, `illum`, `Tf`, `Tr` | ignored |
 //!
 //! `specular` is 0.5 (an index of refraction of 1.5), except 0 when the material gives `Ks 0 0 0`
@@ -605,6 +607,81 @@ fn f64x3_to_f32(c: [f64; 3]) -> [f32; 3] {
     c.map(|v| v as f32)
 }
 
+/// The texture maps one MTL material names: indices into the decoded requests.
+struct MaterialTextures {
+    kd: Option<usize>,
+    d: Option<usize>,
+    ke: Option<usize>,
+    /// The normal map, and whether it was given as such (`norm`) rather than as `map_Bump`.
+    normal: Option<(usize, bool)>,
+    roughness: Option<usize>,
+    metallic: Option<usize>,
+}
+
+/// A material's key as text, if present (tobj keeps unknown keys as strings).
+fn param_text<'a>(m: &'a tobj::Material, key: &str) -> Option<&'a String> {
+    m.unknown_param.get(key)
+}
+
+/// The texture in `slot`, if it is one.
+fn roughness_slot_texture(textures: &[Texture], slot: u32) -> Option<&Texture> {
+    textures.get(slot as usize)
+}
+
+/// One glTF-style metallic-roughness texture (G = roughness, B = metallic, data) from separate OBJ
+/// `map_Pr` and `map_Pm` images (their red channel; a missing one is 1, i.e. the factor alone). The
+/// result has the roughness map's size (or the metallic map's, without one); the other is resampled to
+/// it by nearest texel.
+fn metallic_roughness_texture(roughness: Option<&Texture>, metallic: Option<&Texture>) -> Texture {
+    let (width, height) = roughness
+        .or(metallic)
+        .map_or((1, 1), |t| (t.width, t.height));
+    let red = |t: Option<&Texture>, x: u32, y: u32| -> u8 {
+        t.map_or(255, |t| {
+            let tx = (u64::from(x) * u64::from(t.width) / u64::from(width)) as usize;
+            let ty = (u64::from(y) * u64::from(t.height) / u64::from(height)) as usize;
+            t.texels[ty * t.width as usize + tx].to_le_bytes()[0]
+        })
+    };
+    let mut texels = Vec::with_capacity(width as usize * height as usize);
+    for y in 0..height {
+        for x in 0..width {
+            texels.push(crate::texture::pack_rgba8([
+                0,
+                red(roughness, x, y),
+                red(metallic, x, y),
+                255,
+            ]));
+        }
+    }
+    let name = |t: Option<&Texture>| t.map_or("-".to_owned(), |t| t.name.clone());
+    Texture {
+        name: format!("{} + {}", name(roughness), name(metallic)),
+        width,
+        height,
+        srgb: false,
+        texels,
+        sampler: 0,
+    }
+}
+
+/// Whether an image looks like a tangent-space normal map: mean blue above 0.6, red and green within
+/// 0.2 of 0.5 (flat normals encode as (0.5, 0.5, 1)).
+fn looks_like_normal_map(t: &Texture) -> bool {
+    if t.texels.is_empty() {
+        return false;
+    }
+    let mut sum = [0u64; 3];
+    for &texel in &t.texels {
+        let [r, g, b, _] = texel.to_le_bytes();
+        sum[0] += u64::from(r);
+        sum[1] += u64::from(g);
+        sum[2] += u64::from(b);
+    }
+    let mean = sum.map(|v| v as f64 / (255.0 * t.texels.len() as f64));
+    mean[2] > 0.6 && (mean[0] - 0.5).abs() < 0.2 && (mean[1] - 0.5).abs() < 0.2
+}
+
 /// Parses a numeric PBR-extension key (tobj keeps unknown keys as strings).
 fn param(m: &tobj::Material, key: &str, warnings: &mut Vec<String>, mtl: &Path) -> Option<f32> {
     let text = m.unknown_param.get(key)?;
@@ -656,9 +733,17 @@ fn convert_materials(
                 requests.len() - 1
             })
     };
-    let mut per_material: Vec<(Option<usize>, Option<usize>)> = Vec::with_capacity(materials.len());
+    let mut per_material: Vec<MaterialTextures> = Vec::with_capacity(materials.len());
     for (m, mtl) in materials.iter().zip(mtl_files) {
         let dir = mtl.parent().unwrap_or(Path::new(""));
+        let mut data = |t: &str| request(texture_path(dir, t), TextureRole::Color { srgb: false });
+        let normal = m
+            .unknown_param
+            .get("norm")
+            .map(|t| (data(t), true))
+            .or_else(|| m.normal_texture.as_deref().map(|t| (data(t), false)));
+        let roughness = m.unknown_param.get("map_Pr").map(|t| data(t));
+        let metallic = m.unknown_param.get("map_Pm").map(|t| data(t));
         let kd = m
             .diffuse_texture
             .as_deref()
@@ -667,7 +752,18 @@ fn convert_materials(
             .dissolve_texture
             .as_deref()
             .map(|t| request(texture_path(dir, t), TextureRole::Opacity));
-        per_material.push((kd, d));
+        let ke = m
+            .unknown_param
+            .get("map_Ke")
+            .map(|t| request(texture_path(dir, t), TextureRole::Color { srgb: true }));
+        per_material.push(MaterialTextures {
+            kd,
+            d,
+            ke,
+            normal,
+            roughness,
+            metallic,
+        });
     }
     let limits = options.texture_limits();
     let decoded: Vec<Result<Texture, SceneError>> = requests
@@ -675,6 +771,7 @@ fn convert_materials(
         .map(|(path, role)| load_texture_from(source, path, *role, &limits))
         .collect();
     let mut slots: Vec<u32> = Vec::with_capacity(decoded.len());
+    let mut combined_slots: HashMap<(u32, u32), u32> = HashMap::new();
     for (result, (path, _)) in decoded.into_iter().zip(&requests) {
         match result {
             Ok(t) => {
@@ -692,7 +789,15 @@ fn convert_materials(
         }
     }
 
-    for ((m, mtl), (kd_tex, d_tex)) in materials.iter().zip(mtl_files).zip(per_material) {
+    for ((m, mtl), maps) in materials.iter().zip(mtl_files).zip(per_material) {
+        let MaterialTextures {
+            kd: kd_tex,
+            d: d_tex,
+            ke: ke_tex,
+            normal,
+            roughness: roughness_tex,
+            metallic: metallic_tex,
+        } = maps;
         let mtl_name = mtl.display();
         let mut warnings = Vec::new();
         let kd = m.diffuse.map_or([0.8; 3], f64x3_to_f32);
@@ -774,11 +879,55 @@ fn convert_materials(
                 m.name
             ));
         }
-        if m.normal_texture.is_some() || m.unknown_param.contains_key("norm") {
-            warnings.push(format!(
-                "{mtl_name}: material {:?}: bump/normal map ignored (not supported for OBJ)",
-                m.name
-            ));
+        // Emission, roughness/metallic and normal maps.
+        if let Some(slot) = ke_tex.map(|i| slots[i]).filter(|&s| s != INVALID_INDEX) {
+            out.emission_texture = slot;
+            if m.emissive.is_none() {
+                out.emission = [1.0, 1.0, 1.0, 0.0];
+            }
+        }
+        let roughness_slot = roughness_tex.map_or(INVALID_INDEX, |i| slots[i]);
+        let metallic_slot = metallic_tex.map_or(INVALID_INDEX, |i| slots[i]);
+        if roughness_slot != INVALID_INDEX || metallic_slot != INVALID_INDEX {
+            let key = (roughness_slot, metallic_slot);
+            let slot = match combined_slots.get(&key) {
+                Some(&slot) => slot,
+                None => {
+                    let combined = metallic_roughness_texture(
+                        roughness_slot_texture(&scene.textures, roughness_slot),
+                        roughness_slot_texture(&scene.textures, metallic_slot),
+                    );
+                    scene.textures.push(combined);
+                    let slot = (scene.textures.len() - 1) as u32;
+                    combined_slots.insert(key, slot);
+                    slot
+                }
+            };
+            out.metallic_roughness_texture = slot;
+            if roughness_slot != INVALID_INDEX && param_text(m, "Pr").is_none() {
+                out.roughness = 1.0;
+            }
+            if metallic_slot != INVALID_INDEX && param_text(m, "Pm").is_none() {
+                out.metallic = 1.0;
+                out.base_color = [kd[0], kd[1], kd[2], out.base_color[3]];
+                if base_texture != INVALID_INDEX {
+                    out.base_color = [1.0, 1.0, 1.0, out.base_color[3]];
+                }
+            }
+        }
+        if let Some((i, explicit)) = normal {
+            let slot = slots[i];
+            if slot != INVALID_INDEX {
+                if explicit || looks_like_normal_map(&scene.textures[slot as usize]) {
+                    out.normal_texture = slot;
+                } else {
+                    warnings.push(format!(
+                        "{mtl_name}: material {:?}: map_Bump {} looks like a height map (its mean colour \
+                         is not a normal map's); ignored (no bump-to-normal conversion)",
+                        m.name, scene.textures[slot as usize].name
+                    ));
+                }
+            }
         }
         scene.warnings.extend(warnings);
         scene.materials.push(out);
@@ -1017,6 +1166,73 @@ mod tests {
         std::fs::remove_dir_all(dir).ok();
     }
 
+    /// `map_Ke`, `map_Pr` + `map_Pm` (combined into one metallic-roughness texture, the metallic map
+    /// resampled), `norm`, and `map_Bump` as a normal map or, when it is a height map, a warning.
+    #[test]
+    fn emission_roughness_metallic_and_normal_maps() {
+        let dir = temp_dir("maps");
+        let png = |name: &str, w: u32, h: u32, rgba: [u8; 4]| {
+            image::RgbaImage::from_pixel(w, h, image::Rgba(rgba))
+                .save(dir.join(name))
+                .unwrap();
+        };
+        png("ke.png", 2, 2, [255, 0, 0, 255]);
+        png("pr.png", 4, 4, [64, 64, 64, 255]);
+        png("pm.png", 2, 2, [200, 200, 200, 255]);
+        png("n.png", 2, 2, [128, 128, 255, 255]);
+        png("height.png", 2, 2, [90, 90, 90, 255]);
+        std::fs::write(
+            dir.join("m.mtl"),
+            "newmtl lamp\nKd 0.5 0.5 0.5\nmap_Ke ke.png\n\
+             newmtl metal\nKd 0.9 0.8 0.2\nmap_Pr pr.png\nmap_Pm pm.png\nnorm n.png\n\
+             newmtl bumpy\nKd 0.5 0.5 0.5\nPr 0.5\nmap_Bump n.png\n\
+             newmtl heights\nKd 0.5 0.5 0.5\nbump height.png\n",
+        )
+        .unwrap();
+        std::fs::write(
+            dir.join("s.obj"),
+            "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+             usemtl lamp\nf 1/1 2/2 3/3\nusemtl metal\nf 1/1 2/2 3/3\n\
+             usemtl bumpy\nf 1/1 2/2 3/3\nusemtl heights\nf 1/1 2/2 3/3\n",
+        )
+        .unwrap();
+        let s = load_scene(&dir.join("s.obj"), &LoadOptions::default()).unwrap();
+        let by_name = |n: &str| {
+            let i = s.material_names.iter().position(|m| m == n).unwrap();
+            s.materials[i]
+        };
+        let lamp = by_name("lamp");
+        assert_eq!(lamp.emission, [1.0, 1.0, 1.0, 0.0]);
+        let ke = &s.textures[lamp.emission_texture as usize];
+        assert!(ke.srgb && ke.texels[0] == crate::texture::pack_rgba8([255, 0, 0, 255]));
+        let metal = by_name("metal");
+        assert_eq!((metal.roughness, metal.metallic), (1.0, 1.0));
+        assert_eq!(metal.base_color, [0.9, 0.8, 0.2, 1.0]);
+        let mr = &s.textures[metal.metallic_roughness_texture as usize];
+        assert_eq!((mr.width, mr.height, mr.srgb), (4, 4, false));
+        assert!(mr
+            .texels
+            .iter()
+            .all(|&t| t.to_le_bytes()[1] == 64 && t.to_le_bytes()[2] == 200));
+        assert_ne!(metal.normal_texture, INVALID_INDEX);
+        let bumpy = by_name("bumpy");
+        assert_ne!(
+            bumpy.normal_texture, INVALID_INDEX,
+            "a normal map given as map_Bump"
+        );
+        assert_eq!(bumpy.roughness, 0.5);
+        let heights = by_name("heights");
+        assert_eq!(heights.normal_texture, INVALID_INDEX);
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.contains("height map") && w.contains("heights")),
+            "{:?}",
+            s.warnings
+        );
+        std::fs::remove_dir_all(dir).ok();
+    }
+
     #[test]
     fn nan_vertex_missing_mtl_and_texture() {
         let dir = temp_dir("nan");
@@ -1041,7 +1257,7 @@ mod tests {
             all.contains("missing.png") && all.contains("alpha_missing.png"),
             "{all}"
         );
-        assert!(all.contains("bump"), "{all}");
+        assert!(all.contains("b.png"), "{all}");
         assert!(all.contains("d 0.3"), "{all}");
         assert!(all.contains("1 triangles have no material"), "{all}");
         // Missing base colour texture: falls back to Kd; missing map_d: opaque.
