@@ -136,8 +136,7 @@ pub fn load_gltf_from(
         .collect();
     if !unsupported.is_empty() {
         scene.warnings.push(format!(
-            "{}: glTF extension(s) {} not supported; what they describe is left out (e.g. a \
-             transmissive material renders opaque)",
+            "{}: glTF extension(s) {} not supported; what they describe is left out",
             path.display(),
             unsupported.join(", ")
         ));
@@ -161,6 +160,9 @@ pub fn load_gltf_from(
     scene.validate(path)?;
     Ok(scene)
 }
+
+/// What makes two texture records differ: image index, sRGB, sampler bits, coordinate transform (bits).
+type TextureKey = (usize, bool, u32, Option<[u32; 6]>);
 
 /// The [`crate::texture::Texture::sampler`] bits of a glTF sampler: its wrap modes per axis, `NEAREST`
 /// magnification as nearest-texel lookups, and a minification filter without mip-mapping (`NEAREST`,
@@ -350,7 +352,7 @@ struct Loader<'a> {
     material_slots: HashMap<Option<usize>, u32>,
     /// (image index, sRGB, sampler bits) → index in `scene.textures`, or `INVALID_INDEX` if the image
     /// is missing.
-    texture_slots: HashMap<(usize, bool, u32), u32>,
+    texture_slots: HashMap<TextureKey, u32>,
     any_normals: bool,
     any_uvs: bool,
     /// World-space positions in f64, until the scene's origin is known ([`crate::rebase`]).
@@ -863,6 +865,7 @@ impl Loader<'_> {
                 "baseColorTexture",
                 &info.texture(),
                 info.tex_coord(),
+                crate::gltf_pbr::texture_transform(info.extensions()),
                 true,
             )?;
         }
@@ -872,6 +875,7 @@ impl Loader<'_> {
                 "metallicRoughnessTexture",
                 &info.texture(),
                 info.tex_coord(),
+                crate::gltf_pbr::texture_transform(info.extensions()),
                 false,
             )?;
         }
@@ -881,6 +885,7 @@ impl Loader<'_> {
                 "normalTexture",
                 &info.texture(),
                 info.tex_coord(),
+                crate::gltf_pbr::texture_transform(info.extensions()),
                 false,
             )?;
             out.normal_scale = info.scale();
@@ -891,6 +896,7 @@ impl Loader<'_> {
                 "emissiveTexture",
                 &info.texture(),
                 info.tex_coord(),
+                crate::gltf_pbr::texture_transform(info.extensions()),
                 true,
             )?;
         }
@@ -901,24 +907,19 @@ impl Loader<'_> {
             .map(|e| crate::gltf_pbr::apply_material_extensions(e, &mut out))
             .unwrap_or_default();
         let infos = [
-            pbr.base_color_texture().map(|i| i.extensions().cloned()),
+            pbr.base_color_texture()
+                .and_then(|i| crate::gltf_pbr::texture_transform(i.extensions())),
             pbr.metallic_roughness_texture()
-                .map(|i| i.extensions().cloned()),
-            m.emissive_texture().map(|i| i.extensions().cloned()),
+                .and_then(|i| crate::gltf_pbr::texture_transform(i.extensions())),
+            m.emissive_texture()
+                .and_then(|i| crate::gltf_pbr::texture_transform(i.extensions())),
+            m.normal_texture()
+                .and_then(|i| crate::gltf_pbr::texture_transform(i.extensions())),
         ];
-        if infos
-            .iter()
-            .flatten()
-            .flatten()
-            .any(|e| e.contains_key("KHR_texture_transform"))
-            || m.normal_texture().is_some_and(|t| {
-                t.extensions()
-                    .is_some_and(|e| e.contains_key("KHR_texture_transform"))
-            })
-        {
+        if infos.iter().flatten().any(|t| t.tex_coord.is_some()) {
             notes.push(crate::gltf_pbr::Unsupported {
                 extension: "KHR_texture_transform".to_owned(),
-                what: "texture coordinates are used untransformed".to_owned(),
+                what: "its texCoord override is not read (TEXCOORD_0 is used)".to_owned(),
             });
         }
         for note in notes {
@@ -946,6 +947,7 @@ impl Loader<'_> {
         role: &str,
         texture: &gltf::Texture,
         tex_coord: u32,
+        transform: Option<crate::gltf_pbr::TextureTransform>,
         srgb: bool,
     ) -> Result<u32, SceneError> {
         if tex_coord != 0 {
@@ -955,7 +957,13 @@ impl Loader<'_> {
         }
         let image = texture.source();
         let sampler = sampler_bits(&texture.sampler());
-        let key = (image.index(), srgb, sampler);
+        let transform = transform.map(|t| t.matrix);
+        let key = (
+            image.index(),
+            srgb,
+            sampler,
+            transform.map(|m| m.map(f32::to_bits)),
+        );
         if let Some(&slot) = self.texture_slots.get(&key) {
             return Ok(slot);
         }
@@ -1014,6 +1022,7 @@ impl Loader<'_> {
         let slot = match decoded {
             Some(mut t) => {
                 t.sampler = sampler;
+                t.transform = transform;
                 self.scene.textures.push(t);
                 (self.scene.textures.len() - 1) as u32
             }

@@ -15,15 +15,18 @@
 //! | `KHR_materials_anisotropy` (`anisotropyStrength`) | `anisotropic` (along the shading frame's tangent: `anisotropyRotation` is not read) |
 //! | `KHR_materials_unlit` | the base colour (and texture) becomes the emission, the BRDF black, and `MATERIAL_UNLIT` shows it to camera rays only (not a light, not in reflections) |
 //! | `KHR_materials_emissive_strength` | read by the loader (`emission` × strength) |
+//! | `KHR_texture_transform` (`offset`, `rotation`, `scale`) | the texture record's coordinate transform ([`texture_transform`]; a `texCoord` override is not read) |
 //!
 //! What a material asks for and fovea cannot render (the extensions' textures, volume absorption, thin
-//! walls, iridescence, dispersion, `KHR_texture_transform`) is returned as [`Unsupported`] notes: the
-//! loader warns once per extension, naming the materials.
+//! walls, iridescence, dispersion, a texture transform's `texCoord` override) is returned as
+//! [`Unsupported`] notes: the loader warns once per extension, naming the materials.
 use fovea_core::scene::{Material, MATERIAL_LAMBERTIAN, MATERIAL_UNLIT};
 use gltf::json::Value;
 
-/// The material extensions [`apply_material_extensions`] maps (in part, see the module table).
-pub const MAPPED_EXTENSIONS: [&str; 8] = [
+/// The extensions this module maps (in part, see the module table): the material extensions of
+/// [`apply_material_extensions`] and the texture references' [`texture_transform`].
+pub const MAPPED_EXTENSIONS: [&str; 9] = [
+    "KHR_texture_transform",
     "KHR_materials_transmission",
     "KHR_materials_volume",
     "KHR_materials_ior",
@@ -84,6 +87,38 @@ fn rgb(ext: &Value, key: &str, default: [f32; 3]) -> [f32; 3] {
         }
         _ => default,
     }
+}
+
+/// A texture reference's `KHR_texture_transform`: `uv' = T R S uv` (the extension's offset, rotation in
+/// radians, counter-clockwise in UV space, and scale), as the row-major 2 × 3 matrix `[m0 m1 tx; m2 m3
+/// ty]` stored in `matrix` (`[m0, m1, m2, m3, tx, ty]`), and its `texCoord` override if any.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureTransform {
+    pub matrix: [f32; 6],
+    pub tex_coord: Option<u32>,
+}
+
+/// The `KHR_texture_transform` of a texture reference's `extensions` object, if it has one.
+#[must_use]
+pub fn texture_transform(
+    extensions: Option<&serde_json::Map<String, Value>>,
+) -> Option<TextureTransform> {
+    let e = extensions?.get("KHR_texture_transform")?;
+    let pair = |key: &str, default: [f32; 2]| match e.get(key).and_then(Value::as_array) {
+        Some(a) if a.len() == 2 => match (a[0].as_f64(), a[1].as_f64()) {
+            (Some(x), Some(y)) if x.is_finite() && y.is_finite() => [x as f32, y as f32],
+            _ => default,
+        },
+        _ => default,
+    };
+    let [ox, oy] = pair("offset", [0.0, 0.0]);
+    let [sx, sy] = pair("scale", [1.0, 1.0]);
+    let r = number(e, "rotation", 0.0);
+    let (sin, cos) = r.sin_cos();
+    Some(TextureTransform {
+        matrix: [cos * sx, sin * sy, -sin * sx, cos * sy, ox, oy],
+        tex_coord: e.get("texCoord").and_then(Value::as_u64).map(|t| t as u32),
+    })
 }
 
 /// Burley's `specular` for a dielectric of index `ior` and a glTF specular weight: F0 / 0.08, clamped to

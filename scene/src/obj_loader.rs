@@ -662,6 +662,7 @@ fn metallic_roughness_texture(roughness: Option<&Texture>, metallic: Option<&Tex
         srgb: false,
         texels,
         sampler: 0,
+        transform: None,
     }
 }
 

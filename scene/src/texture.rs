@@ -12,7 +12,7 @@ use crate::error::SceneError;
 use crate::source::{FileSource, Filesystem};
 
 /// A decoded texture, ready to be packed.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     /// The file (or `scene.glb#image3` for embedded images); used in messages only.
     pub name: String,
@@ -26,6 +26,9 @@ pub struct Texture {
     /// How it is sampled: `fovea_core::scene::TEXTURE_CLAMP_S` ... `TEXTURE_NEAREST` bits (0: repeat,
     /// bilinear), and [`NO_MIP_LEVELS`] when the sampler asks for no mip-mapping.
     pub sampler: u32,
+    /// Texture-coordinate transform `[m0, m1, m2, m3, tx, ty]` (`uv' = [m0 m1; m2 m3] uv + t`, glTF
+    /// `KHR_texture_transform`), if any.
+    pub transform: Option<[f32; 6]>,
 }
 
 /// [`Texture::sampler`]: the packer builds no mip levels (glTF `minFilter` `NEAREST` or `LINEAR`).
@@ -49,6 +52,7 @@ impl Texture {
             srgb,
             texels: vec![pack_rgba8(rgba)],
             sampler: 0,
+            transform: None,
         }
     }
 
@@ -189,6 +193,7 @@ fn to_texture(image: DynamicImage, name: &str, role: TextureRole) -> Texture {
                 srgb,
                 texels,
                 sampler: 0,
+                transform: None,
             }
         }
         TextureRole::Opacity => {
@@ -217,6 +222,7 @@ fn to_texture(image: DynamicImage, name: &str, role: TextureRole) -> Texture {
                 srgb: false,
                 texels,
                 sampler: 0,
+                transform: None,
             }
         }
     }

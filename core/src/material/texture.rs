@@ -17,6 +17,7 @@ use crate::math::float::{floor, ln};
 use crate::scene::{
     SceneSource, SceneView, TextureInfo, TEXTURE_ADDRESSING, TEXTURE_CLAMP_S, TEXTURE_CLAMP_T,
     TEXTURE_MIPMAPPED, TEXTURE_MIRROR_S, TEXTURE_MIRROR_T, TEXTURE_NEAREST, TEXTURE_RGBA16,
+    TEXTURE_TRANSFORMED,
 };
 
 /// Decodes one packed RGBA8 texel to [0, 1] floats (no colour-space conversion).
@@ -104,7 +105,21 @@ pub fn sample_texture<F: crate::scene::Features, S: SceneSource>(
     uv: Vec2,
 ) -> Vec4 {
     let info = source.texture(scene, texture);
-    bilinear(scene, source, &info, uv)
+    bilinear(scene, source, &info, transformed(&info, uv))
+}
+
+/// `uv` mapped by the texture's coordinate transform (glTF `KHR_texture_transform`), if it has one.
+#[inline]
+#[must_use]
+pub fn transformed(info: &TextureInfo, uv: Vec2) -> Vec2 {
+    if info.flags & TEXTURE_TRANSFORMED == 0 {
+        return uv;
+    }
+    let m = info.matrix;
+    Vec2::new(
+        m[0] * uv.x + m[1] * uv.y + info.translation[0],
+        m[2] * uv.x + m[3] * uv.y + info.translation[1],
+    )
 }
 
 /// Number of mip levels of a `width × height` texture with a full chain: `1 + floor(log2(max))`.
@@ -144,7 +159,7 @@ pub fn mip_level(info: &TextureInfo, level: u32) -> TextureInfo {
         offset,
         width,
         height,
-        flags: info.flags,
+        ..*info
     }
 }
 
@@ -161,7 +176,16 @@ pub fn sample_texture_lod<F: crate::scene::Features, S: SceneSource>(
     footprint_uv: f32,
 ) -> Vec4 {
     let info = source.texture(scene, texture);
-    let texels = footprint_uv * crate::math::float::sqrt(info.width as f32 * info.height as f32);
+    let uv = transformed(&info, uv);
+    // A transform scales the footprint by sqrt(|det|) (its area ratio).
+    let scale = if info.flags & TEXTURE_TRANSFORMED != 0 {
+        let m = info.matrix;
+        crate::math::float::sqrt((m[0] * m[3] - m[1] * m[2]).abs())
+    } else {
+        1.0
+    };
+    let texels =
+        footprint_uv * scale * crate::math::float::sqrt(info.width as f32 * info.height as f32);
     // `!(x > 1)` also takes NaN to level 0.
     if info.flags & TEXTURE_MIPMAPPED == 0 || !(texels > 1.0) {
         return bilinear(scene, source, &info, uv);

@@ -533,13 +533,18 @@ pub const TEXTURE_CLAMP_T: u32 = 1 << 6;
 pub const TEXTURE_MIRROR_T: u32 = 1 << 7;
 /// [`TextureInfo::flags`]: lookups read the nearest texel instead of interpolating (glTF `NEAREST`).
 pub const TEXTURE_NEAREST: u32 = 1 << 8;
+/// [`TextureInfo::flags`]: texture coordinates are transformed by [`TextureInfo::matrix`] and
+/// [`TextureInfo::translation`] before the lookup.
+pub const TEXTURE_TRANSFORMED: u32 = 1 << 9;
 /// Every addressing bit: without any, coordinates repeat (glTF `REPEAT`, the default).
 pub const TEXTURE_ADDRESSING: u32 =
     TEXTURE_CLAMP_S | TEXTURE_MIRROR_S | TEXTURE_CLAMP_T | TEXTURE_MIRROR_T;
 
-/// Where one texture's texels lie in [`super::MaterialArrays::texels`] (16 bytes): `offset` is the index of its
-/// first `u32`; texels are row-major, top row first, RGBA8 or, with [`TEXTURE_RGBA16`] in `flags`,
-/// RGBA16. Addressing wraps (glTF's default REPEAT).
+/// Where one texture's texels lie in [`super::MaterialArrays::texels`] and how they are looked up (48
+/// bytes, three texels): `offset` is the index of its first `u32`; texels are row-major, top row first,
+/// RGBA8 or, with [`TEXTURE_RGBA16`] in `flags`, RGBA16; `flags` also holds the sampler's addressing and
+/// filter and whether mip levels follow. With [`TEXTURE_TRANSFORMED`], texture coordinates are mapped by
+/// `uv' = [m0 m1; m2 m3] uv + translation` first (glTF `KHR_texture_transform`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TextureInfo {
@@ -547,18 +552,25 @@ pub struct TextureInfo {
     pub width: u32,
     pub height: u32,
     pub flags: u32,
+    /// The 2 × 2 part of the coordinate transform, row-major.
+    pub matrix: [f32; 4],
+    pub translation: [f32; 2],
+    pub _pad: [u32; 2],
 }
 
 impl TextureInfo {
-    /// The record whose bytes are the texel `t`.
+    /// The record whose bytes are the texels `t`.
     #[inline(always)]
     #[must_use]
-    pub fn from_texel(t: UVec4) -> Self {
+    pub fn from_texels(t: [UVec4; 3]) -> Self {
         Self {
-            offset: t.x,
-            width: t.y,
-            height: t.z,
-            flags: t.w,
+            offset: t[0].x,
+            width: t[0].y,
+            height: t[0].z,
+            flags: t[0].w,
+            matrix: texel_floats(t[1]).to_array(),
+            translation: [f32::from_bits(t[2].x), f32::from_bits(t[2].y)],
+            _pad: [0; 2],
         }
     }
 }
@@ -676,13 +688,11 @@ mod tests {
         assert_eq!(TriangleBlock::from_position_texels(first_nine), block);
         let info: TriangleInfo = distinct(0);
         assert_eq!(TriangleInfo::from_texel(texels::<_, 1>(&info)[0]), info);
-        let texture: TextureInfo = distinct(0);
-        assert_eq!(
-            TextureInfo::from_texel(texels::<_, 1>(&texture)[0]),
-            texture
-        );
-        // `_pad` (the last three words) decodes as zero.
-        let material: Material = distinct(3);
+        // `_pad` (the last two words) decodes as zero.
+        let texture: TextureInfo = distinct(2);
+        assert_eq!(TextureInfo::from_texels(texels(&texture)), texture);
+        // `_pad` (the last word) decodes as zero.
+        let material: Material = distinct(1);
         assert_eq!(Material::from_texels(texels(&material)), material);
     }
 }

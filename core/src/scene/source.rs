@@ -25,13 +25,15 @@ pub const NODE_TEXELS: u32 = 7;
 pub const MATERIAL_TEXELS: u32 = 7;
 /// Texels per [`TriangleBlock`].
 pub const BLOCK_TEXELS: u32 = 10;
+/// Texels per [`TextureInfo`].
+pub const TEXTURE_INFO_TEXELS: u32 = 3;
 
 const _: () = {
     assert!(core::mem::size_of::<Bvh4Node>() == NODE_TEXELS as usize * 16);
     assert!(core::mem::size_of::<Material>() == MATERIAL_TEXELS as usize * 16);
     assert!(core::mem::size_of::<TriangleBlock>() == BLOCK_TEXELS as usize * 16);
     assert!(core::mem::size_of::<TriangleInfo>() == 16);
-    assert!(core::mem::size_of::<TextureInfo>() == 16);
+    assert!(core::mem::size_of::<TextureInfo>() == TEXTURE_INFO_TEXELS as usize * 16);
 };
 
 /// Reads the scene's large arrays (see the module documentation). Indices are those of the
@@ -221,7 +223,8 @@ mod texels {
 
         #[inline(always)]
         fn texture<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TextureInfo {
-            TextureInfo::from_texel(self.read(scene.globals.texel_offsets.textures + index))
+            let first = scene.globals.texel_offsets.textures + index * TEXTURE_INFO_TEXELS;
+            TextureInfo::from_texels([self.read(first), self.read(first + 1), self.read(first + 2)])
         }
 
         #[inline(always)]

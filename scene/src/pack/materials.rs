@@ -6,7 +6,7 @@
 use fovea_core::kernel_abi::{BINDING_MATERIALS, BINDING_TEXELS, BINDING_TEXTURES};
 use fovea_core::scene::{
     Material, MaterialArrays, TextureInfo, TEXTURE_ADDRESSING, TEXTURE_MIPMAPPED, TEXTURE_NEAREST,
-    TEXTURE_RGBA16,
+    TEXTURE_RGBA16, TEXTURE_TRANSFORMED,
 };
 use glam::Vec3;
 
@@ -60,11 +60,21 @@ pub(super) fn pack_materials(materials: Vec<Material>, textures: &[Texture]) -> 
         if mipmapped {
             flags |= TEXTURE_MIPMAPPED;
         }
+        let (matrix, translation) = match t.transform {
+            Some([m0, m1, m2, m3, tx, ty]) => {
+                flags |= TEXTURE_TRANSFORMED;
+                ([m0, m1, m2, m3], [tx, ty])
+            }
+            None => ([1.0, 0.0, 0.0, 1.0], [0.0, 0.0]),
+        };
         infos.push(TextureInfo {
             offset: texels.len() as u32,
             width: t.width,
             height: t.height,
             flags,
+            matrix,
+            translation,
+            _pad: [0; 2],
         });
         // Level 0 as 16-bit linear channels (sRGB) or bytes (data), then each level from the one before.
         let mut level: Vec<[u16; 4]> = if t.srgb {

@@ -428,4 +428,47 @@ mod tests {
         assert!(flags[..3].iter().all(|f| f & TEXTURE_MIPMAPPED != 0));
         assert_eq!(flags[3] & TEXTURE_MIPMAPPED, 0);
     }
+
+    /// A texture's coordinate transform (`KHR_texture_transform`) maps the lookup's coordinates first:
+    /// scale 2 reads at twice the coordinate, an offset shifts it.
+    #[test]
+    fn texture_transform_maps_coordinates() {
+        use crate::texture::{pack_rgba8, Texture};
+        use fovea_core::material::texture::sample_texture;
+        use fovea_core::scene::{SceneSlices, TEXTURE_TRANSFORMED};
+        use glam::Vec2;
+        let texture = |transform: Option<[f32; 6]>| {
+            let mut t = Texture::single_color("t", [0, 0, 0, 255], false);
+            t.width = 4;
+            t.texels = [0u8, 85, 170, 255]
+                .iter()
+                .map(|&r| pack_rgba8([r, 0, 0, 255]))
+                .collect();
+            t.transform = transform;
+            t
+        };
+        let scene = LoadedScene {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            triangles: vec![[0, 1, 2]],
+            triangle_materials: vec![0],
+            materials: vec![Material::default()],
+            material_names: vec!["m".into()],
+            textures: vec![
+                texture(None),
+                texture(Some([2.0, 0.0, 0.0, 1.0, 0.0, 0.0])),
+                texture(Some([1.0, 0.0, 0.0, 1.0, 0.25, 0.0])),
+            ],
+            ..LoadedScene::default()
+        };
+        let packed = pack_scene(scene, &Environment::None, &BvhBuildOptions::default());
+        assert_eq!(packed.materials.textures[0].flags & TEXTURE_TRANSFORMED, 0);
+        assert_ne!(packed.materials.textures[1].flags & TEXTURE_TRANSFORMED, 0);
+        let view = packed.view();
+        let red =
+            |k: u32, u: f32| sample_texture(&view, &SceneSlices, k, Vec2::new(u, 0.5)).x * 255.0;
+        // Texel 1's centre is u = 0.375: reached at 0.1875 with scale 2, at 0.125 with offset 0.25.
+        assert!((red(0, 0.375) - 85.0).abs() < 1e-3);
+        assert!((red(1, 0.1875) - 85.0).abs() < 1e-3, "{}", red(1, 0.1875));
+        assert!((red(2, 0.125) - 85.0).abs() < 1e-3, "{}", red(2, 0.125));
+    }
 }
