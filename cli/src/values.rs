@@ -43,11 +43,16 @@ fn finite<const N: usize>(text: &str, sep: char) -> Result<[f32; N], String> {
     Ok(v)
 }
 
-/// `N` finite f64 values separated by `sep`.
+/// `N` f64 values separated by `sep`, each finite and within f32's range (they become f32 once moved
+/// into a scene's coordinates).
 fn finite_f64<const N: usize>(text: &str, sep: char) -> Result<[f64; N], String> {
     let v: [f64; N] = split(text, sep)?;
-    if v.iter().any(|x| !x.is_finite()) {
-        return Err(format!("'{text}' contains a non-finite value"));
+    if v.iter()
+        .any(|x| !x.is_finite() || x.abs() > f64::from(f32::MAX))
+    {
+        return Err(format!(
+            "'{text}' contains a value that is not finite or beyond single precision's range"
+        ));
     }
     Ok(v)
 }
@@ -282,6 +287,10 @@ mod tests {
         let l = "0,1,2,3,4,5".parse::<PointLight>().unwrap().0;
         assert_eq!((l.position[1], l.intensity[2]), (1.0, 5.0));
         assert!("0,1,2".parse::<PointLight>().is_err());
+        // Finite in f64 but beyond f32: refused, not turned into infinity.
+        assert!("0,0,0,1e39,1,1".parse::<PointLight>().is_err());
+        assert!("1e39,0,0".parse::<Point3>().is_err());
+        assert_eq!("1e5,2.5,-3".parse::<Point3>().unwrap().0, [1e5, 2.5, -3.0]);
     }
 
     #[test]

@@ -143,7 +143,8 @@ pub const PROBE_OFFSET_RAY_ORIGIN: u32 = 2;
 pub const PROBE_TRIANGLE: u32 = 3;
 /// [`crate::bsdf::disney::DisneyParams::eval_and_pdf`]: `in[0]` = (base colour rgb, metallic), `in[1]` =
 /// (roughness, anisotropic, specular, specular_tint), `in[2]` = (sheen, sheen_tint, clearcoat,
-/// clearcoat_gloss), `in[3].xyz` = wo, `in[4].xyz` = wi, `in[5]` = (transmission, ior, front ? 1 : 0)
+/// clearcoat_gloss), `in[3].xyz` = wo, `in[4].xyz` = wi, `in[5]` = (transmission, ior, front ? 1 : 0,
+/// thin wall ? 1 : 0)
 /// → `out[0]` = (f rgb, pdf), evaluated through [`crate::bsdf::disney::DisneyParams::at_wo_facing`]
 /// (so transmissive materials also refract).
 pub const PROBE_DISNEY_EVAL: u32 = 4;
@@ -218,6 +219,7 @@ fn probe_disney_params(inputs: &[[f32; 4]], base: usize) -> crate::bsdf::disney:
         lambertian: false,
         transmission: t[0],
         ior: t[1],
+        thin_walled: t[3] != 0.0,
     }
 }
 

@@ -7,7 +7,7 @@
 //! | extension | fovea |
 //! |---|---|
 //! | `KHR_materials_transmission` (`transmissionFactor`) | `transmission`: the rough dielectric interface of `fovea_core::bsdf::dielectric` (GGX refraction, Walter et al. 2007) with the material's roughness and `ior`, tinted by the base colour, in place of the non-metallic base |
-//! | `KHR_materials_volume` (`thicknessFactor` > 0) | the mesh is a closed volume: its front faces are the outside of the interface. `attenuationColor`/`attenuationDistance` (absorption inside) are not applied. Without the extension glTF means a thin wall; fovea renders the same single refracting interface (a warning says so) |
+//! | `KHR_materials_volume` (`thicknessFactor` > 0) | the mesh is a closed volume: its front faces are the outside of the interface. `attenuationColor`/`attenuationDistance` (absorption inside) are not applied. Without the extension glTF means a thin wall: `MATERIAL_THIN_WALLED`, straight-through transmission (`RoughDielectric::thin`) |
 //! | `KHR_materials_ior` (`ior`) | `specular` = F0 / 0.08 with F0 = ((ior − 1) / (ior + 1))² (Burley's dielectric F0 is 0.08 · specular; ior 1.5 gives 0.5; clamped at 1, i.e. ior 1.78) |
 //! | `KHR_materials_specular` (`specularFactor`, `specularColorFactor`) | F0 above × `specularFactor` × the colour's largest component (Burley's specular is not coloured) |
 //! | `KHR_materials_clearcoat` (`clearcoatFactor`, `clearcoatRoughnessFactor`) | `clearcoat`, `clearcoat_gloss` = 1 − roughness |
@@ -20,7 +20,7 @@
 //! What a material asks for and fovea cannot render (the extensions' textures, volume absorption, thin
 //! walls, iridescence, dispersion, a texture transform's `texCoord` override) is returned as
 //! [`Unsupported`] notes: the loader warns once per extension, naming the materials.
-use fovea_core::scene::{Material, MATERIAL_LAMBERTIAN, MATERIAL_UNLIT};
+use fovea_core::scene::{Material, MATERIAL_LAMBERTIAN, MATERIAL_THIN_WALLED, MATERIAL_UNLIT};
 use gltf::json::Value;
 
 /// The extensions this module maps (in part, see the module table): the material extensions of
@@ -168,7 +168,8 @@ pub fn apply_material_extensions(
     }
     if let Some(e) = extensions.get("KHR_materials_transmission") {
         material.transmission = number(e, "transmissionFactor", 0.0).clamp(0.0, 1.0);
-        material.ior = if ior > 1.0 { ior } else { 1.5 };
+        // glTF allows 1 (no refraction); the dielectric needs a little above it.
+        material.ior = ior.max(1.01);
         texture_ignored(
             e,
             "KHR_materials_transmission",
@@ -178,11 +179,9 @@ pub fn apply_material_extensions(
         let volume = extensions
             .get("KHR_materials_volume")
             .is_some_and(|v| number(v, "thicknessFactor", 0.0) > 0.0);
-        if material.transmission > 0.0 && !volume {
-            unsupported.push(Unsupported::new(
-                "KHR_materials_transmission",
-                "a thin wall (no KHR_materials_volume) is rendered as one refracting interface",
-            ));
+        if !volume {
+            // No volume: glTF's thin wall, which light passes straight through.
+            material.flags |= MATERIAL_THIN_WALLED;
         }
     }
     if let Some(e) = extensions.get("KHR_materials_volume") {
@@ -343,11 +342,12 @@ mod tests {
         );
         assert_eq!((m.transmission, m.ior), (0.9, 1.45));
         assert!(notes.is_empty(), "{notes:?}");
-        // No volume: a thin wall, reported; absorption: reported.
+        assert_eq!(m.flags & MATERIAL_THIN_WALLED, 0);
+        // No volume: a thin wall; absorption: reported.
         let (m, notes) = apply(r#"{"KHR_materials_transmission":{"transmissionFactor":1}}"#);
         assert_eq!((m.transmission, m.ior), (1.0, 1.5));
-        assert_eq!(notes.len(), 1);
-        assert!(notes[0].what.contains("thin wall"));
+        assert_ne!(m.flags & MATERIAL_THIN_WALLED, 0);
+        assert!(notes.is_empty(), "{notes:?}");
         let (_, notes) = apply(
             r#"{"KHR_materials_transmission":{"transmissionFactor":1},
                 "KHR_materials_volume":{"thicknessFactor":1,"attenuationColor":[0.5,1,1],"attenuationDistance":2}}"#,

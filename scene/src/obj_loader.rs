@@ -853,7 +853,7 @@ fn convert_materials(
         if let Some(v) = param(m, "aniso", &mut warnings, mtl) {
             out.anisotropic = v.clamp(0.0, 1.0);
         }
-        let pbr_keys = ["Pm", "Pr", "Ps", "Pc", "aniso"];
+        let pbr_keys = ["Pm", "Pr", "Ps", "Pc", "aniso", "map_Pm", "map_Pr", "norm"];
         let purely_diffuse =
             no_specular && !pbr_keys.iter().any(|k| m.unknown_param.contains_key(*k));
         if purely_diffuse && options.mtl_diffuse == MtlDiffuse::Lambert {

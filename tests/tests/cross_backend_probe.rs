@@ -451,7 +451,7 @@ fn disney_head(rng: &mut Rng) -> [[f32; 4]; 3] {
 }
 
 /// `in[5]` of a Disney probe item: every third item transmissive (weight 1 or random, glass-like or
-/// extreme indices, outside or inside), the others opaque.
+/// extreme indices, outside or inside, a third of them thin walls), the others opaque.
 fn disney_transmission(rng: &mut Rng, i: usize) -> [f32; 4] {
     if i % 3 != 2 {
         return [0.0, 1.5, 1.0, 0.0];
@@ -459,7 +459,10 @@ fn disney_transmission(rng: &mut Rng, i: usize) -> [f32; 4] {
     let weight = if rng.below(2) == 0 { 1.0 } else { rng.f() };
     let ior = [1.5, 1.33, 2.4, 1.0001, 4.0][rng.below(5) as usize];
     let front = if rng.below(2) == 0 { 1.0 } else { 0.0 };
-    [weight, ior, front, 0.0]
+    // Every third transmissive item is a thin wall (chosen by index: drawing it would shift the random
+    // inputs of every later table).
+    let thin = if (i / 3) % 3 == 0 { 1.0 } else { 0.0 };
+    [weight, ior, front, thin]
 }
 
 fn disney_eval_inputs(rng: &mut Rng, n: usize) -> Vec<[f32; 4]> {

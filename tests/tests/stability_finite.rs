@@ -598,8 +598,9 @@ fn adversarial_scene(environment: &Environment) -> PackedScene {
         Material {
             transmission: 0.7,
             ior: 4.0,
+            flags: fovea_core::scene::MATERIAL_THIN_WALLED,
             ..material(0.9, 0.3, 0.0)
-        }, // 8 smooth, partly metallic, extreme index
+        }, // 8 smooth thin wall, partly metallic, extreme index
     ];
     let mut tri = |p: [Vec3; 3], n: [Vec3; 3], m: u32| {
         let base = positions.len() as u32;

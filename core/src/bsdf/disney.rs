@@ -70,12 +70,16 @@ pub struct DisneyParams {
     /// comparisons with renderers that model a purely diffuse surface that way. The other lobes and the
     /// layering are unchanged (a Lambertian base's albedo is exactly its colour).
     pub lambertian: bool,
-    /// Weight of the rough dielectric interface ([`crate::bsdf::dielectric`]) that replaces the
-    /// non-metallic part of the BRDF: with `w = transmission · (1 - metallic)`, the BSDF is
-    /// `(1 - w) f_disney + w f_dielectric` (see [`DisneyAtWo`]). 0: reflection only.
+    /// Weight of the rough dielectric interface ([`crate::bsdf::dielectric`]) in the non-metallic part
+    /// of the material: with `w = transmission · (1 - metallic)`, the BSDF is `(1 - w) f_disney' + w
+    /// f_dielectric`, `f_disney'` with metallic `metallic / (1 - w)` so that the metal keeps its share
+    /// (see [`DisneyAtWo`]). Sheen and clearcoat belong to the Disney part and fade with `1 - w`. 0:
+    /// reflection only.
     pub transmission: f32,
     /// Index of refraction of the inside (the back side of the geometric normal) over the outside.
     pub ior: f32,
+    /// The transmission is a thin wall's (straight through, `MATERIAL_THIN_WALLED`).
+    pub thin_walled: bool,
 }
 
 /// The result of importance sampling the BRDF.
@@ -283,6 +287,7 @@ impl DisneyParams {
             lambertian: false,
             transmission: 0.0,
             ior: 1.5,
+            thin_walled: false,
         }
     }
 
@@ -442,30 +447,42 @@ impl DisneyParams {
         // Below the surface nothing reflects (`eval_and_pdf` and `sample` then return zero without
         // looking at the lobes); `cos_o` is clamped so that the lobes, computed anyway, stay within the
         // albedo fits' domain.
-        let lobes = self.lobes(wo.z.max(0.0), features);
         let mut transmission_weight = 0.0;
-        let mut dielectric = RoughDielectric {
-            eta: 1.0,
-            ax: lobes.ax,
-            ay: lobes.ay,
-            tint: Vec3::ONE,
-        };
+        let mut eta = 1.0;
+        // Which part of the material each BSDF carries (glTF's model): metal `m`, the opaque dielectric
+        // `(1 - m)(1 - t)` and the transmissive dielectric `w = (1 - m) t`. The Disney part, weighted
+        // `1 - w`, is evaluated with metallic `m / (1 - w)`, so that its metal share is `m` exactly.
+        let mut metallic = self.metallic;
         if features.has(FEATURE_LOBE_TRANSMISSION) && self.transmission > 0.0 {
-            let metallic = if features.has(FEATURE_LOBE_METALLIC) {
+            let m = if features.has(FEATURE_LOBE_METALLIC) {
                 self.metallic.clamp(0.0, 1.0)
             } else {
                 0.0
             };
-            transmission_weight = self.transmission.min(1.0) * (1.0 - metallic);
-            // An index at or below 1 (or NaN) would make a surface that refracts nothing: glass's 1.5.
-            let ior = if self.ior > 1.0 && self.ior.is_finite() {
-                self.ior
+            transmission_weight = self.transmission.min(1.0) * (1.0 - m);
+            let rest = 1.0 - transmission_weight;
+            metallic = if rest > 0.0 { (m / rest).min(1.0) } else { 0.0 };
+            // An index at or below 1 (or NaN) would refract along a degenerate half vector: at least
+            // 1.01.
+            let ior = if crate::math::float::is_finite(self.ior) {
+                self.ior.max(1.01)
             } else {
                 1.5
             };
-            dielectric.eta = if front { ior } else { 1.0 / ior };
-            dielectric.tint = self.base_color.clamp(Vec3::ZERO, Vec3::ONE);
+            eta = if front { ior } else { 1.0 / ior };
         }
+        let lobes = if metallic == self.metallic {
+            self.lobes(wo.z.max(0.0), features)
+        } else {
+            DisneyParams { metallic, ..*self }.lobes(wo.z.max(0.0), features)
+        };
+        let dielectric = RoughDielectric {
+            eta,
+            ax: lobes.ax,
+            ay: lobes.ay,
+            tint: self.base_color.clamp(Vec3::ZERO, Vec3::ONE),
+            thin: self.thin_walled,
+        };
         DisneyAtWo {
             lobes,
             wo,
@@ -716,6 +733,7 @@ mod tests {
                 lambertian: false,
                 transmission: 0.0,
                 ior: 1.5,
+                thin_walled: false,
             }
         }
     }
@@ -740,6 +758,7 @@ mod tests {
                 lambertian: false,
                 transmission: 0.0,
                 ior: 1.5,
+                thin_walled: false,
             });
         }
         out
@@ -1028,6 +1047,7 @@ mod tests {
             lambertian: false,
             transmission: 0.0,
             ior: 1.5,
+            thin_walled: false,
         };
         let wild = DisneyParams {
             base_color: Vec3::new(-1.0, 1e30, 3.0),
@@ -1043,6 +1063,7 @@ mod tests {
             lambertian: false,
             transmission: 0.0,
             ior: 1.5,
+            thin_walled: false,
         };
         let mirror_like = DisneyParams {
             metallic: 1.0,

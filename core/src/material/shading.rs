@@ -14,6 +14,7 @@ use crate::scene::features::{
 };
 use crate::scene::{
     Features, Material, SceneSource, SceneView, INVALID_INDEX, MATERIAL_LAMBERTIAN,
+    MATERIAL_THIN_WALLED,
 };
 
 /// Everything the integrator needs at a hit point.
@@ -50,6 +51,7 @@ pub fn material_params(material: &Material) -> DisneyParams {
         lambertian: material.flags & MATERIAL_LAMBERTIAN != 0,
         transmission: material.transmission,
         ior: material.ior,
+        thin_walled: material.flags & MATERIAL_THIN_WALLED != 0,
     }
 }
 

@@ -390,6 +390,10 @@ pub const MATERIAL_LAMBERTIAN: u32 = 4;
 /// and the integrator adds their emission on camera rays only (it neither lights the scene nor shows
 /// in reflections).
 pub const MATERIAL_UNLIT: u32 = 8;
+/// [`Material::flags`]: a transmissive material is a thin wall (glTF `KHR_materials_transmission` without
+/// `KHR_materials_volume`): light passes straight through instead of refracting into a volume
+/// (`crate::bsdf::dielectric::RoughDielectric::thin`).
+pub const MATERIAL_THIN_WALLED: u32 = 16;
 
 /// A Disney "principled" material (Burley 2012) with optional textures (112 bytes).
 ///

@@ -1,7 +1,8 @@
 //! The materials group: the materials, one record per texture and all texels in one array
 //! ([`fovea_core::scene::MaterialArrays`]). sRGB colour textures become linear RGBA16 here, once, and
 //! every texture larger than one texel gets its mip levels (box-filtered 2 × 2 in the stored, linear,
-//! values, colour weighted by alpha; odd edges repeat their last texel) unless its sampler asks for none;
+//! values, colour weighted by alpha; an odd edge's last texel joins its neighbours) unless its sampler asks
+//! for none;
 //! `fovea_core::material::texture::sample_texture_lod` reads them.
 use fovea_core::kernel_abi::{BINDING_MATERIALS, BINDING_TEXELS, BINDING_TEXTURES};
 use fovea_core::scene::{
@@ -101,7 +102,7 @@ pub(super) fn pack_materials(materials: Vec<Material>, textures: &[Texture]) -> 
             if !mipmapped || (w == 1 && h == 1) {
                 break;
             }
-            (level, w, h) = downsample(&level, w, h);
+            (level, w, h) = downsample(&level, w, h, t.srgb);
         }
     }
     PackedMaterials {
@@ -111,35 +112,51 @@ pub(super) fn pack_materials(materials: Vec<Material>, textures: &[Texture]) -> 
     }
 }
 
-/// The next mip level of a `w × h` level: each texel the mean of a 2 × 2 square (rounded; colour weighted
-/// by alpha), an odd last row or column repeating its texels.
-fn downsample(level: &[[u16; 4]], w: usize, h: usize) -> (Vec<[u16; 4]>, usize, usize) {
+/// The next mip level of a `w × h` level: each texel the mean of its 2 × 2 square (rounded), and on an odd
+/// edge of the last one, 3 texels wide (so that no texel is left out of the coarser levels). Colour
+/// textures (`weight_by_alpha`) weight colour by alpha, so that the colour of transparent texels (cut-out
+/// leaves' surroundings, whatever the painter left there) does not bleed into coarser levels; alpha, and
+/// colour where all are transparent, is the plain mean.
+fn downsample(
+    level: &[[u16; 4]],
+    w: usize,
+    h: usize,
+    weight_by_alpha: bool,
+) -> (Vec<[u16; 4]>, usize, usize) {
     let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+    // The source span of output coordinate `i` of `n` over `size`: [2i, 2i + 1], the last one reaching
+    // the edge.
+    let span = |i: usize, n: usize, size: usize| {
+        let start = (2 * i).min(size - 1);
+        let end = if i + 1 == n {
+            size - 1
+        } else {
+            (2 * i + 1).min(size - 1)
+        };
+        start..=end
+    };
     let mut out = Vec::with_capacity(nw * nh);
     for y in 0..nh {
-        let (y0, y1) = ((2 * y).min(h - 1), (2 * y + 1).min(h - 1));
         for x in 0..nw {
-            let (x0, x1) = ((2 * x).min(w - 1), (2 * x + 1).min(w - 1));
-            let square = [
-                level[y0 * w + x0],
-                level[y0 * w + x1],
-                level[y1 * w + x0],
-                level[y1 * w + x1],
-            ];
-            // Colour weighted by alpha, so that the colour of transparent texels (cut-out leaves'
-            // surroundings, whatever the painter left there) does not bleed into coarser levels;
-            // alpha itself, and colour where all four are transparent, is the plain mean.
-            let alpha: u64 = square.iter().map(|t| u64::from(t[3])).sum();
+            let (mut sum, mut weighted, mut alpha, mut count) = ([0u64; 4], [0u64; 3], 0u64, 0u64);
+            for sy in span(y, nh, h) {
+                for sx in span(x, nw, w) {
+                    let t = level[sy * w + sx];
+                    for k in 0..4 {
+                        sum[k] += u64::from(t[k]);
+                    }
+                    for k in 0..3 {
+                        weighted[k] += u64::from(t[k]) * u64::from(t[3]);
+                    }
+                    alpha += u64::from(t[3]);
+                    count += 1;
+                }
+            }
             out.push(std::array::from_fn(|k| {
-                let plain = square.iter().map(|t| u64::from(t[k])).sum::<u64>();
-                let v = if k < 3 && alpha > 0 {
-                    let weighted: u64 = square
-                        .iter()
-                        .map(|t| u64::from(t[k]) * u64::from(t[3]))
-                        .sum();
-                    (weighted + alpha / 2) / alpha
+                let v = if k < 3 && weight_by_alpha && alpha > 0 {
+                    (weighted[k] + alpha / 2) / alpha
                 } else {
-                    (plain + 2) / 4
+                    (sum[k] + count / 2) / count
                 };
                 v as u16
             }));

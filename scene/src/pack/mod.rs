@@ -81,7 +81,7 @@ pub struct PackedScene {
     pub materials: PackedMaterials,
     pub lights: PackedLights,
     pub environment: PackedEnvironment,
-    /// World-space bounds of all triangles.
+    /// Bounds of all triangles, in the scene's coordinates (relative to `LoadedScene::origin`).
     pub bounds_min: Vec3,
     pub bounds_max: Vec3,
     pub stats: PackStats,
