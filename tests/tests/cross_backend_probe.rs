@@ -461,7 +461,7 @@ fn disney_transmission(rng: &mut Rng, i: usize) -> [f32; 4] {
     let front = if rng.below(2) == 0 { 1.0 } else { 0.0 };
     // Every third transmissive item is a thin wall (chosen by index: drawing it would shift the random
     // inputs of every later table).
-    let thin = if (i / 3) % 3 == 0 { 1.0 } else { 0.0 };
+    let thin = if (i / 3).is_multiple_of(3) { 1.0 } else { 0.0 };
     [weight, ior, front, thin]
 }
 
