@@ -51,7 +51,7 @@ fn finite_f64<const N: usize>(text: &str, sep: char) -> Result<[f64; N], String>
         .any(|x| !x.is_finite() || x.abs() > f64::from(f32::MAX))
     {
         return Err(format!(
-            "'{text}' contains a value that is not finite or beyond single precision's range"
+            "'{text}' contains a non-finite value or one beyond single precision's range"
         ));
     }
     Ok(v)
