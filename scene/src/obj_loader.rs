@@ -655,15 +655,13 @@ fn metallic_roughness_texture(roughness: Option<&Texture>, metallic: Option<&Tex
         }
     }
     let name = |t: Option<&Texture>| t.map_or("-".to_owned(), |t| t.name.clone());
-    Texture {
-        name: format!("{} + {}", name(roughness), name(metallic)),
+    Texture::new(
+        format!("{} + {}", name(roughness), name(metallic)),
         width,
         height,
-        srgb: false,
+        false,
         texels,
-        sampler: 0,
-        transform: None,
-    }
+    )
 }
 
 /// Whether an image looks like a tangent-space normal map: mean blue above 0.6, red and green within

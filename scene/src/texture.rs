@@ -42,18 +42,30 @@ pub fn pack_rgba8(rgba: [u8; 4]) -> u32 {
 }
 
 impl Texture {
-    /// A 1×1 texture of one colour (fallbacks and tests).
+    /// A texture of `texels` (RGBA8, `width × height`), repeated and filtered by default, untransformed.
     #[must_use]
-    pub fn single_color(name: impl Into<String>, rgba: [u8; 4], srgb: bool) -> Self {
+    pub fn new(
+        name: impl Into<String>,
+        width: u32,
+        height: u32,
+        srgb: bool,
+        texels: Vec<u32>,
+    ) -> Self {
         Self {
             name: name.into(),
-            width: 1,
-            height: 1,
+            width,
+            height,
             srgb,
-            texels: vec![pack_rgba8(rgba)],
+            texels,
             sampler: 0,
             transform: None,
         }
+    }
+
+    /// A 1×1 texture of one colour (fallbacks and tests).
+    #[must_use]
+    pub fn single_color(name: impl Into<String>, rgba: [u8; 4], srgb: bool) -> Self {
+        Self::new(name, 1, 1, srgb, vec![pack_rgba8(rgba)])
     }
 
     /// The texel at column `x`, row `y` (row 0 is the top) as `[r, g, b, a]`.
@@ -186,15 +198,7 @@ fn to_texture(image: DynamicImage, name: &str, role: TextureRole) -> Texture {
                 .chunks_exact(4)
                 .map(|c| pack_rgba8([c[0], c[1], c[2], c[3]]))
                 .collect();
-            Texture {
-                name: name.to_owned(),
-                width,
-                height,
-                srgb,
-                texels,
-                sampler: 0,
-                transform: None,
-            }
+            Texture::new(name.to_owned(), width, height, srgb, texels)
         }
         TextureRole::Opacity => {
             let has_alpha = image.color().has_alpha();
@@ -215,15 +219,7 @@ fn to_texture(image: DynamicImage, name: &str, role: TextureRole) -> Texture {
                     pack_rgba8([255, 255, 255, opacity])
                 })
                 .collect();
-            Texture {
-                name: name.to_owned(),
-                width,
-                height,
-                srgb: false,
-                texels,
-                sampler: 0,
-                transform: None,
-            }
+            Texture::new(name.to_owned(), width, height, false, texels)
         }
     }
 }

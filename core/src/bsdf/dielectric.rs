@@ -32,15 +32,7 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     if sin2_t >= 1.0 {
         return 1.0;
     }
-    let cos_t = sqrt((1.0 - sin2_t).max(0.0));
-    let r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    let r = 0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular);
-    if r.is_nan() {
-        1.0
-    } else {
-        r.clamp(0.0, 1.0)
-    }
+    fresnel_refraction(cos_i, sqrt((1.0 - sin2_t).max(0.0)), eta)
 }
 
 /// [`fresnel_dielectric`] for a refraction whose two cosines are both known (`cos_i` on the side `eta` is
@@ -121,48 +113,49 @@ impl RoughDielectric {
             let transmitted = 1.0 - fresnel;
             return (self.tint * (f * transmitted), pdf * transmitted);
         }
-        let reflect = cos_i > 0.0;
-        let etap = if reflect { 1.0 } else { self.eta };
+        if cos_i > 0.0 {
+            let (f, pdf, fresnel) = self.microfacet_mirror(wo, wi);
+            return (Vec3::splat(f * fresnel), pdf * fresnel);
+        }
+        // Refraction.
+        let etap = self.eta;
         let m = Self::half_vector(wo, wi, etap);
         let (o_m, i_m) = (wo.dot(m), wi.dot(m));
         // Microfacets seen from behind by either direction contribute nothing.
         if m == Vec3::ZERO || !(o_m > 0.0) || i_m * cos_i <= 0.0 {
             return (Vec3::ZERO, 0.0);
         }
-        let fresnel = if reflect {
-            fresnel_dielectric(o_m, self.eta)
-        } else {
-            fresnel_refraction(o_m, -i_m, self.eta)
+        let fresnel = fresnel_refraction(o_m, -i_m, self.eta);
+        let (d, g, d_wo) = self.microfacet_terms(wo, wi, m);
+        // Walter et al. eq. 21 and the Jacobian of eq. 17 with etap = η_i / η_o.
+        let denom = {
+            let s = i_m + o_m / etap;
+            s * s
         };
+        if !(denom > 0.0) || d_wo == 0.0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        let transmitted = 1.0 - fresnel;
+        let f = transmitted * d * g * (i_m * o_m).abs() / denom / (etap * etap);
+        let pdf = transmitted * d_wo * i_m.abs() / denom;
+        (self.tint * f, pdf)
+    }
+
+    /// `D(m)`, `G2 / (cos θo |cos θi|)` and the density `D_wo(m) = G1(wo) (wo·m) D(m) / wo.z` of
+    /// sampling `m`, for unit `wo` above the surface; zeros where they are not finite.
+    #[must_use]
+    fn microfacet_terms(&self, wo: Vec3, wi: Vec3, m: Vec3) -> (f32, f32, f32) {
         let d = ggx_d(m, self.ax, self.ay);
         let g2 =
             1.0 / (1.0 + smith_lambda(wo, self.ax, self.ay) + smith_lambda(wi, self.ax, self.ay));
-        // G2 / (cos θo |cos θi|), divided one cosine at a time: near the horizon G2 falls as fast as the
-        // cosines, but their product alone underflows.
-        let g = g2 / cos_o / cos_i.abs();
-        // D_wo(m) = G1(wo) (wo·m) D(m) / wo.z, the density of the sampled microfacet normal.
+        // Divided one cosine at a time: near the horizon G2 falls as fast as the cosines, but their
+        // product alone underflows.
+        let g = g2 / wo.z / wi.z.abs();
         let d_wo = ggx_vndf_pdf(wo, m, self.ax, self.ay);
         if !(g.is_finite() && d_wo.is_finite()) {
-            return (Vec3::ZERO, 0.0);
+            return (0.0, 0.0, 0.0);
         }
-        if reflect {
-            let f = 0.25 * fresnel * d * g;
-            let pdf = fresnel * d_wo / (4.0 * o_m);
-            (Vec3::splat(f), pdf)
-        } else {
-            // Walter et al. eq. 21 and the Jacobian of eq. 17 with etap = η_i / η_o.
-            let denom = {
-                let s = i_m + o_m / etap;
-                s * s
-            };
-            if !(denom > 0.0) {
-                return (Vec3::ZERO, 0.0);
-            }
-            let transmitted = 1.0 - fresnel;
-            let f = transmitted * d * g * (i_m * o_m).abs() / denom / (etap * etap);
-            let pdf = transmitted * d_wo * i_m.abs() / denom;
-            (self.tint * f, pdf)
-        }
+        (d, g, d_wo)
     }
 
     /// The mirror-microfacet terms at unit `wo`, `wi` above the surface: `D G / (4 cos θo cos θi)`, the
@@ -176,16 +169,12 @@ impl RoughDielectric {
         if !valid {
             return (0.0, 0.0, 0.0);
         }
-        let fresnel = fresnel_dielectric(o_m, self.eta);
-        let d = ggx_d(m, self.ax, self.ay);
-        let g2 =
-            1.0 / (1.0 + smith_lambda(wo, self.ax, self.ay) + smith_lambda(wi, self.ax, self.ay));
-        let g = g2 / wo.z / wi.z;
-        let d_wo = ggx_vndf_pdf(wo, m, self.ax, self.ay);
-        if !(g.is_finite() && d_wo.is_finite()) {
-            return (0.0, 0.0, 0.0);
-        }
-        (0.25 * d * g, d_wo / (4.0 * o_m), fresnel)
+        let (d, g, d_wo) = self.microfacet_terms(wo, wi, m);
+        (
+            0.25 * d * g,
+            d_wo / (4.0 * o_m),
+            fresnel_dielectric(o_m, self.eta),
+        )
     }
 
     /// Samples `wi`: `u.yz` picks a visible microfacet normal, `u.x` reflection (with probability the

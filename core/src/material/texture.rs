@@ -242,13 +242,7 @@ fn bilinear<F: crate::scene::Features, S: SceneSource>(
     // targets, a scalar division per lane on lavapipe).
     let (x0, y0) = (wrap(x0 as i32, info.width), wrap(y0 as i32, info.height));
     let (x1, y1) = (next_wrapped(x0, info.width), next_wrapped(y0, info.height));
-    let c00 = fetch(scene, source, info, x0, y0);
-    let c10 = fetch(scene, source, info, x1, y0);
-    let c01 = fetch(scene, source, info, x0, y1);
-    let c11 = fetch(scene, source, info, x1, y1);
-    let top = c00 + (c10 - c00) * tx;
-    let bottom = c01 + (c11 - c01) * tx;
-    top + (bottom - top) * ty
+    blend(scene, source, info, [x0, x1], [y0, y1], [tx, ty])
 }
 
 /// [`bilinear`] for a texture whose sampler clamps, mirrors or reads the nearest texel (`fx`, `fy`: the
@@ -279,11 +273,26 @@ fn filtered_with_sampler<F: crate::scene::Features, S: SceneSource>(
     let x1 = address(xi + 1, info.width, clamp_s, mirror_s);
     let y0 = address(yi, info.height, clamp_t, mirror_t);
     let y1 = address(yi + 1, info.height, clamp_t, mirror_t);
-    let c00 = fetch(scene, source, info, x0, y0);
-    let c10 = fetch(scene, source, info, x1, y0);
-    let c01 = fetch(scene, source, info, x0, y1);
-    let c11 = fetch(scene, source, info, x1, y1);
-    let top = c00 + (c10 - c00) * tx;
-    let bottom = c01 + (c11 - c01) * tx;
-    top + (bottom - top) * ty
+    blend(scene, source, info, [x0, x1], [y0, y1], [tx, ty])
+}
+
+/// The bilinear blend of texels (`xs[0..2]`, `ys[0..2]`), already addressed, with weights `t` of the second
+/// column and row.
+#[inline]
+#[must_use]
+fn blend<F: crate::scene::Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    info: &TextureInfo,
+    xs: [u32; 2],
+    ys: [u32; 2],
+    t: [f32; 2],
+) -> Vec4 {
+    let c00 = fetch(scene, source, info, xs[0], ys[0]);
+    let c10 = fetch(scene, source, info, xs[1], ys[0]);
+    let c01 = fetch(scene, source, info, xs[0], ys[1]);
+    let c11 = fetch(scene, source, info, xs[1], ys[1]);
+    let top = c00 + (c10 - c00) * t[0];
+    let bottom = c01 + (c11 - c01) * t[0];
+    top + (bottom - top) * t[1]
 }

@@ -244,6 +244,19 @@ mod tests {
     use crate::bvh::BvhBuildOptions;
     use fovea_core::scene::{Material, TEXTURE_RGBA16};
 
+    /// One triangle with the default material, and `textures` to pack.
+    fn textured_triangle(textures: Vec<crate::texture::Texture>) -> LoadedScene {
+        LoadedScene {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            triangles: vec![[0, 1, 2]],
+            triangle_materials: vec![0],
+            materials: vec![Material::default()],
+            material_names: vec!["m".into()],
+            textures,
+            ..LoadedScene::default()
+        }
+    }
+
     #[test]
     fn bounds_ignore_unused_vertices_and_lights_are_normalised() {
         let scene = LoadedScene {
@@ -291,15 +304,7 @@ mod tests {
             crate::texture::pack_rgba8([0, 128, 255, 255]),
         ];
         let data = Texture::single_color("d", [128, 0, 255, 77], false);
-        let scene = LoadedScene {
-            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-            triangles: vec![[0, 1, 2]],
-            triangle_materials: vec![0],
-            materials: vec![Material::default()],
-            material_names: vec!["m".into()],
-            textures: vec![colour, data],
-            ..LoadedScene::default()
-        };
+        let scene = textured_triangle(vec![colour, data]);
         let words = packed_texel_words(&scene.textures);
         let packed = pack_scene(scene, &Environment::None, &BvhBuildOptions::default());
         assert!(packed.materials.texels.len() as u64 <= words);
@@ -341,15 +346,7 @@ mod tests {
         t.height = 2;
         let (black, white) = (pack_rgba8([0, 0, 0, 255]), pack_rgba8([255, 255, 255, 255]));
         t.texels = vec![black, black, white, white, black, black, white, white];
-        let scene = LoadedScene {
-            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-            triangles: vec![[0, 1, 2]],
-            triangle_materials: vec![0],
-            materials: vec![Material::default()],
-            material_names: vec!["m".into()],
-            textures: vec![t],
-            ..LoadedScene::default()
-        };
+        let scene = textured_triangle(vec![t]);
         let words = packed_texel_words(&scene.textures);
         let packed = pack_scene(scene, &Environment::None, &BvhBuildOptions::default());
         let info = packed.materials.textures[0];
@@ -395,20 +392,12 @@ mod tests {
             t.sampler = sampler;
             t
         };
-        let scene = LoadedScene {
-            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-            triangles: vec![[0, 1, 2]],
-            triangle_materials: vec![0],
-            materials: vec![Material::default()],
-            material_names: vec!["m".into()],
-            textures: vec![
-                texture(0),
-                texture(TEXTURE_CLAMP_S),
-                texture(TEXTURE_MIRROR_S),
-                texture(TEXTURE_NEAREST | NO_MIP_LEVELS),
-            ],
-            ..LoadedScene::default()
-        };
+        let scene = textured_triangle(vec![
+            texture(0),
+            texture(TEXTURE_CLAMP_S),
+            texture(TEXTURE_MIRROR_S),
+            texture(TEXTURE_NEAREST | NO_MIP_LEVELS),
+        ]);
         let packed = pack_scene(scene, &Environment::None, &BvhBuildOptions::default());
         let view = packed.view();
         let red =
@@ -447,19 +436,11 @@ mod tests {
             t.transform = transform;
             t
         };
-        let scene = LoadedScene {
-            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-            triangles: vec![[0, 1, 2]],
-            triangle_materials: vec![0],
-            materials: vec![Material::default()],
-            material_names: vec!["m".into()],
-            textures: vec![
-                texture(None),
-                texture(Some([2.0, 0.0, 0.0, 1.0, 0.0, 0.0])),
-                texture(Some([1.0, 0.0, 0.0, 1.0, 0.25, 0.0])),
-            ],
-            ..LoadedScene::default()
-        };
+        let scene = textured_triangle(vec![
+            texture(None),
+            texture(Some([2.0, 0.0, 0.0, 1.0, 0.0, 0.0])),
+            texture(Some([1.0, 0.0, 0.0, 1.0, 0.25, 0.0])),
+        ]);
         let packed = pack_scene(scene, &Environment::None, &BvhBuildOptions::default());
         assert_eq!(packed.materials.textures[0].flags & TEXTURE_TRANSFORMED, 0);
         assert_ne!(packed.materials.textures[1].flags & TEXTURE_TRANSFORMED, 0);
