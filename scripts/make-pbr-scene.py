@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """Writes two generated test scenes (CC0, like the rest of the repository's own assets):
 
-- assets/pbr_extensions/pbr_extensions.gltf: a floor and nine spheres, each with one glTF PBR extension
+- assets/pbr_extensions/pbr_extensions.gltf: a floor and twelve spheres, each with one glTF PBR extension
   (KHR_materials_ior, _specular, _clearcoat, _sheen, _anisotropy, _unlit, _emissive_strength,
-  _transmission + _volume, and KHR_texture_transform on a checker texture), a camera and a point light:
+  _transmission + _volume with absorption, and KHR_texture_transform on a checker texture), one with the
+  extensions' textures (clear coat, clear-coat roughness, sheen colour, specular), a thin glass whose
+  transmission is textured and one whose texture reads TEXCOORD_1, a camera and a point light:
   the test scene of the loader's extension mapping (scene/src/gltf_pbr.rs) and of tests/tests/pbr_scene.rs.
 - assets/pbr_extensions/checker_floor.gltf: a 400 x 400 floor under a 512 x 512 texture of one-texel
   checks repeated 40 times, seen from 1.7 units up towards the horizon, lit by a directional light: the
@@ -90,6 +92,8 @@ def main():
     s_nrm = add(b"".join(struct.pack("<3f", *v) for v in sphere_v), len(sphere_v), "VEC3", 5126, 34962)
     s_uv = add(b"".join(struct.pack("<2f", 0.5 + math.atan2(v[2], v[0]) / (2 * math.pi), 0.5 - math.asin(v[1]) / math.pi)
                         for v in sphere_v), len(sphere_v), "VEC2", 5126, 34962)
+    s_uv1 = add(b"".join(struct.pack("<2f", 1 + math.atan2(v[2], v[0]) / math.pi, 1 - 2 * math.asin(v[1]) / math.pi)
+                         for v in sphere_v), len(sphere_v), "VEC2", 5126, 34962)
     s_idx = add(b"".join(struct.pack("<3H", *f) for f in sphere_f), 3 * len(sphere_f), "SCALAR", 5123, 34963)
     f_pos = positions(floor_v)
     f_uv = add(b"".join(struct.pack("<2f", *t) for t in floor_uv), 4, "VEC2", 5126, 34962)
@@ -117,12 +121,23 @@ def main():
         {"name": "texture_transform", "pbrMetallicRoughness": {
             "baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"scale": [4, 4], "rotation": 0.3}}},
             "metallicFactor": 0, "roughnessFactor": 0.7}},
+        {"name": "extension_textures", "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.3, 0.1, 1], "metallicFactor": 0, "roughnessFactor": 0.6},
+         "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1, "clearcoatRoughnessFactor": 0.5,
+                                                    "clearcoatTexture": {"index": 0}, "clearcoatRoughnessTexture": {"index": 0}},
+                        "KHR_materials_sheen": {"sheenColorFactor": [1, 1, 1], "sheenColorTexture": {"index": 0}},
+                        "KHR_materials_specular": {"specularTexture": {"index": 0}}}},
+        {"name": "textured_glass", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0.1},
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1, "transmissionTexture": {"index": 0}}}},
+        {"name": "texcoord_1", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1},
+                                                        "metallicFactor": 0, "roughnessFactor": 0.7}},
     ]
     meshes = [{"name": "floor", "primitives": [{"attributes": {"POSITION": f_pos, "TEXCOORD_0": f_uv}, "indices": f_idx, "material": 0}]}]
     nodes = [{"name": "floor", "mesh": 0}]
     for i, m in enumerate(materials[1:], start=1):
-        meshes.append({"name": m["name"], "primitives": [
-            {"attributes": {"POSITION": s_pos, "NORMAL": s_nrm, "TEXCOORD_0": s_uv}, "indices": s_idx, "material": i}]})
+        attributes = {"POSITION": s_pos, "NORMAL": s_nrm, "TEXCOORD_0": s_uv}
+        if m["name"] == "texcoord_1":
+            attributes["TEXCOORD_1"] = s_uv1
+        meshes.append({"name": m["name"], "primitives": [{"attributes": attributes, "indices": s_idx, "material": i}]})
         row, col = divmod(i - 1, 5)
         nodes.append({"name": m["name"], "mesh": i, "translation": [-4.4 + 2.2 * col, 1.0, -1.2 + 2.4 * row],
                       "scale": [0.9, 0.9, 0.9]})

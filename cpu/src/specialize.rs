@@ -3,7 +3,8 @@
 //!
 //! A path exists for every combination of three feature groups that scenes tend to have or lack together:
 //! textures and cut-outs; glossy reflection (the GGX specular lobe, metals); and the rarer features
-//! (environment maps, punctual lights, sheen, clearcoat, anisotropy, transmission). Every path keeps the features
+//! (environment maps, punctual lights, sheen, clearcoat, anisotropy, transmission, the glTF
+//! extensions' textures, volume absorption). Every path keeps the features
 //! nearly every scene has (emissive triangles, a constant sky, shading normals). A scene runs the
 //! smallest path that covers its features, so only the groups it lacks are compiled out; eight copies of
 //! the integrator keep the build time and binary size in check. `FeatureFlags::ALL` (the
@@ -23,14 +24,16 @@ pub const GROUP_TEXTURES: u32 = FEATURE_BASE_COLOR_TEXTURE
     | FEATURE_UVS;
 /// Glossy reflection: the GGX specular lobe and metals.
 pub const GROUP_GLOSSY: u32 = FEATURE_LOBE_SPECULAR | FEATURE_LOBE_METALLIC;
-/// The rarer features: environment maps, punctual lights, and the sheen, clearcoat, anisotropy and
-/// transmission lobes.
+/// The rarer features: environment maps, punctual lights, the sheen, clearcoat, anisotropy and
+/// transmission lobes, the glTF extensions' textures and volume absorption.
 pub const GROUP_RARE: u32 = FEATURE_ENVIRONMENT_MAP
     | FEATURE_PUNCTUAL_LIGHTS
     | FEATURE_LOBE_SHEEN
     | FEATURE_LOBE_CLEARCOAT
     | FEATURE_LOBE_ANISOTROPY
-    | FEATURE_LOBE_TRANSMISSION;
+    | FEATURE_LOBE_TRANSMISSION
+    | FEATURE_EXTENSION_TEXTURES
+    | FEATURE_VOLUME_ABSORPTION;
 
 const V0: u32 = GROUP_BASE;
 const V1: u32 = GROUP_BASE | GROUP_TEXTURES;

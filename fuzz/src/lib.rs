@@ -140,14 +140,24 @@ pub fn check_packed(p: &PackedScene, triangles: usize) {
             m.alpha_cutoff,
             m.normal_scale,
             m.clearcoat,
-            m.sheen
+            m.sheen,
+            m.transmission,
+            m.ior
         ]));
+        assert!(m.absorption.iter().all(|&a| a.is_finite() && a >= 0.0), "{m:?}");
         for t in [
             m.base_color_texture,
             m.metallic_roughness_texture,
             m.normal_texture,
             m.emission_texture,
             m.alpha_texture,
+            m.transmission_texture,
+            m.clearcoat_texture,
+            m.clearcoat_roughness_texture,
+            m.sheen_texture,
+            m.specular_texture,
+            m.specular_color_texture,
+            m.anisotropy_texture,
         ] {
             assert!(t == INVALID_INDEX || (t as usize) < p.materials.textures.len());
         }

@@ -77,7 +77,7 @@ const _: () = {
     assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
     // `render_samples`' specialization constant: id and default (every feature).
     assert!(kernel_abi::SPEC_CONSTANT_FEATURES == 0);
-    assert!(FEATURES_ALL == 0x1FFFF);
+    assert!(FEATURES_ALL == 0x7FFFF);
 };
 
 /// Declares a compute entry point that binds the whole scene, group by group as
@@ -169,7 +169,7 @@ scene_entry_point! {
     /// the driver drops the code of absent features.
     #[spirv(compute(threads(64)))]
     pub fn render_samples(
-        #[spirv(spec_constant(id = 0, default = 131071))] features: u32,
+        #[spirv(spec_constant(id = 0, default = 524287))] features: u32,
         #[spirv(global_invocation_id)] id: UVec3,
         #[spirv(num_workgroups)] num_workgroups: UVec3,
         #[spirv(push_constant)] pc: &KernelPushConstants,

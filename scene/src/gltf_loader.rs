@@ -348,8 +348,9 @@ struct Loader<'a> {
     buffers: &'a [Vec<u8>],
     limits: TextureLimits,
     scene: LoadedScene,
-    /// glTF material index (`None` = the default material) → index in `scene.materials`.
-    material_slots: HashMap<Option<usize>, u32>,
+    /// glTF material index (`None` = the default material) → index in `scene.materials` and the
+    /// texture coordinate set its textures read.
+    material_slots: HashMap<Option<usize>, (u32, u32)>,
     /// (image index, sRGB, sampler bits) → index in `scene.textures`, or `INVALID_INDEX` if the image
     /// is missing.
     texture_slots: HashMap<TextureKey, u32>,
@@ -660,11 +661,19 @@ impl Loader<'_> {
                     &[DataType::F32],
                 )?;
             }
-            let uv_acc = primitive.get(&gltf::Semantic::TexCoords(0));
+            // The texture coordinate set the material's textures name (one per material).
+            let (material, mut uv_set) = self.material_slot(&primitive.material())?;
+            if uv_set != 0 && primitive.get(&gltf::Semantic::TexCoords(uv_set)).is_none() {
+                self.warn(format!(
+                    "{label}: its material's textures read TEXCOORD_{uv_set}, which it lacks; TEXCOORD_0 is used"
+                ));
+                uv_set = 0;
+            }
+            let uv_acc = primitive.get(&gltf::Semantic::TexCoords(uv_set));
             if let Some(a) = &uv_acc {
                 self.check_accessor(
                     a,
-                    &format!("{label} TEXCOORD_0"),
+                    &format!("{label} TEXCOORD_{uv_set}"),
                     Dimensions::Vec2,
                     &[DataType::F32, DataType::U8, DataType::U16],
                 )?;
@@ -745,12 +754,12 @@ impl Loader<'_> {
             if let Some(acc) = &uv_acc {
                 if acc.count() == vertex_count {
                     let uvs = reader
-                        .read_tex_coords(0)
-                        .ok_or_else(|| short("TEXCOORD_0"))?
+                        .read_tex_coords(uv_set)
+                        .ok_or_else(|| short(&format!("TEXCOORD_{uv_set}")))?
                         .into_f32();
                     self.scene.uvs.extend(uvs);
                     if self.scene.uvs.len() != base + vertex_count {
-                        return Err(short("TEXCOORD_0"));
+                        return Err(short(&format!("TEXCOORD_{uv_set}")));
                     }
                     uvs_added = true;
                     self.any_uvs = true;
@@ -778,7 +787,6 @@ impl Loader<'_> {
                     ),
                 });
             }
-            let material = self.material_slot(&primitive.material())?;
             let before = self.scene.triangles.len();
             let b = base as u32;
             let mut push = |t: [u32; 3]| {
@@ -821,8 +829,9 @@ impl Loader<'_> {
         Ok(())
     }
 
-    /// The `scene.materials` index of a glTF material, converting it on first use.
-    fn material_slot(&mut self, m: &gltf::Material) -> Result<u32, SceneError> {
+    /// The `scene.materials` index of a glTF material, converting it on first use, and the texture
+    /// coordinate set its textures read.
+    fn material_slot(&mut self, m: &gltf::Material) -> Result<(u32, u32), SceneError> {
         if let Some(&slot) = self.material_slots.get(&m.index()) {
             return Ok(slot);
         }
@@ -859,67 +868,98 @@ impl Loader<'_> {
         if m.double_sided() {
             out.flags |= MATERIAL_DOUBLE_SIDED_EMISSION;
         }
+        // The texture coordinate set of each texture read, (role, set), to choose the material's one.
+        let mut sets: Vec<(&'static str, u32)> = Vec::new();
+        let mut read = |this: &mut Self,
+                        role: &'static str,
+                        texture: &gltf::Texture,
+                        tex_coord: u32,
+                        extensions: Option<&serde_json::Map<String, gltf::json::Value>>,
+                        srgb: bool|
+         -> Result<u32, SceneError> {
+            let transform = crate::gltf_pbr::texture_transform(extensions);
+            // KHR_texture_transform's texCoord overrides the texture's own.
+            sets.push((
+                role,
+                transform.and_then(|t| t.tex_coord).unwrap_or(tex_coord),
+            ));
+            this.texture_slot(&label, role, texture, transform, srgb)
+        };
         if let Some(info) = pbr.base_color_texture() {
-            out.base_color_texture = self.texture_slot(
-                &label,
+            out.base_color_texture = read(
+                self,
                 "baseColorTexture",
                 &info.texture(),
                 info.tex_coord(),
-                crate::gltf_pbr::texture_transform(info.extensions()),
+                info.extensions(),
                 true,
             )?;
         }
         if let Some(info) = pbr.metallic_roughness_texture() {
-            out.metallic_roughness_texture = self.texture_slot(
-                &label,
+            out.metallic_roughness_texture = read(
+                self,
                 "metallicRoughnessTexture",
                 &info.texture(),
                 info.tex_coord(),
-                crate::gltf_pbr::texture_transform(info.extensions()),
+                info.extensions(),
                 false,
             )?;
         }
         if let Some(info) = m.normal_texture() {
-            out.normal_texture = self.texture_slot(
-                &label,
+            out.normal_texture = read(
+                self,
                 "normalTexture",
                 &info.texture(),
                 info.tex_coord(),
-                crate::gltf_pbr::texture_transform(info.extensions()),
+                info.extensions(),
                 false,
             )?;
             out.normal_scale = info.scale();
         }
         if let Some(info) = m.emissive_texture() {
-            out.emission_texture = self.texture_slot(
-                &label,
+            out.emission_texture = read(
+                self,
                 "emissiveTexture",
                 &info.texture(),
                 info.tex_coord(),
-                crate::gltf_pbr::texture_transform(info.extensions()),
+                info.extensions(),
                 true,
             )?;
         }
         // The PBR extensions, after the textures (unlit emits the base colour texture).
         let name = m.name().map_or_else(|| label.clone(), str::to_owned);
-        let mut notes = m
+        let applied = m
             .extensions()
             .map(|e| crate::gltf_pbr::apply_material_extensions(e, &mut out))
             .unwrap_or_default();
-        let infos = [
-            pbr.base_color_texture()
-                .and_then(|i| crate::gltf_pbr::texture_transform(i.extensions())),
-            pbr.metallic_roughness_texture()
-                .and_then(|i| crate::gltf_pbr::texture_transform(i.extensions())),
-            m.emissive_texture()
-                .and_then(|i| crate::gltf_pbr::texture_transform(i.extensions())),
-            m.normal_texture()
-                .and_then(|i| crate::gltf_pbr::texture_transform(i.extensions())),
-        ];
-        if infos.iter().flatten().any(|t| t.tex_coord.is_some()) {
+        let mut notes = applied.unsupported;
+        for t in &applied.textures {
+            let Some(texture) = self.document.textures().nth(t.index) else {
+                return Err(self.malformed(format!(
+                    "{label} {} names texture {}, but the file has {}",
+                    t.role,
+                    t.index,
+                    self.document.textures().len()
+                )));
+            };
+            sets.push((
+                t.role,
+                t.transform.and_then(|x| x.tex_coord).unwrap_or(t.tex_coord),
+            ));
+            *t.slot.field(&mut out) =
+                self.texture_slot(&label, t.role, &texture, t.transform, t.slot.srgb())?;
+        }
+        // One texture coordinate set per material: the one its textures name, or (if they disagree)
+        // the base colour's, with a warning.
+        let uv_set = sets.first().map_or(0, |&(_, set)| set);
+        if let Some(&(role, other)) = sets.iter().find(|&&(_, set)| set != uv_set) {
             notes.push(crate::gltf_pbr::Unsupported {
-                extension: "KHR_texture_transform".to_owned(),
-                what: "its texCoord override is not read (TEXCOORD_0 is used)".to_owned(),
+                extension: "glTF texCoord".to_owned(),
+                what: format!(
+                    "textures name different coordinate sets ({} TEXCOORD_{uv_set}, {role} TEXCOORD_{other}); \
+                     fovea reads one set per material and uses TEXCOORD_{uv_set}",
+                    sets[0].0
+                ),
             });
         }
         for note in notes {
@@ -935,8 +975,8 @@ impl Loader<'_> {
             (Some(i), None) => format!("material {i}"),
             (None, None) => "default".to_owned(),
         });
-        self.material_slots.insert(m.index(), slot);
-        Ok(slot)
+        self.material_slots.insert(m.index(), (slot, uv_set));
+        Ok((slot, uv_set))
     }
 
     /// The `scene.textures` index of a texture's image decoded with `srgb`, or `INVALID_INDEX` if its
@@ -946,15 +986,9 @@ impl Loader<'_> {
         material: &str,
         role: &str,
         texture: &gltf::Texture,
-        tex_coord: u32,
         transform: Option<crate::gltf_pbr::TextureTransform>,
         srgb: bool,
     ) -> Result<u32, SceneError> {
-        if tex_coord != 0 {
-            self.warn(format!(
-                "{material} {role} uses TEXCOORD_{tex_coord}; only TEXCOORD_0 is supported and used instead"
-            ));
-        }
         let image = texture.source();
         let sampler = sampler_bits(&texture.sampler());
         let transform = transform.map(|t| t.matrix);
@@ -1244,6 +1278,40 @@ mod tests {
         assert!(s.positions.iter().any(|p| p[0] == -1.0));
         assert_eq!(s.materials[0].base_color, [1.0, 0.5, 0.25, 1.0]);
         assert!(s.normals.is_empty() && s.uvs.is_empty());
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// One texture coordinate set per material: a primitive without the set its material's textures
+    /// name falls back to TEXCOORD_0, and textures that name different sets are one warning.
+    #[test]
+    fn texture_coordinate_sets_are_chosen_per_material_with_warnings() {
+        let dir = temp_dir("texcoord");
+        let file = dir.join("t.gltf");
+        let base = triangle_gltf(TRI, Some("missing.png"), "");
+        let set1 = base.replace(
+            r#""baseColorTexture":{"index":0}"#,
+            r#""baseColorTexture":{"index":0,"texCoord":1}"#,
+        );
+        std::fs::write(&file, &set1).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        let all = s.warnings.join("\n");
+        assert!(
+            all.contains("read TEXCOORD_1, which it lacks; TEXCOORD_0 is used"),
+            "{all}"
+        );
+        assert!(!all.contains("different coordinate sets"), "{all}");
+        let mixed = set1.replace(
+            r#""emissiveFactor":[1,1,1]"#,
+            r#""emissiveFactor":[1,1,1],"emissiveTexture":{"index":0}"#,
+        );
+        std::fs::write(&file, mixed).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        let all = s.warnings.join("\n");
+        assert!(
+            all.contains("baseColorTexture TEXCOORD_1, emissiveTexture TEXCOORD_0")
+                && all.contains("uses TEXCOORD_1"),
+            "{all}"
+        );
         std::fs::remove_dir_all(dir).ok();
     }
 

@@ -7,7 +7,7 @@
 //! | extension | fovea |
 //! |---|---|
 //! | `KHR_materials_transmission` (`transmissionFactor`) | `transmission`: the rough dielectric interface of `fovea_core::bsdf::dielectric` (GGX refraction, Walter et al. 2007) with the material's roughness and `ior`, tinted by the base colour, in place of the non-metallic base |
-//! | `KHR_materials_volume` (`thicknessFactor` > 0) | the mesh is a closed volume: its front faces are the outside of the interface. `attenuationColor`/`attenuationDistance` (absorption inside) are not applied. Without the extension glTF means a thin wall: `MATERIAL_THIN_WALLED`, straight-through transmission (`RoughDielectric::thin`) |
+//! | `KHR_materials_volume` (`thicknessFactor` > 0) | the mesh is a closed volume: its front faces are the outside of the interface, and `attenuationColor`/`attenuationDistance` give its inside's absorption (`Material::absorption`, Beer–Lambert, [`absorption_coefficient`]). Without the extension glTF means a thin wall: `MATERIAL_THIN_WALLED`, straight-through transmission (`RoughDielectric::thin`) |
 //! | `KHR_materials_ior` (`ior`) | `specular` = F0 / 0.08 with F0 = ((ior − 1) / (ior + 1))² (Burley's dielectric F0 is 0.08 · specular; ior 1.5 gives 0.5; clamped at 1, i.e. ior 1.78) |
 //! | `KHR_materials_specular` (`specularFactor`, `specularColorFactor`) | F0 above × `specularFactor` × the colour's largest component (Burley's specular is not coloured) |
 //! | `KHR_materials_clearcoat` (`clearcoatFactor`, `clearcoatRoughnessFactor`) | `clearcoat`, `clearcoat_gloss` = 1 − roughness |
@@ -15,11 +15,16 @@
 //! | `KHR_materials_anisotropy` (`anisotropyStrength`) | `anisotropic` (along the shading frame's tangent: `anisotropyRotation` is not read) |
 //! | `KHR_materials_unlit` | the base colour (and texture) becomes the emission, the BRDF black, and `MATERIAL_UNLIT` shows it to camera rays only (not a light, not in reflections) |
 //! | `KHR_materials_emissive_strength` | read by the loader (`emission` × strength) |
-//! | `KHR_texture_transform` (`offset`, `rotation`, `scale`) | the texture record's coordinate transform ([`texture_transform`]; a `texCoord` override is not read) |
+//! | `KHR_texture_transform` (`offset`, `rotation`, `scale`, `texCoord`) | the texture record's coordinate transform ([`texture_transform`]); its `texCoord` overrides the texture's set |
 //!
-//! What a material asks for and fovea cannot render (the extensions' textures, volume absorption, thin
-//! walls, iridescence, dispersion, a texture transform's `texCoord` override) is returned as
-//! [`Unsupported`] notes: the loader warns once per extension, naming the materials.
+//! The extensions' textures (`transmissionTexture`, `clearcoatTexture`, `clearcoatRoughnessTexture`,
+//! `sheenColorTexture`, `specularTexture`, `specularColorTexture`, `anisotropyTexture`) multiply their
+//! factor by the channel their specification names (`fovea_core::material::shading`); they are returned
+//! as [`ExtensionTexture`]s for the loader to decode.
+//!
+//! What a material asks for and fovea cannot render (`sheenRoughnessTexture`, `clearcoatNormalTexture`,
+//! the anisotropy direction, iridescence, dispersion) is returned as [`Unsupported`] notes: the loader
+//! warns once per extension, naming the materials.
 use fovea_core::scene::{Material, MATERIAL_LAMBERTIAN, MATERIAL_THIN_WALLED, MATERIAL_UNLIT};
 use gltf::json::Value;
 
@@ -131,18 +136,102 @@ pub fn specular_from_ior(ior: f32, weight: f32) -> f32 {
     (f0 * weight / 0.08).clamp(0.0, 1.0)
 }
 
+/// A material field that one of the extensions' textures fills.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExtensionTextureSlot {
+    Transmission,
+    Clearcoat,
+    ClearcoatRoughness,
+    Sheen,
+    Specular,
+    SpecularColor,
+    Anisotropy,
+}
+
+impl ExtensionTextureSlot {
+    /// The field of `material` that holds the texture.
+    pub fn field(self, material: &mut Material) -> &mut u32 {
+        match self {
+            Self::Transmission => &mut material.transmission_texture,
+            Self::Clearcoat => &mut material.clearcoat_texture,
+            Self::ClearcoatRoughness => &mut material.clearcoat_roughness_texture,
+            Self::Sheen => &mut material.sheen_texture,
+            Self::Specular => &mut material.specular_texture,
+            Self::SpecularColor => &mut material.specular_color_texture,
+            Self::Anisotropy => &mut material.anisotropy_texture,
+        }
+    }
+
+    /// Whether the texture holds a colour, which glTF stores sRGB-encoded (`sheenColorTexture`,
+    /// `specularColorTexture`); the others hold linear data.
+    #[must_use]
+    pub fn srgb(self) -> bool {
+        matches!(self, Self::Sheen | Self::SpecularColor)
+    }
+}
+
+/// A texture an extension names (a glTF `textureInfo`: `{"index", "texCoord", "extensions"}`), for the
+/// loader to decode and store in `slot`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExtensionTexture {
+    pub slot: ExtensionTextureSlot,
+    /// The JSON key (`"transmissionTexture"`), for messages.
+    pub role: &'static str,
+    /// The glTF texture index.
+    pub index: usize,
+    pub tex_coord: u32,
+    pub transform: Option<TextureTransform>,
+}
+
+/// What [`apply_material_extensions`] leaves to the loader: the textures to decode and what cannot be
+/// rendered.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExtensionsApplied {
+    pub textures: Vec<ExtensionTexture>,
+    pub unsupported: Vec<Unsupported>,
+}
+
+/// The absorption coefficient σₐ = −ln(c) / d of `KHR_materials_volume`'s `attenuationColor` c and
+/// `attenuationDistance` d (world units): light that travels d inside keeps the fraction c. Zero for the
+/// defaults (white, infinite distance); a zero channel of c absorbs as 10⁻⁶ does.
+#[must_use]
+pub fn absorption_coefficient(attenuation_color: [f32; 3], attenuation_distance: f32) -> [f32; 3] {
+    if !(attenuation_distance > 0.0 && attenuation_distance.is_finite()) {
+        return [0.0; 3];
+    }
+    attenuation_color.map(|c| (-c.clamp(1e-6, 1.0).ln() / attenuation_distance).max(0.0))
+}
+
 /// Applies the material extensions of `extensions` (the material's `extensions` object, as JSON) to
-/// `material` (whose textures are already set: unlit emits the base colour texture); returns what could
-/// not be rendered.
+/// `material` (whose textures are already set: unlit emits the base colour texture); returns the
+/// extensions' textures for the loader to decode and what could not be rendered.
 pub fn apply_material_extensions(
     extensions: &serde_json::Map<String, Value>,
     material: &mut Material,
-) -> Vec<Unsupported> {
-    let mut unsupported = Vec::new();
-    let texture_ignored = |ext: &Value, name: &str, keys: &[&str], out: &mut Vec<Unsupported>| {
+) -> ExtensionsApplied {
+    let mut out = ExtensionsApplied::default();
+    let texture =
+        |ext: &Value, name: &str, key: &'static str, slot, out: &mut ExtensionsApplied| {
+            let Some(info) = ext.get(key) else { return };
+            match info.get("index").and_then(Value::as_u64) {
+                Some(index) => out.textures.push(ExtensionTexture {
+                    slot,
+                    role: key,
+                    index: index as usize,
+                    tex_coord: info.get("texCoord").and_then(Value::as_u64).unwrap_or(0) as u32,
+                    transform: texture_transform(info.get("extensions").and_then(Value::as_object)),
+                }),
+                None => out.unsupported.push(Unsupported::new(
+                    name,
+                    &format!("{key} has no texture index; ignored"),
+                )),
+            }
+        };
+    let texture_ignored = |ext: &Value, name: &str, keys: &[&str], out: &mut ExtensionsApplied| {
         for key in keys {
             if ext.get(*key).is_some() {
-                out.push(Unsupported::new(name, &format!("{key} is not read")));
+                out.unsupported
+                    .push(Unsupported::new(name, &format!("{key} is not read")));
             }
         }
     };
@@ -154,11 +243,20 @@ pub fn apply_material_extensions(
         let colour = rgb(e, "specularColorFactor", [1.0; 3]);
         specular_weight = number(e, "specularFactor", 1.0).max(0.0)
             * colour.iter().fold(0.0f32, |m, &c| m.max(c)).max(0.0);
-        texture_ignored(
+        let name = "KHR_materials_specular";
+        texture(
             e,
-            "KHR_materials_specular",
-            &["specularTexture", "specularColorTexture"],
-            &mut unsupported,
+            name,
+            "specularTexture",
+            ExtensionTextureSlot::Specular,
+            &mut out,
+        );
+        texture(
+            e,
+            name,
+            "specularColorTexture",
+            ExtensionTextureSlot::SpecularColor,
+            &mut out,
         );
     }
     if extensions.contains_key("KHR_materials_ior")
@@ -170,69 +268,81 @@ pub fn apply_material_extensions(
         material.transmission = number(e, "transmissionFactor", 0.0).clamp(0.0, 1.0);
         // glTF allows 1 (no refraction); the dielectric needs a little above it.
         material.ior = ior.max(1.01);
-        texture_ignored(
+        texture(
             e,
             "KHR_materials_transmission",
-            &["transmissionTexture"],
-            &mut unsupported,
+            "transmissionTexture",
+            ExtensionTextureSlot::Transmission,
+            &mut out,
         );
-        let volume = extensions
-            .get("KHR_materials_volume")
-            .is_some_and(|v| number(v, "thicknessFactor", 0.0) > 0.0);
-        if !volume {
+        match extensions.get("KHR_materials_volume") {
+            Some(v) if number(v, "thicknessFactor", 0.0) > 0.0 => {
+                // A closed volume: its inside may absorb.
+                material.absorption = absorption_coefficient(
+                    rgb(v, "attenuationColor", [1.0; 3]),
+                    number(v, "attenuationDistance", f32::INFINITY),
+                );
+            }
             // No volume: glTF's thin wall, which light passes straight through.
-            material.flags |= MATERIAL_THIN_WALLED;
-        }
-    }
-    if let Some(e) = extensions.get("KHR_materials_volume") {
-        let absorbs = rgb(e, "attenuationColor", [1.0; 3]) != [1.0; 3]
-            && number(e, "attenuationDistance", f32::INFINITY).is_finite();
-        if absorbs {
-            unsupported.push(Unsupported::new(
-                "KHR_materials_volume",
-                "attenuationColor/attenuationDistance (absorption inside) is not applied",
-            ));
+            _ => material.flags |= MATERIAL_THIN_WALLED,
         }
     }
     if let Some(e) = extensions.get("KHR_materials_clearcoat") {
         material.clearcoat = number(e, "clearcoatFactor", 0.0).clamp(0.0, 1.0);
         material.clearcoat_gloss = 1.0 - number(e, "clearcoatRoughnessFactor", 0.0).clamp(0.0, 1.0);
-        texture_ignored(
+        let name = "KHR_materials_clearcoat";
+        texture(
             e,
-            "KHR_materials_clearcoat",
-            &[
-                "clearcoatTexture",
-                "clearcoatRoughnessTexture",
-                "clearcoatNormalTexture",
-            ],
-            &mut unsupported,
+            name,
+            "clearcoatTexture",
+            ExtensionTextureSlot::Clearcoat,
+            &mut out,
         );
+        texture(
+            e,
+            name,
+            "clearcoatRoughnessTexture",
+            ExtensionTextureSlot::ClearcoatRoughness,
+            &mut out,
+        );
+        texture_ignored(e, name, &["clearcoatNormalTexture"], &mut out);
     }
     if let Some(e) = extensions.get("KHR_materials_sheen") {
         let colour = rgb(e, "sheenColorFactor", [0.0; 3]);
         material.sheen = colour.iter().fold(0.0f32, |m, &c| m.max(c)).clamp(0.0, 1.0);
         material.sheen_tint = 0.0;
-        texture_ignored(
+        let name = "KHR_materials_sheen";
+        texture(
             e,
-            "KHR_materials_sheen",
-            &["sheenColorTexture", "sheenRoughnessTexture"],
-            &mut unsupported,
+            name,
+            "sheenColorTexture",
+            ExtensionTextureSlot::Sheen,
+            &mut out,
         );
+        texture_ignored(e, name, &["sheenRoughnessTexture"], &mut out);
     }
     if let Some(e) = extensions.get("KHR_materials_anisotropy") {
         material.anisotropic = number(e, "anisotropyStrength", 0.0).clamp(0.0, 1.0);
         if number(e, "anisotropyRotation", 0.0) != 0.0 {
-            unsupported.push(Unsupported::new(
+            out.unsupported.push(Unsupported::new(
                 "KHR_materials_anisotropy",
                 "anisotropyRotation is not read (the highlight follows the tangent)",
             ));
         }
-        texture_ignored(
+        let name = "KHR_materials_anisotropy";
+        texture(
             e,
-            "KHR_materials_anisotropy",
-            &["anisotropyTexture"],
-            &mut unsupported,
+            name,
+            "anisotropyTexture",
+            ExtensionTextureSlot::Anisotropy,
+            &mut out,
         );
+        if e.get("anisotropyTexture").is_some() {
+            out.unsupported.push(Unsupported::new(
+                name,
+                "anisotropyTexture's direction (RG) is not read, only its strength (B)",
+            ));
+        }
     }
     if extensions.contains_key("KHR_materials_unlit") {
         let [r, g, b, _] = material.base_color;
@@ -247,10 +357,11 @@ pub fn apply_material_extensions(
     }
     for name in extensions.keys() {
         if !MAPPED_EXTENSIONS.contains(&name.as_str()) {
-            unsupported.push(Unsupported::new(name, consequence(name)));
+            out.unsupported
+                .push(Unsupported::new(name, consequence(name)));
         }
     }
-    unsupported
+    out
 }
 
 #[cfg(test)]
@@ -258,10 +369,15 @@ mod tests {
     use super::*;
 
     fn apply(json: &str) -> (Material, Vec<Unsupported>) {
+        let (m, applied) = apply_all(json);
+        (m, applied.unsupported)
+    }
+
+    fn apply_all(json: &str) -> (Material, ExtensionsApplied) {
         let map: serde_json::Map<String, Value> = serde_json::from_str(json).unwrap();
         let mut m = Material::default();
-        let notes = apply_material_extensions(&map, &mut m);
-        (m, notes)
+        let applied = apply_material_extensions(&map, &mut m);
+        (m, applied)
     }
 
     #[test]
@@ -283,18 +399,75 @@ mod tests {
     }
 
     #[test]
-    fn specular_scales_f0_and_its_textures_are_reported() {
-        let (m, notes) = apply(
+    fn specular_scales_f0_and_names_its_textures() {
+        let (m, applied) = apply_all(
             r#"{"KHR_materials_specular":{"specularFactor":0.5,"specularColorFactor":[0.2,0.8,0.4],
-                "specularTexture":{"index":0}}}"#,
+                "specularTexture":{"index":0},"specularColorTexture":{"index":2,"texCoord":1}}}"#,
         );
         assert!(
             (m.specular - 0.5 * 0.5 * 0.8).abs() < 1e-6,
             "{}",
             m.specular
         );
-        assert_eq!(notes.len(), 1);
-        assert!(notes[0].what.contains("specularTexture"));
+        assert!(applied.unsupported.is_empty(), "{:?}", applied.unsupported);
+        let t = &applied.textures;
+        assert_eq!(t.len(), 2);
+        assert_eq!(
+            (t[0].slot, t[0].index, t[0].tex_coord),
+            (ExtensionTextureSlot::Specular, 0, 0)
+        );
+        assert_eq!(
+            (t[1].slot, t[1].index, t[1].tex_coord),
+            (ExtensionTextureSlot::SpecularColor, 2, 1)
+        );
+        assert!(!t[0].slot.srgb() && t[1].slot.srgb());
+    }
+
+    #[test]
+    fn every_extension_texture_fills_its_slot() {
+        let (_, applied) = apply_all(
+            r#"{"KHR_materials_transmission":{"transmissionFactor":1,"transmissionTexture":{"index":1}},
+                "KHR_materials_clearcoat":{"clearcoatFactor":1,"clearcoatTexture":{"index":2},
+                    "clearcoatRoughnessTexture":{"index":3,
+                        "extensions":{"KHR_texture_transform":{"scale":[2,2]}}},
+                    "clearcoatNormalTexture":{"index":4}},
+                "KHR_materials_sheen":{"sheenColorFactor":[1,1,1],"sheenColorTexture":{"index":5},
+                    "sheenRoughnessTexture":{"index":6}},
+                "KHR_materials_anisotropy":{"anisotropyStrength":1,"anisotropyTexture":{"index":7}},
+                "KHR_materials_specular":{"specularTexture":{"texCoord":0}}}"#,
+        );
+        let mut m = Material::default();
+        for t in &applied.textures {
+            *t.slot.field(&mut m) = t.index as u32;
+        }
+        assert_eq!(
+            [
+                m.transmission_texture,
+                m.clearcoat_texture,
+                m.clearcoat_roughness_texture,
+                m.sheen_texture,
+                m.anisotropy_texture
+            ],
+            [1, 2, 3, 5, 7]
+        );
+        let scaled = applied.textures[2].transform.expect("transform read");
+        assert_eq!(scaled.matrix[0], 2.0);
+        // Read nowhere: the clear coat's own normal map, sheen roughness, the anisotropy direction
+        // and a reference without an index.
+        let notes: Vec<&str> = applied
+            .unsupported
+            .iter()
+            .map(|u| u.what.as_str())
+            .collect();
+        assert_eq!(notes.len(), 4, "{notes:?}");
+        for key in [
+            "clearcoatNormalTexture",
+            "sheenRoughnessTexture",
+            "direction",
+            "no texture index",
+        ] {
+            assert!(notes.iter().any(|n| n.contains(key)), "{key}: {notes:?}");
+        }
     }
 
     #[test]
@@ -325,7 +498,10 @@ mod tests {
             base_color_texture: 3,
             ..Material::default()
         };
-        assert!(apply_material_extensions(&map, &mut m).is_empty());
+        assert_eq!(
+            apply_material_extensions(&map, &mut m),
+            ExtensionsApplied::default()
+        );
         assert_eq!(m.emission, [0.2, 0.4, 0.6, 0.0]);
         assert_eq!(m.emission_texture, 3);
         assert_eq!(m.base_color, [0.0, 0.0, 0.0, 0.9]);
@@ -343,17 +519,25 @@ mod tests {
         assert_eq!((m.transmission, m.ior), (0.9, 1.45));
         assert!(notes.is_empty(), "{notes:?}");
         assert_eq!(m.flags & MATERIAL_THIN_WALLED, 0);
-        // No volume: a thin wall; absorption: reported.
+        assert_eq!(m.absorption, [0.0; 3]);
+        // No volume: a thin wall, which absorbs nothing.
         let (m, notes) = apply(r#"{"KHR_materials_transmission":{"transmissionFactor":1}}"#);
         assert_eq!((m.transmission, m.ior), (1.0, 1.5));
         assert_ne!(m.flags & MATERIAL_THIN_WALLED, 0);
         assert!(notes.is_empty(), "{notes:?}");
-        let (_, notes) = apply(
+        // A volume with attenuation: light that travels 2 units keeps half its red.
+        let (m, notes) = apply(
             r#"{"KHR_materials_transmission":{"transmissionFactor":1},
-                "KHR_materials_volume":{"thicknessFactor":1,"attenuationColor":[0.5,1,1],"attenuationDistance":2}}"#,
+                "KHR_materials_volume":{"thicknessFactor":1,"attenuationColor":[0.5,1,0],"attenuationDistance":2}}"#,
         );
-        assert_eq!(notes.len(), 1);
-        assert!(notes[0].what.contains("attenuation"));
+        assert!(notes.is_empty(), "{notes:?}");
+        assert!((m.absorption[0] - std::f32::consts::LN_2 / 2.0).abs() < 1e-6);
+        assert_eq!(m.absorption[1], 0.0);
+        assert!((m.absorption[2] - 1e-6f32.ln().abs() / 2.0).abs() < 1e-4);
+        assert!((-m.absorption[0] * 2.0).exp() - 0.5 < 1e-6);
+        // The default distance is infinite: no absorption.
+        assert_eq!(absorption_coefficient([0.5; 3], f32::INFINITY), [0.0; 3]);
+        assert_eq!(absorption_coefficient([0.5; 3], -1.0), [0.0; 3]);
     }
 
     #[test]

@@ -396,6 +396,14 @@ impl LoadedScene {
             fix(&mut m.clearcoat_gloss, 0.0, 1.0, 0.0, "clearcoat gloss");
             fix(&mut m.alpha_cutoff, 0.0, 1.0, 0.5, "alpha cutoff");
             fix(&mut m.normal_scale, -1.0e6, 1.0e6, 1.0, "normal scale");
+            fix(&mut m.transmission, 0.0, 1.0, 0.0, "transmission");
+            if m.transmission > 0.0 {
+                // The dielectric needs an index a little above 1 (`gltf_pbr`).
+                fix(&mut m.ior, 1.01, 100.0, 1.5, "index of refraction");
+            }
+            for c in 0..3 {
+                fix(&mut m.absorption[c], 0.0, f32::MAX, 0.0, "absorption");
+            }
             let mut seen = Vec::new();
             fixed.retain(|w| {
                 let new = !seen.contains(w);
@@ -594,6 +602,9 @@ mod tests {
         s.materials[0].base_color = [f32::NAN, -1.0, 0.5, 2.0];
         s.materials[0].emission = [f32::INFINITY, 1.0, -3.0, 0.0];
         s.materials[0].roughness = 7.0;
+        s.materials[0].transmission = 0.5;
+        s.materials[0].ior = f32::NAN;
+        s.materials[0].absorption = [1.0, -2.0, f32::INFINITY];
         s.punctual_lights = vec![
             Light {
                 kind: LIGHT_POINT,
@@ -624,12 +635,15 @@ mod tests {
         assert_eq!(m.base_color, [0.8, 0.0, 0.5, 1.0]);
         assert_eq!(&m.emission[..3], &[0.0, 1.0, 0.0]);
         assert_eq!(m.roughness, 1.0);
+        assert_eq!((m.transmission, m.ior), (0.5, 1.5));
+        assert_eq!(m.absorption, [1.0, 0.0, 0.0]);
         assert_eq!(s.punctual_lights.len(), 1);
         assert!(s.camera.is_none());
         let all = s.warnings.join("\n");
         assert!(
             all.contains(
-                "q.obj: material 0 (\"m\"): invalid base colour, emission, opacity, roughness"
+                "q.obj: material 0 (\"m\"): invalid base colour, emission, opacity, roughness, \
+                 index of refraction, absorption"
             ),
             "{all}"
         );

@@ -23,6 +23,8 @@
 //!   `fovea_core::bsdf::dielectric` at alpha 1e-4): light is split, refracted and reflected inside the
 //!   sphere (here paths do meet the object twice) but never absorbed, so the image must again be
 //!   uniformly 1 within 1 %, like the conductor's.
+//!
+//! And one absorbing glass cube (Beer–Lambert, `absorbing_cube`), against its closed-form radiance.
 use std::time::Instant;
 
 use fovea_core::bsdf::DisneyParams;
@@ -418,4 +420,124 @@ fn furnace_sphere_is_uniform_on_vulkan() {
     drop(ctx);
     let messages = log.lock().unwrap().clone();
     assert!(messages.is_empty(), "validation messages: {messages:#?}");
+}
+
+/// Beer–Lambert absorption (`Material::absorption`, glTF `KHR_materials_volume`): a smooth glass cube
+/// of side `L = 1` and index 1.5 whose inside absorbs `σ = (0, 0.5, 2)` per unit, seen head-on under
+/// the constant environment 1 through a narrow field of view. Between its two parallel faces light
+/// bounces at normal incidence with reflectance `R = 0.04`; the radiance `X` leaving a face from the
+/// inside solves `X = e^{−σL} ((1 − R) + R X)`, and the pixel sees `R + (1 − R) X`:
+/// `R + (1 − R)² e^{−σL} / (1 − R e^{−σL})`. Red does not absorb and must stay 1 (energy is kept);
+/// green and blue must match within 1 %.
+fn absorbing_cube() -> (PackedScene, Camera, [f64; 3]) {
+    let sigma = [0.0f32, 0.5, 2.0];
+    let material = Material {
+        base_color: [1.0, 1.0, 1.0, 1.0],
+        roughness: 0.0,
+        transmission: 1.0,
+        ior: 1.5,
+        absorption: sigma,
+        ..Default::default()
+    };
+    // The unit cube around the origin, faces counter-clockwise seen from outside.
+    let p: Vec<[f32; 3]> = (0..8)
+        .map(|i| {
+            [
+                if i & 1 != 0 { 0.5 } else { -0.5 },
+                if i & 2 != 0 { 0.5 } else { -0.5 },
+                if i & 4 != 0 { 0.5 } else { -0.5 },
+            ]
+        })
+        .collect();
+    let quads = [
+        [0, 4, 6, 2], // −x
+        [1, 3, 7, 5], // +x
+        [0, 1, 5, 4], // −y
+        [2, 6, 7, 3], // +y
+        [0, 2, 3, 1], // −z
+        [4, 5, 7, 6], // +z
+    ];
+    let t: Vec<[u32; 3]> = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    let n = t.len();
+    let scene = pack(
+        loaded_scene(p, t, vec![0; n], vec![material]),
+        &Environment::Constant([1.0, 1.0, 1.0]),
+    );
+    let camera = Camera::look_at(
+        Vec3::new(0.0, 0.0, 10.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        2f32.to_radians(),
+        1.0,
+    );
+    let r = 0.04f64;
+    let expected = sigma.map(|s| {
+        let e = (-f64::from(s)).exp();
+        r + (1.0 - r) * (1.0 - r) * e / (1.0 - r * e)
+    });
+    (scene, camera, expected)
+}
+
+fn check_absorption(backend: &str, pixels: &[[f32; 4]], size: u32, expected: [f64; 3]) {
+    let mut sum = [0.0f64; 3];
+    for p in pixels {
+        for c in 0..3 {
+            sum[c] += f64::from(p[c]);
+        }
+    }
+    let mean = sum.map(|s| s / pixels.len() as f64);
+    eprintln!(
+        "{backend}: absorbing glass cube {size}x{size}: mean RGB {mean:.4?}, Beer-Lambert {expected:.4?}"
+    );
+    for c in 0..3 {
+        assert!(
+            (mean[c] / expected[c] - 1.0).abs() < 0.01,
+            "{backend} channel {c}: {} against {}",
+            mean[c],
+            expected[c]
+        );
+    }
+    // The absorption is visible: blue keeps less than half of what red keeps.
+    assert!(mean[2] < 0.5 * mean[0]);
+}
+
+fn absorption_frame(camera: Camera, spp: u32) -> FrameParams {
+    let mut frame = fovea_tests::frame_params(camera, FoveationParams::uniform(spp), 16, 16, 5);
+    frame.integrator.max_bounces = 64;
+    frame
+}
+
+#[test]
+fn absorbing_glass_matches_beer_lambert_on_cpu() {
+    let (scene, camera, expected) = absorbing_cube();
+    let (image, _) = fovea_tests::render(&scene, &absorption_frame(camera, pick(4096, 16384)));
+    check_absorption("CPU", &image.pixels, 16, expected);
+}
+
+#[test]
+fn absorbing_glass_matches_beer_lambert_on_vulkan() {
+    let Some(mut ctx) = fovea_tests::vulkan_context_or_skip("the Vulkan absorption test") else {
+        return;
+    };
+    let (scene, camera, expected) = absorbing_cube();
+    let gpu_scene = ctx.upload_scene(&scene).expect("upload");
+    let (gpu, _) = ctx
+        .render_frame(
+            &gpu_scene,
+            &absorption_frame(camera, pick(4096, 16384)),
+            FILL_BILINEAR,
+            0.0,
+            true,
+        )
+        .expect("render");
+    let device = ctx.device_name().to_string();
+    check_absorption(
+        &device,
+        &gpu.hdr.expect("HDR requested").pixels,
+        16,
+        expected,
+    );
 }

@@ -30,7 +30,7 @@ use crate::lights::{
 use crate::material::shading::surface_point_lod;
 use crate::math::color::is_finite3;
 use crate::rng::SampleRng;
-use crate::scene::features::FEATURE_LOBE_TRANSMISSION;
+use crate::scene::features::{FEATURE_LOBE_TRANSMISSION, FEATURE_VOLUME_ABSORPTION};
 use crate::scene::{SceneSlices, SceneSource, SceneView, INVALID_INDEX};
 
 /// [`IntegratorSettings::strategy`]: next-event estimation and BSDF sampling combined by MIS.
@@ -146,6 +146,21 @@ pub fn trace_path_from_hit<F: crate::scene::Features, S: SceneSource>(
     )
 }
 
+/// Beer–Lambert transmittance `exp(−σₐ d)` of a segment of length `distance` inside a medium with
+/// absorption coefficient `absorption` (glTF `KHR_materials_volume`). One medium at a time: a segment
+/// that ends on a back face is taken to have run inside that face's material, which holds for closed,
+/// non-nested volumes (nested media would need a stack of interiors, as in pbrt-v4's `MediumInterface`).
+#[inline]
+#[must_use]
+pub fn transmittance(absorption: Vec3, distance: f32) -> Vec3 {
+    use crate::math::float::exp;
+    Vec3::new(
+        exp(-absorption.x * distance),
+        exp(-absorption.y * distance),
+        exp(-absorption.z * distance),
+    )
+}
+
 /// Whether `triangle`'s material is unlit (`MATERIAL_UNLIT`, glTF `KHR_materials_unlit`): its emission is
 /// its look, seen by camera rays only, so it neither lights the scene nor shows in reflections.
 #[inline]
@@ -211,6 +226,12 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
         };
         let surface = surface_point_lod(scene, source, &hit, ray.direction, cone_width);
         let wo_world = -ray.direction;
+        if scene.features.has(FEATURE_VOLUME_ABSORPTION)
+            && surface.geometric_normal.dot(wo_world) < 0.0
+        {
+            // The segment ends on a back face: it ran inside the material, which absorbs along it.
+            throughput *= transmittance(surface.absorption, hit.t * ray.direction.length());
+        }
 
         // Emission found by this ray.
         let le = emitted_radiance(

@@ -1,6 +1,6 @@
 //! The shading point of a ray hit: position, geometric and shading normals, texture coordinates and the
 //! Disney parameters with textures applied.
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 use super::alpha::interpolate_uv;
 use super::texture::sample_texture_lod;
@@ -9,8 +9,9 @@ use crate::bvh::traverse::Hit;
 use crate::lights::triangle::{scaled_geometric_normal, triangle_vertices};
 use crate::math::{vec3_from, Frame};
 use crate::scene::features::{
-    FEATURE_BASE_COLOR_TEXTURE, FEATURE_LOBE_ANISOTROPY, FEATURE_METALLIC_ROUGHNESS_TEXTURE,
-    FEATURE_NORMAL_TEXTURE, FEATURE_SHADING_NORMALS, FEATURE_UVS,
+    FEATURE_BASE_COLOR_TEXTURE, FEATURE_EXTENSION_TEXTURES, FEATURE_LOBE_ANISOTROPY,
+    FEATURE_METALLIC_ROUGHNESS_TEXTURE, FEATURE_NORMAL_TEXTURE, FEATURE_SHADING_NORMALS,
+    FEATURE_UVS, FEATURE_VOLUME_ABSORPTION,
 };
 use crate::scene::{
     Features, Material, SceneSource, SceneView, INVALID_INDEX, MATERIAL_LAMBERTIAN,
@@ -31,6 +32,9 @@ pub struct SurfacePoint {
     pub frame: Frame,
     pub uv: Vec2,
     pub params: DisneyParams,
+    /// The absorption coefficient of the material's inside ([`Material::absorption`]); zero for scenes
+    /// without volume absorption.
+    pub absorption: Vec3,
 }
 
 /// The Disney parameters of `material`'s factors, before any texture.
@@ -176,11 +180,19 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
         roughness *= t.y;
         metallic *= t.z;
     }
-    let params = DisneyParams {
+    let mut params = DisneyParams {
         base_color,
         metallic,
         roughness,
         ..material_params(&material)
+    };
+    if scene.features.has(FEATURE_EXTENSION_TEXTURES) && material.has_extension_texture() {
+        apply_extension_textures(scene, source, &material, uv, footprint_uv, &mut params);
+    }
+    let absorption = if scene.features.has(FEATURE_VOLUME_ABSORPTION) {
+        Vec3::from(material.absorption)
+    } else {
+        Vec3::ZERO
     };
     SurfacePoint {
         position,
@@ -189,7 +201,70 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
         frame,
         uv,
         params,
+        absorption,
     }
+}
+
+/// Texture `index` at `uv`, or white where the material has none.
+#[inline]
+fn texture_or_white<F: Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    index: u32,
+    uv: Vec2,
+    footprint_uv: f32,
+) -> Vec4 {
+    if index == INVALID_INDEX {
+        Vec4::ONE
+    } else {
+        sample_texture_lod(scene, source, index, uv, footprint_uv)
+    }
+}
+
+/// Multiplies the factors of `params` by the glTF material extensions' textures of `material`, each by
+/// the channel its extension's specification names: `KHR_materials_transmission` R,
+/// `KHR_materials_clearcoat` R (factor) and G (roughness), `KHR_materials_sheen` RGB (Burley's sheen is a
+/// weight: the largest component), `KHR_materials_specular` A (weight) and RGB (colour, largest
+/// component), `KHR_materials_anisotropy` B (strength).
+fn apply_extension_textures<F: Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    material: &Material,
+    uv: Vec2,
+    footprint_uv: f32,
+    params: &mut DisneyParams,
+) {
+    let transmission = texture_or_white(
+        scene,
+        source,
+        material.transmission_texture,
+        uv,
+        footprint_uv,
+    );
+    params.transmission *= transmission.x;
+    let clearcoat = texture_or_white(scene, source, material.clearcoat_texture, uv, footprint_uv);
+    params.clearcoat *= clearcoat.x;
+    let clearcoat_roughness = texture_or_white(
+        scene,
+        source,
+        material.clearcoat_roughness_texture,
+        uv,
+        footprint_uv,
+    );
+    params.clearcoat_gloss = 1.0 - (1.0 - params.clearcoat_gloss) * clearcoat_roughness.y;
+    let sheen = texture_or_white(scene, source, material.sheen_texture, uv, footprint_uv);
+    params.sheen *= sheen.truncate().max_element();
+    let specular = texture_or_white(scene, source, material.specular_texture, uv, footprint_uv);
+    let specular_color = texture_or_white(
+        scene,
+        source,
+        material.specular_color_texture,
+        uv,
+        footprint_uv,
+    );
+    params.specular *= specular.w * specular_color.truncate().max_element();
+    let anisotropy = texture_or_white(scene, source, material.anisotropy_texture, uv, footprint_uv);
+    params.anisotropic *= anisotropy.z;
 }
 
 #[cfg(test)]

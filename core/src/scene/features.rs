@@ -52,11 +52,16 @@ pub const FEATURE_UVS: u32 = 1 << 15;
 /// The rough dielectric interface of transmissive materials ([`crate::bsdf::dielectric`]).
 pub const FEATURE_LOBE_TRANSMISSION: u32 = 1 << 16;
 
+/// A glTF extension's texture (transmission, clear coat, sheen, specular, anisotropy) on some material.
+pub const FEATURE_EXTENSION_TEXTURES: u32 = 1 << 17;
+/// Some transmissive material's inside absorbs (`Material::absorption`, glTF `KHR_materials_volume`).
+pub const FEATURE_VOLUME_ABSORPTION: u32 = 1 << 18;
+
 /// Every feature: the general render path (`--no-specialize`).
-pub const FEATURES_ALL: u32 = (1 << 17) - 1;
+pub const FEATURES_ALL: u32 = (1 << 19) - 1;
 
 /// Names of the feature bits, bit `i` at index `i` (for `--verbose` and `--stats`).
-pub const FEATURE_NAMES: [&str; 17] = [
+pub const FEATURE_NAMES: [&str; 19] = [
     "base_color_texture",
     "metallic_roughness_texture",
     "normal_texture",
@@ -74,6 +79,8 @@ pub const FEATURE_NAMES: [&str; 17] = [
     "shading_normals",
     "uvs",
     "lobe_transmission",
+    "extension_textures",
+    "volume_absorption",
 ];
 
 /// A set of features to test against; see the module documentation.
@@ -202,6 +209,12 @@ impl FeatureFlags {
         }
         if !(m.transmission == 0.0) {
             bits |= FEATURE_LOBE_TRANSMISSION;
+            if m.absorbs() {
+                bits |= FEATURE_VOLUME_ABSORPTION;
+            }
+        }
+        if m.has_extension_texture() {
+            bits |= FEATURE_EXTENSION_TEXTURES;
         }
         bits
     }

@@ -395,10 +395,12 @@ pub const MATERIAL_UNLIT: u32 = 8;
 /// (`crate::bsdf::dielectric::RoughDielectric::thin`).
 pub const MATERIAL_THIN_WALLED: u32 = 16;
 
-/// A Disney "principled" material (Burley 2012) with optional textures (112 bytes).
+/// A Disney "principled" material (Burley 2012) with optional textures (160 bytes).
 ///
 /// Texture values multiply the factors as in glTF: base colour (RGB, alpha in A), metallic in B and
-/// roughness in G of `metallic_roughness_texture`, tangent-space normal map, emissive colour.
+/// roughness in G of `metallic_roughness_texture`, tangent-space normal map, emissive colour. The glTF
+/// extensions' textures (`transmission_texture` to `anisotropy_texture`) multiply their factor by the
+/// channel their extension names (`crate::material::shading`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Material {
@@ -435,7 +437,26 @@ pub struct Material {
     /// Index of refraction of the material's inside (relative to the outside, the side the
     /// counter-clockwise front face points to); read only where `transmission` is above 0.
     pub ior: f32,
-    pub _pad: u32,
+    /// `transmission` × this texture's R (glTF `transmissionTexture`).
+    pub transmission_texture: u32,
+    /// Absorption coefficient σₐ of the inside, per unit of distance (glTF `KHR_materials_volume`:
+    /// `−ln(attenuationColor) / attenuationDistance`); a path that travels `d` inside is attenuated by
+    /// `exp(−σₐ d)` (Beer–Lambert). 0: clear.
+    pub absorption: [f32; 3],
+    /// `clearcoat` × this texture's R (glTF `clearcoatTexture`).
+    pub clearcoat_texture: u32,
+    /// The clear coat's roughness (`1 − clearcoat_gloss`) × this texture's G (glTF
+    /// `clearcoatRoughnessTexture`).
+    pub clearcoat_roughness_texture: u32,
+    /// `sheen` × the largest of this texture's RGB (glTF `sheenColorTexture`).
+    pub sheen_texture: u32,
+    /// `specular` × this texture's A (glTF `specularTexture`).
+    pub specular_texture: u32,
+    /// `specular` × the largest of this texture's RGB (glTF `specularColorTexture`).
+    pub specular_color_texture: u32,
+    /// `anisotropic` × this texture's B (glTF `anisotropyTexture`; its RG direction is not read).
+    pub anisotropy_texture: u32,
+    pub _pad: [u32; 3],
 }
 
 impl Default for Material {
@@ -462,7 +483,15 @@ impl Default for Material {
             alpha_texture: INVALID_INDEX,
             transmission: 0.0,
             ior: 1.5,
-            _pad: 0,
+            transmission_texture: INVALID_INDEX,
+            absorption: [0.0; 3],
+            clearcoat_texture: INVALID_INDEX,
+            clearcoat_roughness_texture: INVALID_INDEX,
+            sheen_texture: INVALID_INDEX,
+            specular_texture: INVALID_INDEX,
+            specular_color_texture: INVALID_INDEX,
+            anisotropy_texture: INVALID_INDEX,
+            _pad: [0; 3],
         }
     }
 }
@@ -471,8 +500,9 @@ impl Material {
     /// The material whose bytes are the texels `t`.
     #[inline(always)]
     #[must_use]
-    pub fn from_texels(t: [UVec4; 7]) -> Self {
+    pub fn from_texels(t: [UVec4; 10]) -> Self {
         let (factors, more, last, textures, alpha) = (t[2], t[3], t[4], t[5], t[6]);
+        let (volume, extension, anisotropy) = (t[7], t[8], t[9]);
         Self {
             base_color: texel_floats(t[0]).to_array(),
             emission: texel_floats(t[1]).to_array(),
@@ -495,7 +525,19 @@ impl Material {
             alpha_texture: alpha.x,
             transmission: f32::from_bits(alpha.y),
             ior: f32::from_bits(alpha.z),
-            _pad: 0,
+            transmission_texture: alpha.w,
+            absorption: [
+                f32::from_bits(volume.x),
+                f32::from_bits(volume.y),
+                f32::from_bits(volume.z),
+            ],
+            clearcoat_texture: volume.w,
+            clearcoat_roughness_texture: extension.x,
+            sheen_texture: extension.y,
+            specular_texture: extension.z,
+            specular_color_texture: extension.w,
+            anisotropy_texture: anisotropy.x,
+            _pad: [0; 3],
         }
     }
 
@@ -515,6 +557,28 @@ impl Material {
             || self.normal_texture != INVALID_INDEX
             || self.emission_texture != INVALID_INDEX
             || self.alpha_texture != INVALID_INDEX
+            || self.has_extension_texture()
+    }
+
+    /// Whether the material reads one of the glTF extensions' textures (`transmission_texture` to
+    /// `anisotropy_texture`).
+    #[inline]
+    #[must_use]
+    pub fn has_extension_texture(&self) -> bool {
+        self.transmission_texture != INVALID_INDEX
+            || self.clearcoat_texture != INVALID_INDEX
+            || self.clearcoat_roughness_texture != INVALID_INDEX
+            || self.sheen_texture != INVALID_INDEX
+            || self.specular_texture != INVALID_INDEX
+            || self.specular_color_texture != INVALID_INDEX
+            || self.anisotropy_texture != INVALID_INDEX
+    }
+
+    /// Whether the material's inside absorbs (`absorption` above 0 in some channel).
+    #[inline]
+    #[must_use]
+    pub fn absorbs(&self) -> bool {
+        self.absorption[0] > 0.0 || self.absorption[1] > 0.0 || self.absorption[2] > 0.0
     }
 }
 

@@ -22,7 +22,7 @@ use crate::scene::{
 /// Texels (16 bytes each) per [`Bvh4Node`].
 pub const NODE_TEXELS: u32 = 7;
 /// Texels per [`Material`].
-pub const MATERIAL_TEXELS: u32 = 7;
+pub const MATERIAL_TEXELS: u32 = 10;
 /// Texels per [`TriangleBlock`].
 pub const BLOCK_TEXELS: u32 = 10;
 /// Texels per [`TextureInfo`].
@@ -145,8 +145,8 @@ mod texels {
     use crate::scene::layout::{block_and_lane, texel_floats};
     use glam::UVec4;
 
-    /// The seven texels from `first` on (a node or a material: [`NODE_TEXELS`], [`MATERIAL_TEXELS`]).
-    /// Written out rather than a loop filling a local array, which lavapipe would index dynamically.
+    /// The seven texels from `first` on (a node: [`NODE_TEXELS`]). Written out rather than a loop
+    /// filling a local array, which lavapipe would index dynamically.
     #[inline(always)]
     fn seven_texels(texels: &SceneTexels, first: u32) -> [UVec4; 7] {
         [
@@ -157,6 +157,25 @@ mod texels {
             texels.read(first + 4),
             texels.read(first + 5),
             texels.read(first + 6),
+        ]
+    }
+
+    /// The ten texels of the material at `first` ([`MATERIAL_TEXELS`]), written out as
+    /// [`seven_texels`].
+    #[inline(always)]
+    fn material_texels(texels: &SceneTexels, first: u32) -> [UVec4; 10] {
+        let s = seven_texels(texels, first);
+        [
+            s[0],
+            s[1],
+            s[2],
+            s[3],
+            s[4],
+            s[5],
+            s[6],
+            texels.read(first + 7),
+            texels.read(first + 8),
+            texels.read(first + 9),
         ]
     }
 
@@ -202,7 +221,7 @@ mod texels {
         #[inline(always)]
         fn material<F: Features>(&self, scene: &SceneView<F>, index: u32) -> Material {
             let first = scene.globals.texel_offsets.materials + index * MATERIAL_TEXELS;
-            Material::from_texels(seven_texels(self, first))
+            Material::from_texels(material_texels(self, first))
         }
 
         #[inline(always)]
