@@ -759,8 +759,8 @@ mod tests {
         // `_pad` (the last two words) decodes as zero.
         let texture: TextureInfo = distinct(2);
         assert_eq!(TextureInfo::from_texels(texels(&texture)), texture);
-        // `_pad` (the last word) decodes as zero.
-        let material: Material = distinct(1);
+        // `_pad` (the last three words) decodes as zero.
+        let material: Material = distinct(3);
         assert_eq!(Material::from_texels(texels(&material)), material);
     }
 }
