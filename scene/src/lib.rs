@@ -7,6 +7,7 @@
 // `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it is also true for NaN, so it guards
 // inputs against NaN as well as against zero and negative values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
+pub mod bump;
 pub mod bvh;
 pub mod environment;
 pub mod error;

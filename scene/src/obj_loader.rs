@@ -26,7 +26,7 @@
 //! | `Ps`, `Pc`, `Pcr`, `aniso` | `sheen`, `clearcoat`, `clearcoat_gloss` = 1 - Pcr, `anisotropic` |
 //! | `map_Ke` | `emission_texture` (sRGB), times `Ke` (1 if `Ke` is absent) |
 //! | `map_Pr`, `map_Pm` | one `metallic_roughness_texture` built at load (G = the roughness map, B = the metallic map, as glTF packs them; the metallic map is resampled to the roughness map's size), times `Pr`/`Pm` (1 if absent) |
-//! | `norm`, or `map_Bump`/`bump` holding a tangent-space normal map | `normal_texture` (linear; `-bm` is not read). A `map_Bump` image is taken for a normal map when its mean colour is bluish-neutral (mean B > 0.6, R and G within 0.2 of 0.5); a height map gets a warning and is not used (no bump-to-normal conversion) |
+//! | `norm`, or `map_Bump`/`bump` | `normal_texture` (linear). A `map_Bump` image is taken for a tangent-space normal map when its mean colour is bluish-neutral (mean B > 0.6, R and G within 0.2 of 0.5); otherwise it holds heights and is converted to a normal map with its `-bm` multiplier ([`crate::bump`]) |
 //! | `map_Ka`, `Ka`, `Ni`, `illum`, `Tf`, `Tr` | ignored |
 //!
 //! `specular` is 0.5 (an index of refraction of 1.5), except 0 when the material gives `Ks 0 0 0`
@@ -771,6 +771,8 @@ fn convert_materials(
         .collect();
     let mut slots: Vec<u32> = Vec::with_capacity(decoded.len());
     let mut combined_slots: HashMap<(u32, u32), u32> = HashMap::new();
+    // (height map slot, bump multiplier bits) → its normal map's slot.
+    let mut bump_slots: HashMap<(u32, u32), u32> = HashMap::new();
     for (result, (path, _)) in decoded.into_iter().zip(&requests) {
         match result {
             Ok(t) => {
@@ -920,11 +922,29 @@ fn convert_materials(
                 if explicit || looks_like_normal_map(&scene.textures[slot as usize]) {
                     out.normal_texture = slot;
                 } else {
-                    warnings.push(format!(
-                        "{mtl_name}: material {:?}: map_Bump {} looks like a height map (its mean colour \
-                         is not a normal map's); ignored (no bump-to-normal conversion)",
-                        m.name, scene.textures[slot as usize].name
-                    ));
+                    // A height map: converted to a normal map once per image and multiplier.
+                    let statement = m.normal_texture.as_deref().unwrap_or("");
+                    let strength = crate::bump::bump_multiplier(statement).unwrap_or_else(|| {
+                        warnings.push(format!(
+                            "{mtl_name}: material {:?}: cannot parse the -bm of {statement:?}; 1 is used",
+                            m.name
+                        ));
+                        1.0
+                    });
+                    let key = (slot, strength.to_bits());
+                    out.normal_texture = match bump_slots.get(&key) {
+                        Some(&converted) => converted,
+                        None => {
+                            let normals = crate::bump::normal_map_from_heights(
+                                &scene.textures[slot as usize],
+                                strength,
+                            );
+                            scene.textures.push(normals);
+                            let converted = (scene.textures.len() - 1) as u32;
+                            bump_slots.insert(key, converted);
+                            converted
+                        }
+                    };
                 }
             }
         }
@@ -1166,7 +1186,8 @@ mod tests {
     }
 
     /// `map_Ke`, `map_Pr` + `map_Pm` (combined into one metallic-roughness texture, the metallic map
-    /// resampled), `norm`, and `map_Bump` as a normal map or, when it is a height map, a warning.
+    /// resampled), `norm`, and `map_Bump` as a normal map or, when it is a height map, converted to one
+    /// with its `-bm` (once per image and multiplier).
     #[test]
     fn emission_roughness_metallic_and_normal_maps() {
         let dir = temp_dir("maps");
@@ -1179,20 +1200,28 @@ mod tests {
         png("pr.png", 4, 4, [64, 64, 64, 255]);
         png("pm.png", 2, 2, [200, 200, 200, 255]);
         png("n.png", 2, 2, [128, 128, 255, 255]);
-        png("height.png", 2, 2, [90, 90, 90, 255]);
+        // Heights climbing 25 / 255 per texel along x.
+        image::RgbaImage::from_fn(8, 4, |x, _| {
+            let h = (x * 25) as u8;
+            image::Rgba([h, h, h, 255])
+        })
+        .save(dir.join("height.png"))
+        .unwrap();
         std::fs::write(
             dir.join("m.mtl"),
             "newmtl lamp\nKd 0.5 0.5 0.5\nmap_Ke ke.png\n\
              newmtl metal\nKd 0.9 0.8 0.2\nmap_Pr pr.png\nmap_Pm pm.png\nnorm n.png\n\
              newmtl bumpy\nKd 0.5 0.5 0.5\nPr 0.5\nmap_Bump n.png\n\
-             newmtl heights\nKd 0.5 0.5 0.5\nbump height.png\n",
+             newmtl heights\nKd 0.5 0.5 0.5\nbump -bm 2 height.png\n\
+             newmtl same_heights\nKd 0.2 0.2 0.2\nmap_Bump -bm 2 height.png\n",
         )
         .unwrap();
         std::fs::write(
             dir.join("s.obj"),
             "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
              usemtl lamp\nf 1/1 2/2 3/3\nusemtl metal\nf 1/1 2/2 3/3\n\
-             usemtl bumpy\nf 1/1 2/2 3/3\nusemtl heights\nf 1/1 2/2 3/3\n",
+             usemtl bumpy\nf 1/1 2/2 3/3\nusemtl heights\nf 1/1 2/2 3/3\n\
+             usemtl same_heights\nf 1/1 2/2 3/3\n",
         )
         .unwrap();
         let s = load_scene(&dir.join("s.obj"), &LoadOptions::default()).unwrap();
@@ -1221,11 +1250,20 @@ mod tests {
         );
         assert_eq!(bumpy.roughness, 0.5);
         let heights = by_name("heights");
-        assert_eq!(heights.normal_texture, INVALID_INDEX);
+        assert_ne!(heights.normal_texture, INVALID_INDEX);
+        assert_eq!(
+            by_name("same_heights").normal_texture,
+            heights.normal_texture
+        );
+        let normals = &s.textures[heights.normal_texture as usize];
+        assert_eq!((normals.width, normals.height, normals.srgb), (8, 4, false));
+        // Inside the ramp the normal leans against it: normalize(-2 * 25 / 255, 0, 1).
+        let [r, g, b, _] = normals.texels[8 + 3].to_le_bytes();
+        let n = Vec3::new(f32::from(r), f32::from(g), f32::from(b)) / 127.5 - 1.0;
+        let want = Vec3::new(-2.0 * 25.0 / 255.0, 0.0, 1.0).normalize();
+        assert!((n - want).length() < 0.02, "{n} against {want}");
         assert!(
-            s.warnings
-                .iter()
-                .any(|w| w.contains("height map") && w.contains("heights")),
+            s.warnings.iter().all(|w| !w.contains("height")),
             "{:?}",
             s.warnings
         );
