@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Writes two generated test scenes (CC0, like the rest of the repository's own assets):
 
-- assets/pbr_extensions/pbr_extensions.gltf: a floor and twelve spheres, each with one glTF PBR extension
+- assets/pbr_extensions/pbr_extensions.gltf: a floor and fourteen spheres, each with one glTF PBR extension
   (KHR_materials_ior, _specular, _clearcoat, _sheen, _anisotropy, _unlit, _emissive_strength,
   _transmission + _volume with absorption, and KHR_texture_transform on a checker texture), one with the
   extensions' textures (clear coat, clear-coat roughness, sheen colour, specular), a thin glass whose
-  transmission is textured and one whose texture reads TEXCOORD_1, a camera and a point light:
+  transmission is textured, one whose texture reads TEXCOORD_1, and two normal-mapped ones (MikkTSpace
+  tangents, and the file's own TANGENT), a camera and a point light:
   the test scene of the loader's extension mapping (scene/src/gltf_pbr.rs) and of tests/tests/pbr_scene.rs.
 - assets/pbr_extensions/checker_floor.gltf: a 400 x 400 floor under a 512 x 512 texture of one-texel
   checks repeated 40 times, seen from 1.7 units up towards the horizon, lit by a directional light: the
@@ -55,7 +56,26 @@ def checker_png(n=8):
     for y in range(n):
         rows += b"\0" + b"".join(
             bytes([230, 230, 230, 255] if (x + y) % 2 == 0 else [40, 40, 40, 255]) for x in range(n))
+    return png_bytes(n, rows)
 
+
+def normal_map_png(n=16):
+    """An n x n tangent-space normal map of round bumps (RGB = (n + 1) / 2), 8-bit RGBA PNG bytes."""
+    rows = b""
+    for y in range(n):
+        row = b"\0"
+        for x in range(n):
+            # Height sin(2 pi x / n) sin(2 pi y / n); its normal (-dh/dx, -dh/dy, 1), y up the image.
+            a, b = 2 * math.pi * (x + 0.5) / n, 2 * math.pi * (y + 0.5) / n
+            dx, dy = 0.6 * math.cos(a) * math.sin(b), -0.6 * math.sin(a) * math.cos(b)
+            length = math.sqrt(dx * dx + dy * dy + 1)
+            rgb = [round((c / length * 0.5 + 0.5) * 255) for c in (-dx, -dy, 1)]
+            row += bytes(rgb + [255])
+        rows += row
+    return png_bytes(n, rows)
+
+
+def png_bytes(n, rows):
     def chunk(kind, data):
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
 
@@ -94,6 +114,13 @@ def main():
                         for v in sphere_v), len(sphere_v), "VEC2", 5126, 34962)
     s_uv1 = add(b"".join(struct.pack("<2f", 1 + math.atan2(v[2], v[0]) / math.pi, 1 - 2 * math.asin(v[1]) / math.pi)
                          for v in sphere_v), len(sphere_v), "VEC2", 5126, 34962)
+    # The analytic tangent d p / d u (u grows with atan2(z, x)) and handedness -1: seen from outside the
+    # texture is mirrored (u runs to the viewer's left), so the bitangent up the image is -(n x t).
+    # (At the poles, where it is undefined, +x.)
+    def tangent(v):
+        r = math.hypot(v[0], v[2])
+        return (-v[2] / r, 0, v[0] / r, -1) if r > 1e-6 else (1, 0, 0, -1)
+    s_tan = add(b"".join(struct.pack("<4f", *tangent(v)) for v in sphere_v), len(sphere_v), "VEC4", 5126, 34962)
     s_idx = add(b"".join(struct.pack("<3H", *f) for f in sphere_f), 3 * len(sphere_f), "SCALAR", 5123, 34963)
     f_pos = positions(floor_v)
     f_uv = add(b"".join(struct.pack("<2f", *t) for t in floor_uv), 4, "VEC2", 5126, 34962)
@@ -130,6 +157,10 @@ def main():
          "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1, "transmissionTexture": {"index": 0}}}},
         {"name": "texcoord_1", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1},
                                                         "metallicFactor": 0, "roughnessFactor": 0.7}},
+        {"name": "normal_map", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.4, 1], "metallicFactor": 0, "roughnessFactor": 0.3},
+         "normalTexture": {"index": 1}},
+        {"name": "normal_map_tangents", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.4, 1], "metallicFactor": 0, "roughnessFactor": 0.3},
+         "normalTexture": {"index": 1}},
     ]
     meshes = [{"name": "floor", "primitives": [{"attributes": {"POSITION": f_pos, "TEXCOORD_0": f_uv}, "indices": f_idx, "material": 0}]}]
     nodes = [{"name": "floor", "mesh": 0}]
@@ -137,6 +168,8 @@ def main():
         attributes = {"POSITION": s_pos, "NORMAL": s_nrm, "TEXCOORD_0": s_uv}
         if m["name"] == "texcoord_1":
             attributes["TEXCOORD_1"] = s_uv1
+        if m["name"] == "normal_map_tangents":
+            attributes["TANGENT"] = s_tan
         meshes.append({"name": m["name"], "primitives": [{"attributes": attributes, "indices": s_idx, "material": i}]})
         row, col = divmod(i - 1, 5)
         nodes.append({"name": m["name"], "mesh": i, "translation": [-4.4 + 2.2 * col, 1.0, -1.2 + 2.4 * row],
@@ -157,9 +190,10 @@ def main():
         "cameras": [{"type": "perspective", "perspective": {"yfov": 0.75, "aspectRatio": 16 / 9, "znear": 0.1}}],
         "meshes": meshes,
         "materials": materials,
-        "textures": [{"source": 0, "sampler": 0}],
+        "textures": [{"source": 0, "sampler": 0}, {"source": 1}],
         "samplers": [{"magFilter": 9728, "minFilter": 9728, "wrapS": 10497, "wrapT": 10497}],
-        "images": [{"uri": "data:image/png;base64," + base64.b64encode(checker_png()).decode()}],
+        "images": [{"uri": "data:image/png;base64," + base64.b64encode(checker_png()).decode()},
+                   {"uri": "data:image/png;base64," + base64.b64encode(normal_map_png()).decode()}],
         "accessors": accessors,
         "bufferViews": views,
         "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],

@@ -262,6 +262,7 @@ mod sampling_tests {
             positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             normals: Vec::new(),
             uvs: Vec::new(),
+            tangents: Vec::new(),
             triangles: vec![[0, 1, 2]],
             triangle_materials: vec![0],
             materials: vec![fovea_core::scene::Material::default()],

@@ -661,6 +661,15 @@ impl Loader<'_> {
                     &[DataType::F32],
                 )?;
             }
+            let tangent_acc = primitive.get(&gltf::Semantic::Tangents);
+            if let Some(a) = &tangent_acc {
+                self.check_accessor(
+                    a,
+                    &format!("{label} TANGENT"),
+                    Dimensions::Vec4,
+                    &[DataType::F32],
+                )?;
+            }
             // The texture coordinate set the material's textures name (one per material).
             let (material, mut uv_set) = self.material_slot(&primitive.material())?;
             if uv_set != 0 && primitive.get(&gltf::Semantic::TexCoords(uv_set)).is_none() {
@@ -749,6 +758,33 @@ impl Loader<'_> {
             }
             if !normals_added {
                 self.scene.normals.resize(base + vertex_count, [0.0; 3]);
+            }
+            // Tangents move with the mesh (the linear part of its transform); a mirroring transform
+            // flips their handedness. Without normals glTF ignores them.
+            let mut tangents_added = false;
+            if let Some(acc) = tangent_acc.as_ref().filter(|_| normals_added) {
+                if acc.count() == vertex_count {
+                    let linear = Mat3::from_mat4(world);
+                    let mirror = if flip { -1.0 } else { 1.0 };
+                    let tangents = reader.read_tangents().ok_or_else(|| short("TANGENT"))?;
+                    self.scene.tangents.resize(base, [0.0; 4]);
+                    self.scene.tangents.extend(tangents.map(|[x, y, z, w]| {
+                        let t = (linear * Vec3::new(x, y, z)).normalize_or_zero();
+                        [t.x, t.y, t.z, w * mirror]
+                    }));
+                    if self.scene.tangents.len() != base + vertex_count {
+                        return Err(short("TANGENT"));
+                    }
+                    tangents_added = true;
+                } else {
+                    self.warn(format!(
+                        "{label}: {} tangents for {vertex_count} positions; ignored",
+                        acc.count()
+                    ));
+                }
+            }
+            if !tangents_added && !self.scene.tangents.is_empty() {
+                self.scene.tangents.resize(base + vertex_count, [0.0; 4]);
             }
             let mut uvs_added = false;
             if let Some(acc) = &uv_acc {

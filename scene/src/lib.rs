@@ -20,6 +20,7 @@ pub mod pack;
 pub mod procedural;
 pub mod rebase;
 pub mod source;
+pub mod tangents;
 pub mod texture;
 
 pub use load::{load_scene, load_scene_from};

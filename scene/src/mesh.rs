@@ -109,7 +109,8 @@ impl LoadOptions {
 ///
 /// Invariants after a successful load: every triangle index is `< positions.len()`, every material index
 /// is `< materials.len()`, `triangle_materials.len() == triangles.len()`, every position, normal and UV is
-/// finite, `normals` and `uvs` are empty or as long as `positions`, non-zero normals are unit length, and
+/// finite, `normals`, `uvs` and `tangents` are empty or as long as `positions`, non-zero normals and
+/// tangents are unit length, and
 /// every texture index in a material is `< textures.len()` or `INVALID_INDEX`.
 #[derive(Clone, Debug, Default)]
 pub struct LoadedScene {
@@ -123,6 +124,10 @@ pub struct LoadedScene {
     pub normals: Vec<[f32; 3]>,
     /// Per vertex or empty; glTF convention, (0, 0) = top-left of the image (OBJ's v is flipped).
     pub uvs: Vec<[f32; 2]>,
+    /// Per vertex or empty: unit tangent `xyz` and handedness `w` (±1, glTF `TANGENT`: the bitangent is
+    /// `w · (n × t)`); `[0, 0, 0, 0]` = "no tangent here". The file's own, or MikkTSpace's for the
+    /// normal-mapped and anisotropic triangles that lack one ([`crate::tangents`]).
+    pub tangents: Vec<[f32; 4]>,
     /// Vertex indices, counter-clockwise = front.
     pub triangles: Vec<[u32; 3]>,
     /// Per triangle, index into `materials`.
@@ -242,6 +247,28 @@ impl LoadedScene {
                 self.uvs.len()
             ));
             self.uvs.clear();
+        }
+        if !self.tangents.is_empty() && self.tangents.len() != n {
+            self.warnings.push(format!(
+                "{name}: {} tangents for {n} vertices; tangents ignored (MikkTSpace's are used)",
+                self.tangents.len()
+            ));
+            self.tangents.clear();
+        }
+        if self.normals.is_empty() {
+            // glTF: without normals, tangents are ignored.
+            self.tangents.clear();
+        }
+        // A tangent that is not finite or is zero is none (shading derives one); the rest are unit,
+        // with a handedness of ±1.
+        for t in &mut self.tangents {
+            let v = Vec3::new(t[0], t[1], t[2]);
+            *t = if v.is_finite() && v != Vec3::ZERO && t[3].is_finite() {
+                let v = (v / v.abs().max_element()).normalize_or_zero();
+                [v.x, v.y, v.z, if t[3] < 0.0 { -1.0 } else { 1.0 }]
+            } else {
+                [0.0; 4]
+            };
         }
         self.sanitize_materials(file);
         self.sanitize_lights_and_camera(file);

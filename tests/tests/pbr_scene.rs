@@ -323,3 +323,139 @@ fn khr_materials_unlit_shows_its_base_colour_and_lights_nothing() {
         assert!((c - want).abs() < 1e-5, "{p:?}");
     }
 }
+
+/// The vertices of a material's triangles that come from the file, in its order (the first contiguous
+/// run: MikkTSpace's seam copies come after every vertex of the file).
+fn material_vertices(s: &LoadedScene, name: &str) -> Vec<usize> {
+    let m = s.material_names.iter().position(|n| n == name).unwrap() as u32;
+    let mut v: Vec<usize> = s
+        .triangles
+        .iter()
+        .zip(&s.triangle_materials)
+        .filter(|&(_, &t)| t == m)
+        .flat_map(|(t, _)| t.map(|v| v as usize))
+        .collect();
+    v.sort_unstable();
+    v.dedup();
+    let first = v[0];
+    v.into_iter()
+        .enumerate()
+        .take_while(|&(i, v)| v == first + i)
+        .map(|(_, v)| v)
+        .collect()
+}
+
+/// Tangents: the file's own `TANGENT` is read (the analytic ∂p/∂u of the sphere's mapping, handedness
+/// −1 as its texture is mirrored), and MikkTSpace's for the same sphere without it agree with them away
+/// from the poles and the seam, handedness included.
+#[test]
+fn tangents_are_read_or_generated_with_mikktspace() {
+    let s = load();
+    let given = material_vertices(&s, "normal_map_tangents");
+    let generated = material_vertices(&s, "normal_map");
+    assert_eq!((given.len(), generated.len()), (642, 642));
+    // MikkTSpace copied the vertices on the texture's seam.
+    assert!(s.positions.len() > generated[0] + 2 * 642 + 10);
+    assert!(!s.tangents.is_empty());
+    let centre = |vs: &[usize]| {
+        vs.iter().map(|&v| Vec3::from(s.positions[v])).sum::<Vec3>() / vs.len() as f32
+    };
+    let (c_given, c_generated) = (centre(&given), centre(&generated));
+    let mut compared = 0;
+    for (&a, &b) in given.iter().zip(&generated) {
+        let (ta, tb) = (s.tangents[a], s.tangents[b]);
+        let p = (Vec3::from(s.positions[a]) - c_given) / 0.9;
+        assert!(
+            (Vec3::from(s.positions[b]) - c_generated - 0.9 * p).length() < 1e-4,
+            "{a} {b} {:?} {:?} {c_given} {c_generated}",
+            s.positions[a],
+            s.positions[b]
+        );
+        // The file's: ∂p/∂u = (−z, 0, x) / |(x, z)|, handedness −1.
+        if p.y.abs() < 0.95 {
+            let want = Vec3::new(-p.z, 0.0, p.x).normalize();
+            assert!(
+                Vec3::new(ta[0], ta[1], ta[2]).dot(want) > 0.999,
+                "{ta:?} {want}"
+            );
+        }
+        assert_eq!(ta[3], -1.0);
+        let uv = s.uvs[b];
+        if p.y.abs() < 0.8 && uv[0] > 0.05 && uv[0] < 0.95 {
+            let d = Vec3::new(ta[0], ta[1], ta[2]).dot(Vec3::new(tb[0], tb[1], tb[2]));
+            assert!(
+                d > 0.98,
+                "vertex {b}: MikkTSpace {tb:?} against the file's {ta:?}"
+            );
+            assert_eq!(tb[3], ta[3]);
+            compared += 1;
+        }
+    }
+    assert!(compared > 200, "{compared}");
+}
+
+/// Shading reads the vertex tangents: on the sphere with the file's tangents, the shading frame's
+/// tangent at a hit is the interpolated ∂p/∂u, and the normal map tilts the normal. Without vertex
+/// tangents (the per-triangle ones shading derives from the texture coordinates, handedness included)
+/// the mapped normal is the same within the difference of the two tangent fields.
+#[test]
+fn shading_uses_the_vertex_tangents() {
+    use fovea_core::bvh::closest_hit;
+    use fovea_core::material::surface_point;
+    use fovea_core::scene::{SceneSlices, SceneSource};
+
+    let s = load();
+    let names = s.material_names.clone();
+    let centre = sphere_centre(&s, "normal_map_tangents");
+    let eye = Vec3::from(s.camera.expect("camera").position);
+    let mut without = s.clone();
+    without.tangents.clear();
+    let packed = fovea_tests::stability::pack(s, &Environment::None);
+    let view = packed.view();
+    let packed_without = fovea_tests::stability::pack(without, &Environment::None);
+    let view_without = packed_without.view();
+    let (mut hits, mut tilted) = (0, 0);
+    for k in 0..100 {
+        let offset = Vec3::new(
+            (k % 10) as f32 / 10.0 - 0.45,
+            (k / 10) as f32 / 10.0 - 0.45,
+            0.0,
+        );
+        let ray = fovea_core::geometry::Ray::new(eye, centre + offset - eye);
+        let hit = closest_hit(&view, &ray, f32::INFINITY);
+        if !hit.is_hit() {
+            continue;
+        }
+        let info = SceneSlices.triangle_info(&view, hit.triangle);
+        if names[info.material as usize] != "normal_map_tangents" {
+            continue;
+        }
+        let p = surface_point(&view, &SceneSlices, &hit);
+        let q = (p.position - centre).normalize();
+        let dp_du = Vec3::new(-q.z, 0.0, q.x).normalize();
+        // The frame's tangent is ∂p/∂u made orthogonal to the (mapped) normal.
+        let expected = (dp_du - p.frame.z * p.frame.z.dot(dp_du)).normalize();
+        assert!(
+            p.frame.x.dot(expected) > 0.99,
+            "{:?} against {expected}",
+            p.frame
+        );
+        tilted += usize::from(p.frame.z.dot(q) < 0.995);
+        hits += 1;
+        let derived = surface_point(
+            &view_without,
+            &SceneSlices,
+            &closest_hit(&view_without, &ray, f32::INFINITY),
+        );
+        assert!(
+            derived.frame.z.dot(p.frame.z) > 0.995,
+            "{:?} against {:?}",
+            derived.frame.z,
+            p.frame.z
+        );
+    }
+    assert!(
+        hits > 30 && tilted > hits / 2,
+        "{hits} hits, {tilted} tilted"
+    );
+}

@@ -1,6 +1,7 @@
 //! From a hit to shading inputs: texture fetches, alpha cut-outs and the Disney parameters at a point.
 pub mod alpha;
 pub mod shading;
+pub mod tangent;
 pub mod texture;
 
 pub use shading::{material_params, surface_point, SurfacePoint};

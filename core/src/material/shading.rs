@@ -3,6 +3,7 @@
 use glam::{Vec2, Vec3};
 
 use super::alpha::interpolate_uv;
+use super::tangent::{decode_tangent, has_tangent, NO_TANGENT};
 use super::texture::sample_texture_lod;
 use crate::bsdf::DisneyParams;
 use crate::bvh::traverse::Hit;
@@ -108,24 +109,41 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
 
     // Interpolated vertex normal, if the scene has them for all three vertices.
     let mut ns = ng;
+    // The vertices' encoded tangents, which ride in the normals' `w` (`super::tangent`).
+    let mut tangent_words = (NO_TANGENT, NO_TANGENT, NO_TANGENT);
     if scene.features.has(FEATURE_SHADING_NORMALS) && !scene.geometry.normals.is_empty() {
-        let n0 = vec3_from(source.normal(scene, info.vertices[0]));
-        let n1 = vec3_from(source.normal(scene, info.vertices[1]));
-        let n2 = vec3_from(source.normal(scene, info.vertices[2]));
+        let r0 = source.normal(scene, info.vertices[0]);
+        let r1 = source.normal(scene, info.vertices[1]);
+        let r2 = source.normal(scene, info.vertices[2]);
+        tangent_words = (r0[3], r1[3], r2[3]);
+        let n0 = vec3_from(r0);
+        let n1 = vec3_from(r1);
+        let n2 = vec3_from(r2);
         if n0 != Vec3::ZERO && n1 != Vec3::ZERO && n2 != Vec3::ZERO {
             let n = (n0 * b0 + n1 * b1 + n2 * b2).normalize_or(ng);
             ns = if n.dot(ng) < 0.0 { -n } else { n };
         }
     }
 
-    // Tangent from the texture parameterisation (pbrt-v4 §6.5.3), for the materials that need one: normal
-    // maps and anisotropy. Others are isotropic, so any tangent serves and the normal's own frame is
-    // used (cheaper, and independent of whether the scene has texture coordinates).
+    // The tangent, for the materials that need one (normal maps and anisotropy): the vertices' own
+    // (glTF `TANGENT`, or MikkTSpace's at load) where all three have one, else the triangle's from its
+    // texture parameterisation (pbrt-v4 §6.5.3). `handedness` is the bitangent's side (glTF `TANGENT`'s
+    // `w`: the normal map's y points along `handedness · (n × t)`), −1 where the texture is mirrored. Other materials are
+    // isotropic, so any tangent serves and the normal's own frame is used (cheaper, and independent of
+    // whether the scene has texture coordinates).
     let needs_tangent = (scene.features.has(FEATURE_NORMAL_TEXTURE)
         && material.normal_texture != INVALID_INDEX)
         || (scene.features.has(FEATURE_LOBE_ANISOTROPY) && !(material.anisotropic == 0.0));
     let mut tangent = Vec3::ZERO;
-    if needs_tangent && scene.features.has(FEATURE_UVS) && !scene.geometry.uvs.is_empty() {
+    let mut handedness = 1.0;
+    let (w0, w1, w2) = tangent_words;
+    if needs_tangent && has_tangent(w0) && has_tangent(w1) && has_tangent(w2) {
+        let (t0, s0) = decode_tangent(w0);
+        let (t1, _) = decode_tangent(w1);
+        let (t2, _) = decode_tangent(w2);
+        tangent = (t0 * b0 + t1 * b1 + t2 * b2).normalize_or_zero();
+        handedness = s0;
+    } else if needs_tangent && scene.features.has(FEATURE_UVS) && !scene.geometry.uvs.is_empty() {
         let t0 = Vec2::from(source.uv(scene, info.vertices[0]));
         let t1 = Vec2::from(source.uv(scene, info.vertices[1]));
         let t2 = Vec2::from(source.uv(scene, info.vertices[2]));
@@ -133,11 +151,18 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
         let duv2 = t2 - t0;
         let det = duv1.x * duv2.y - duv1.y * duv2.x;
         if det.abs() > 1e-20 {
-            // Only the direction is used: multiply by the determinant's sign and normalise instead of
-            // dividing by it, which overflows for tiny determinants (zero if the length over- or
+            // Only the directions are used: multiply by the determinant's sign and normalise instead
+            // of dividing by it, which overflows for tiny determinants (zero if the length over- or
             // underflows, and then the frame falls back to `Frame::from_normal`).
-            tangent = (((v[1] - v[0]) * duv2.y - (v[2] - v[0]) * duv1.y) * det.signum())
-                .normalize_or_zero();
+            let e1 = v[1] - v[0];
+            let e2 = v[2] - v[0];
+            tangent = ((e1 * duv2.y - e2 * duv1.y) * det.signum()).normalize_or_zero();
+            // glTF's v runs down the image and a normal map's y up it (its "+Y is up"): a texture
+            // that shows upright has ∂p/∂v = −(n × t), and a mirrored one the opposite.
+            let dp_dv = (e2 * duv1.x - e1 * duv2.x) * det.signum();
+            if ns.cross(tangent).dot(dp_dv) > 0.0 {
+                handedness = -1.0;
+            }
         }
     }
 
@@ -149,7 +174,7 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
         let t = sample_texture_lod(scene, source, material.normal_texture, uv, footprint_uv);
         let m = Vec3::new(
             (2.0 * t.x - 1.0) * material.normal_scale,
-            (2.0 * t.y - 1.0) * material.normal_scale,
+            (2.0 * t.y - 1.0) * material.normal_scale * handedness,
             2.0 * t.z - 1.0,
         );
         let mapped = frame.to_world(m).normalize_or(ns);

@@ -35,8 +35,9 @@ pub struct GeometryArrays<'a> {
     pub blocks: &'a [TriangleBlock],
     /// Per-triangle vertex indices and material, parallel to `triangle_lanes`.
     pub triangle_info: &'a [TriangleInfo],
-    /// Per-vertex shading normals (`xyz`, `w` unused). Empty when the scene has no shading normals; a zero
-    /// normal means "use the geometric normal".
+    /// Per-vertex shading normals (`xyz`) and tangents (`w`, encoded: `crate::material::tangent`;
+    /// [`crate::material::tangent::NO_TANGENT`] where the vertex has none). Empty when the scene has no
+    /// shading normals; a zero normal means "use the geometric normal".
     pub normals: &'a [[f32; 4]],
     /// Per-vertex texture coordinates. Empty when no material has a texture.
     pub uvs: &'a [[f32; 2]],

@@ -6,9 +6,10 @@ use fovea_core::kernel_abi::{
     BINDING_NODES, BINDING_NORMALS, BINDING_TRIANGLE_BLOCKS, BINDING_TRIANGLE_INFO,
     BINDING_TRIANGLE_LANES, BINDING_UVS,
 };
+use fovea_core::material::tangent::{encode_tangent, NO_TANGENT};
 use fovea_core::scene::{
     Bvh4Node, GeometryArrays, Material, TriangleBlock, TriangleInfo, TrianglePositions,
-    MATERIAL_ALPHA_CUTOUT,
+    INVALID_INDEX, MATERIAL_ALPHA_CUTOUT,
 };
 use glam::{Vec3, Vec4};
 
@@ -92,6 +93,7 @@ pub(super) struct GeometryInput {
     pub positions: Vec<[f32; 3]>,
     pub normals: Vec<[f32; 3]>,
     pub uvs: Vec<[f32; 2]>,
+    pub tangents: Vec<[f32; 4]>,
     pub triangles: Vec<[u32; 3]>,
     pub triangle_materials: Vec<u32>,
 }
@@ -105,7 +107,8 @@ pub(super) struct GeometryOutput {
 }
 
 /// Builds the BVH over `input`'s triangles and packs them in its leaf order; texture coordinates are
-/// kept only when a material reads a texture, normals only when one is not zero.
+/// kept only when a material reads a texture, normals only when one is not zero, tangents (in the
+/// normals' `w`) only when a material reads them.
 pub(super) fn pack_geometry(
     input: GeometryInput,
     materials: &[Material],
@@ -115,6 +118,7 @@ pub(super) fn pack_geometry(
         positions,
         normals,
         uvs,
+        tangents,
         triangles,
         triangle_materials,
     } = input;
@@ -151,8 +155,26 @@ pub(super) fn pack_geometry(
     } else {
         Vec::new()
     };
+    // Each vertex's tangent rides in its normal's `w` (`fovea_core::material::tangent`), where a
+    // material reads tangents.
+    let tangents = if materials
+        .iter()
+        .any(|m| m.normal_texture != INVALID_INDEX || !(m.anisotropic == 0.0))
+    {
+        tangents
+    } else {
+        Vec::new()
+    };
+    let tangent_word = |i: usize| match tangents.get(i) {
+        Some(&[x, y, z, w]) => encode_tangent(Vec3::new(x, y, z), w),
+        None => NO_TANGENT,
+    };
     let normals: Vec<[f32; 4]> = if normals.iter().any(|n| *n != [0.0; 3]) {
-        normals.iter().map(|n| [n[0], n[1], n[2], 0.0]).collect()
+        normals
+            .iter()
+            .enumerate()
+            .map(|(i, n)| [n[0], n[1], n[2], tangent_word(i)])
+            .collect()
     } else {
         Vec::new()
     };
