@@ -29,8 +29,8 @@ pub fn normal_map_from_heights(heights: &Texture, strength: f32) -> Texture {
             let column = |x: usize| height_at(x, up) + 2.0 * height_at(x, y) + height_at(x, down);
             let row = |y: usize| height_at(left, y) + 2.0 * height_at(x, y) + height_at(right, y);
             let dx = (column(right) - column(left)) / 8.0;
-            let dy = (row(down) - row(up)) / 8.0;
-            let n = glam::Vec3::new(-strength * dx, -strength * dy, 1.0).normalize();
+            let d_row = (row(down) - row(up)) / 8.0;
+            let n = glam::Vec3::new(-strength * dx, strength * d_row, 1.0).normalize();
             let encode = |c: f32| ((c * 0.5 + 0.5) * 255.0).round().clamp(0.0, 255.0) as u8;
             texels.push(pack_rgba8([encode(n.x), encode(n.y), encode(n.z), 255]));
         }
@@ -79,8 +79,8 @@ mod tests {
         glam::Vec3::new(f32::from(r), f32::from(g), f32::from(b)) / 127.5 - 1.0
     }
 
-    /// A ramp that climbs 0.1 per texel along x leans towards −x by atan(bm · 0.1); one along y leans
-    /// towards −y; a flat map stays flat.
+    /// A ramp that climbs 0.1 per texel along x leans towards −x by atan(bm · 0.1); one that climbs
+    /// down the rows leans up the image (+y of the normal map); a flat map stays flat.
     #[test]
     fn ramps_lean_against_their_slope_by_the_rule() {
         let ramp_x = image(16, 8, |x, _| (x * 255 / 10).min(255) as u8);
@@ -89,7 +89,7 @@ mod tests {
         assert!((n - want).length() < 0.02, "{n} against {want}");
         let ramp_y = image(8, 16, |_, y| (y * 255 / 10).min(255) as u8);
         let n = normal(&normal_map_from_heights(&ramp_y, 1.0), 4, 4);
-        let want = glam::Vec3::new(0.0, -0.1, 1.0).normalize();
+        let want = glam::Vec3::new(0.0, 0.1, 1.0).normalize();
         assert!((n - want).length() < 0.02, "{n} against {want}");
         let flat = image(4, 4, |_, _| 77);
         let n = normal(&normal_map_from_heights(&flat, 5.0), 1, 2);

@@ -661,14 +661,19 @@ impl Loader<'_> {
                     &[DataType::F32],
                 )?;
             }
-            let tangent_acc = primitive.get(&gltf::Semantic::Tangents);
-            if let Some(a) = &tangent_acc {
-                self.check_accessor(
-                    a,
+            // Tangents are optional (MikkTSpace's replace them): a malformed accessor is a warning.
+            let mut tangent_acc = primitive.get(&gltf::Semantic::Tangents);
+            if let Some(a) = tangent_acc.clone() {
+                let checked = self.check_accessor(
+                    &a,
                     &format!("{label} TANGENT"),
                     Dimensions::Vec4,
                     &[DataType::F32],
-                )?;
+                );
+                if let Err(e) = checked {
+                    self.warn(format!("{e}; its tangents are ignored"));
+                    tangent_acc = None;
+                }
             }
             // The texture coordinate set the material's textures name (one per material).
             let (material, mut uv_set) = self.material_slot(&primitive.material())?;

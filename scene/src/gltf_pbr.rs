@@ -199,7 +199,9 @@ pub fn absorption_coefficient(attenuation_color: [f32; 3], attenuation_distance:
     if !(attenuation_distance > 0.0 && attenuation_distance.is_finite()) {
         return [0.0; 3];
     }
-    attenuation_color.map(|c| (-c.clamp(1e-6, 1.0).ln() / attenuation_distance).max(0.0))
+    // A tiny distance overflows to +inf: as opaque as f32 allows.
+    attenuation_color
+        .map(|c| (-c.clamp(1e-6, 1.0).ln() / attenuation_distance).clamp(0.0, f32::MAX))
 }
 
 /// Applies the material extensions of `extensions` (the material's `extensions` object, as JSON) to
@@ -538,6 +540,7 @@ mod tests {
         // The default distance is infinite: no absorption.
         assert_eq!(absorption_coefficient([0.5; 3], f32::INFINITY), [0.0; 3]);
         assert_eq!(absorption_coefficient([0.5; 3], -1.0), [0.0; 3]);
+        assert_eq!(absorption_coefficient([0.5; 3], 1e-45), [f32::MAX; 3]);
     }
 
     #[test]

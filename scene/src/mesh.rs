@@ -429,6 +429,10 @@ impl LoadedScene {
                 fix(&mut m.ior, 1.01, 100.0, 1.5, "index of refraction");
             }
             for c in 0..3 {
+                if m.absorption[c] == f32::INFINITY {
+                    // Opaque: as much as f32 holds.
+                    m.absorption[c] = f32::MAX;
+                }
                 fix(&mut m.absorption[c], 0.0, f32::MAX, 0.0, "absorption");
             }
             let mut seen = Vec::new();
@@ -631,7 +635,7 @@ mod tests {
         s.materials[0].roughness = 7.0;
         s.materials[0].transmission = 0.5;
         s.materials[0].ior = f32::NAN;
-        s.materials[0].absorption = [1.0, -2.0, f32::INFINITY];
+        s.materials[0].absorption = [1.0, -2.0, f32::NAN];
         s.punctual_lights = vec![
             Light {
                 kind: LIGHT_POINT,

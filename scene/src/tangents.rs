@@ -6,8 +6,9 @@
 //! MikkTSpace gives a tangent per triangle corner; corners of one vertex that disagree (a UV seam, a
 //! mirrored half) get copies of the vertex. Conventions as in glTF: the tangent runs along +u and the
 //! bitangent `w · (n × t)` up the image (decreasing v, glTF's v running down), so MikkTSpace is given
-//! `(u, 1 − v)`. Triangles without shading normals or texture coordinates keep the per-triangle tangent
-//! that shading derives (`fovea_core::material::shading`).
+//! `(u, 1 − v)`. A scene without shading normals keeps the per-triangle tangent that shading derives
+//! from the texture coordinates (`fovea_core::material::shading`); without texture coordinates there is
+//! no tangent (and no normal map to read).
 use fovea_core::scene::{Material, INVALID_INDEX};
 use glam::Vec3;
 
@@ -118,15 +119,15 @@ pub fn generate_missing_tangents(scene: &mut LoadedScene) -> usize {
             } else {
                 continue;
             };
-            if vi < n && has(&scene.tangents[vi]) && !assigned[vi] {
+            // Only the file's vertices are visited (copies are made below and never revisited).
+            debug_assert!(vi < n);
+            if has(&scene.tangents[vi]) && !assigned[vi] {
                 // The file's own tangent: kept.
                 continue;
             }
-            if vi >= n || !assigned[vi] {
-                if vi < n {
-                    scene.tangents[vi] = t;
-                    assigned[vi] = true;
-                }
+            if !assigned[vi] {
+                scene.tangents[vi] = t;
+                assigned[vi] = true;
                 continue;
             }
             let close = |a: [f32; 4], b: [f32; 4]| {

@@ -29,8 +29,11 @@ use crate::lights::{
 };
 use crate::material::shading::surface_point_lod;
 use crate::math::color::is_finite3;
+use crate::math::Frame;
 use crate::rng::SampleRng;
-use crate::scene::features::{FEATURE_LOBE_TRANSMISSION, FEATURE_VOLUME_ABSORPTION};
+use crate::scene::features::{
+    FEATURE_LOBE_TRANSMISSION, FEATURE_NORMAL_TEXTURE, FEATURE_VOLUME_ABSORPTION,
+};
 use crate::scene::{SceneSlices, SceneSource, SceneView, INVALID_INDEX};
 
 /// [`IntegratorSettings::strategy`]: next-event estimation and BSDF sampling combined by MIS.
@@ -147,9 +150,10 @@ pub fn trace_path_from_hit<F: crate::scene::Features, S: SceneSource>(
 }
 
 /// Beer–Lambert transmittance `exp(−σₐ d)` of a segment of length `distance` inside a medium with
-/// absorption coefficient `absorption` (glTF `KHR_materials_volume`). One medium at a time: a segment
-/// that ends on a back face is taken to have run inside that face's material, which holds for closed,
-/// non-nested volumes (nested media would need a stack of interiors, as in pbrt-v4's `MediumInterface`).
+/// absorption coefficient `absorption` (glTF `KHR_materials_volume`). The path tracks one medium at a
+/// time (entered by refracting through a front face, left through a back face), which holds for closed,
+/// non-nested volumes; nested media would need a stack of interiors (pbrt-v4's `MediumInterface`), and a
+/// camera inside a volume starts outside it.
 #[inline]
 #[must_use]
 pub fn transmittance(absorption: Vec3, distance: f32) -> Vec3 {
@@ -197,6 +201,9 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
     // Solid-angle pdf of the BSDF sample that produced `ray` (unused for the camera ray).
     let mut bsdf_pdf = 0.0f32;
     let mut bounce = 0u32;
+    // The absorption coefficient of the volume the path is in (zero outside any): set when it refracts
+    // into a front face of an absorbing material, cleared when it refracts out through a back face.
+    let mut medium = Vec3::ZERO;
     loop {
         let hit = match first_hit {
             Some(hit) if bounce == 0 => hit,
@@ -226,11 +233,9 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
         };
         let surface = surface_point_lod(scene, source, &hit, ray.direction, cone_width);
         let wo_world = -ray.direction;
-        if scene.features.has(FEATURE_VOLUME_ABSORPTION)
-            && surface.geometric_normal.dot(wo_world) < 0.0
-        {
-            // The segment ends on a back face: it ran inside the material, which absorbs along it.
-            throughput *= transmittance(surface.absorption, hit.t * ray.direction.length());
+        if scene.features.has(FEATURE_VOLUME_ABSORPTION) && medium != Vec3::ZERO {
+            // The segment ran inside an absorbing material.
+            throughput *= transmittance(medium, hit.t * ray.direction.length());
         }
 
         // Emission found by this ray.
@@ -280,7 +285,15 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
             frame.x = -frame.x;
             frame.z = -frame.z;
         }
-        let wo = frame.to_local(wo_world);
+        let mut wo = frame.to_local(wo_world);
+        if !(wo.z > 0.0) && scene.features.has(FEATURE_NORMAL_TEXTURE) {
+            // A normal map turned the shading normal away from the viewer (at grazing views of
+            // steep bumps): shade with the interpolated normal instead, losing the map's detail there
+            // rather than the light.
+            let n = surface.unmapped_normal;
+            frame = Frame::from_normal_tangent(if front { n } else { -n }, frame.x);
+            wo = frame.to_local(wo_world);
+        }
         if !(wo.z > 0.0) {
             // The shading normal faces away from the viewer although the geometric one does not.
             break;
@@ -368,6 +381,13 @@ fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
             throughput /= survive;
         }
 
+        if scene.features.has(FEATURE_VOLUME_ABSORPTION) && refracted {
+            medium = if front {
+                surface.absorption
+            } else {
+                Vec3::ZERO
+            };
+        }
         ray = Ray::new(if refracted { origin_below } else { origin }, wi_world);
         bounce += 1;
     }

@@ -31,6 +31,9 @@ pub struct SurfacePoint {
     pub geometric_normal: Vec3,
     /// Shading frame; `z` is the shading normal on the same side as `geometric_normal`.
     pub frame: Frame,
+    /// The interpolated vertex normal before the normal map (`frame.z` where there is none), for
+    /// views the mapped normal turns away from (`crate::integrator::path`).
+    pub unmapped_normal: Vec3,
     pub uv: Vec2,
     pub params: DisneyParams,
     /// The absorption coefficient of the material's inside ([`Material::absorption`]); zero for scenes
@@ -111,6 +114,9 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
     let mut ns = ng;
     // The vertices' encoded tangents, which ride in the normals' `w` (`super::tangent`).
     let mut tangent_words = (NO_TANGENT, NO_TANGENT, NO_TANGENT);
+    // Whether the interpolated normal was turned to the geometric normal's side (which turns the
+    // bitangent `n × t` of the vertex tangents' handedness too).
+    let mut normal_flipped = false;
     if scene.features.has(FEATURE_SHADING_NORMALS) && !scene.geometry.normals.is_empty() {
         let r0 = source.normal(scene, info.vertices[0]);
         let r1 = source.normal(scene, info.vertices[1]);
@@ -121,7 +127,8 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
         let n2 = vec3_from(r2);
         if n0 != Vec3::ZERO && n1 != Vec3::ZERO && n2 != Vec3::ZERO {
             let n = (n0 * b0 + n1 * b1 + n2 * b2).normalize_or(ng);
-            ns = if n.dot(ng) < 0.0 { -n } else { n };
+            normal_flipped = n.dot(ng) < 0.0;
+            ns = if normal_flipped { -n } else { n };
         }
     }
 
@@ -142,7 +149,7 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
         let (t1, _) = decode_tangent(w1);
         let (t2, _) = decode_tangent(w2);
         tangent = (t0 * b0 + t1 * b1 + t2 * b2).normalize_or_zero();
-        handedness = s0;
+        handedness = if normal_flipped { -s0 } else { s0 };
     } else if needs_tangent && scene.features.has(FEATURE_UVS) && !scene.geometry.uvs.is_empty() {
         let t0 = Vec2::from(source.uv(scene, info.vertices[0]));
         let t1 = Vec2::from(source.uv(scene, info.vertices[1]));
@@ -214,7 +221,11 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
     if scene.features.has(FEATURE_EXTENSION_TEXTURES) && material.has_extension_texture() {
         apply_extension_textures(scene, source, &material, uv, footprint_uv, &mut params);
     }
-    let absorption = if scene.features.has(FEATURE_VOLUME_ABSORPTION) {
+    // Only a refracting interface (transmissive, not a thin wall) encloses a volume.
+    let absorption = if scene.features.has(FEATURE_VOLUME_ABSORPTION)
+        && params.transmission > 0.0
+        && !params.thin_walled
+    {
         Vec3::from(material.absorption)
     } else {
         Vec3::ZERO
@@ -224,6 +235,7 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
         magnitude,
         geometric_normal: ng,
         frame,
+        unmapped_normal: ns,
         uv,
         params,
         absorption,

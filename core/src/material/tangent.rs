@@ -13,8 +13,9 @@ use glam::{Vec2, Vec3};
 /// The `w` of a vertex without a tangent.
 pub const NO_TANGENT: f32 = 0.0;
 
-/// Largest quantised octahedral coordinate (12 bits).
-const STEPS: f32 = 4095.0;
+/// Largest quantised octahedral coordinate (12 bits; even, so that 0 is a step: axis-aligned tangents
+/// come back exact).
+const STEPS: f32 = 4094.0;
 
 /// `w` for the unit tangent `tangent` with handedness `sign` (±1; negative means mirrored texture
 /// coordinates); [`NO_TANGENT`] for a zero or non-finite tangent.
@@ -99,6 +100,9 @@ mod tests {
             worst = worst.max(d.dot(t).clamp(-1.0, 1.0).acos().to_degrees());
         }
         assert!(worst < 0.07, "worst {worst}°");
+        for axis in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z] {
+            assert_eq!(decode_tangent(encode_tangent(axis, 1.0)).0, axis);
+        }
         assert_eq!(encode_tangent(Vec3::ZERO, 1.0), NO_TANGENT);
         assert_eq!(
             encode_tangent(Vec3::new(f32::NAN, 0.0, 1.0), 1.0),
