@@ -1322,6 +1322,67 @@ mod tests {
         std::fs::remove_dir_all(dir).ok();
     }
 
+    /// `TANGENT` moves with the node's transform, and a mirroring one flips its handedness (the
+    /// bitangent `w (n × t)` must follow the mirrored surface); a malformed accessor is a warning.
+    #[test]
+    fn tangents_follow_the_node_transform_and_mirrors_flip_their_handedness() {
+        let dir = temp_dir("tangents");
+        let file = dir.join("t.gltf");
+        let mut bytes = Vec::new();
+        let floats: Vec<f32> = [
+            TRI.concat(),
+            [0.0, 0.0, 1.0].repeat(3),
+            [0.0, 1.0, 0.0, 1.0].repeat(3),
+        ]
+        .concat();
+        for f in floats {
+            bytes.extend_from_slice(&f.to_le_bytes());
+        }
+        let gltf = |node: &str, tangent_type: &str| {
+            format!(
+                r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+                "nodes":[{{"mesh":0{node}}}],
+                "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1,"TANGENT":2}}}}]}}],
+                "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                    {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}},
+                    {{"bufferView":2,"componentType":5126,"count":3,"type":"{tangent_type}"}}],
+                "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}},
+                    {{"buffer":0,"byteOffset":72,"byteLength":48}}],
+                "buffers":[{{"byteLength":120,"uri":"data:application/octet-stream;base64,{}"}}]}}"#,
+                base64_encode(&bytes)
+            )
+        };
+        for (node, want) in [
+            ("", [0.0, 1.0, 0.0, 1.0]),
+            // A quarter turn about z: the tangent turns with it.
+            (
+                r#","rotation":[0,0,0.70710678,0.70710678]"#,
+                [-1.0, 0.0, 0.0, 1.0],
+            ),
+            // Mirrored in y: the tangent follows and the handedness flips.
+            (r#","scale":[1,-1,1]"#, [0.0, -1.0, 0.0, -1.0]),
+        ] {
+            std::fs::write(&file, gltf(node, "VEC4")).unwrap();
+            let s = load_scene(&file, &LoadOptions::default()).unwrap();
+            for t in &s.tangents {
+                for c in 0..4 {
+                    assert!((t[c] - want[c]).abs() < 1e-6, "{node}: {t:?}");
+                }
+            }
+            assert_eq!(s.tangents.len(), 3, "{node}");
+        }
+        // VEC3 tangents (a common exporter mistake): ignored with a warning, not an error.
+        std::fs::write(&file, gltf("", "VEC3")).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        assert!(s.tangents.is_empty());
+        assert!(
+            s.warnings.iter().any(|w| w.contains("TANGENT")),
+            "{:?}",
+            s.warnings
+        );
+        std::fs::remove_dir_all(dir).ok();
+    }
+
     /// One texture coordinate set per material: a primitive without the set its material's textures
     /// name falls back to TEXCOORD_0, and textures that name different sets are one warning.
     #[test]

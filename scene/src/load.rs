@@ -1,6 +1,6 @@
 //! Loading a scene file: the loader is chosen by extension, and what every loader's scene must satisfy
 //! is checked after it ([`load_scene`]), where the triangles that need tangents and lack them get
-//! MikkTSpace's ([`crate::tangents`]). Above the loaders ([`crate::gltf_loader`],
+//! MikkTSpace's ([`crate::tangents`]) and textures no material reads are dropped. Above the loaders ([`crate::gltf_loader`],
 //! [`crate::obj_loader`]) and the scene types they fill ([`crate::mesh`]), so that imports run one way.
 use std::path::Path;
 
@@ -34,6 +34,7 @@ pub fn load_scene_from(
     }?;
     let mut scene = scene;
     crate::tangents::generate_missing_tangents(&mut scene);
+    scene.drop_unused_textures();
     let words = crate::pack::packed_texel_words(&scene.textures);
     if words > u64::from(u32::MAX) {
         return Err(SceneError::TooLarge {

@@ -5,7 +5,7 @@
 //! textures, punctual lights and an optional camera. [`crate::load::load_scene`] picks the loader by file extension.
 use std::path::{Path, PathBuf};
 
-use fovea_core::scene::{Light, Material};
+use fovea_core::scene::{Light, Material, INVALID_INDEX};
 use glam::Vec3;
 
 use crate::error::SceneError;
@@ -391,6 +391,41 @@ impl LoadedScene {
             });
         }
         Ok(())
+    }
+
+    /// Drops the textures no material reads (the separate images an OBJ `map_Pr`/`map_Pm` pair or a
+    /// `map_Bump` height map was converted from) and renumbers the materials' indices; returns how many
+    /// were dropped.
+    pub fn drop_unused_textures(&mut self) -> usize {
+        let mut used = vec![false; self.textures.len()];
+        for m in &mut self.materials {
+            for index in m.texture_indices_mut() {
+                if let Some(u) = used.get_mut(*index as usize) {
+                    *u = true;
+                }
+            }
+        }
+        if used.iter().all(|&u| u) {
+            return 0;
+        }
+        let mut renumbered = vec![INVALID_INDEX; self.textures.len()];
+        let mut next = 0u32;
+        for (r, &u) in renumbered.iter_mut().zip(&used) {
+            if u {
+                *r = next;
+                next += 1;
+            }
+        }
+        let mut keep = used.iter();
+        self.textures.retain(|_| *keep.next().unwrap_or(&false));
+        for m in &mut self.materials {
+            for index in m.texture_indices_mut() {
+                if let Some(&r) = renumbered.get(*index as usize) {
+                    *index = r;
+                }
+            }
+        }
+        used.len() - self.textures.len()
     }
 
     /// Replaces non-finite material parameters by defaults and clamps the others to their ranges (one

@@ -1267,6 +1267,16 @@ mod tests {
             "{:?}",
             s.warnings
         );
+        // What the materials read, and nothing else: the separate roughness and metallic images and
+        // the height map were converted, so they are dropped (ke, n, the combined map, the normals).
+        let names: Vec<&String> = s.textures.iter().map(|t| &t.name).collect();
+        assert_eq!(s.textures.len(), 4, "{names:?}");
+        for m in &s.materials {
+            let mut m = *m;
+            for index in m.texture_indices_mut() {
+                assert!(*index == INVALID_INDEX || (*index as usize) < s.textures.len());
+            }
+        }
         std::fs::remove_dir_all(dir).ok();
     }
 

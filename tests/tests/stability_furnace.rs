@@ -541,3 +541,41 @@ fn absorbing_glass_matches_beer_lambert_on_vulkan() {
         expected,
     );
 }
+
+/// Absorption needs a volume entered through its front: an open, absorbing glass pane seen from behind
+/// (its back face towards the camera) is crossed leaving "inside" for outside, so nothing is absorbed,
+/// and the image is bit for bit the clear pane's. (A rule that absorbed on every back-face hit darkened
+/// it by `exp(−σ d)` over the camera's distance.)
+#[test]
+fn an_open_pane_seen_from_behind_absorbs_nothing() {
+    let render_pane = |sigma: f32| {
+        let material = Material {
+            base_color: [1.0, 1.0, 1.0, 1.0],
+            roughness: 0.2,
+            transmission: 1.0,
+            ior: 1.5,
+            absorption: [sigma; 3],
+            ..Default::default()
+        };
+        // A unit square at z = 0 facing +z; the camera looks at it from −z.
+        let p = vec![
+            [-1.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+        ];
+        let t = vec![[0, 1, 2], [0, 2, 3]];
+        let scene = pack(
+            loaded_scene(p, t, vec![0; 2], vec![material]),
+            &Environment::Constant([1.0, 1.0, 1.0]),
+        );
+        let camera = Camera::look_at(Vec3::new(0.0, 0.0, -4.0), Vec3::ZERO, Vec3::Y, 0.4, 1.0);
+        let frame = fovea_tests::frame_params(camera, FoveationParams::uniform(16), 16, 16, 3);
+        let (image, _) = fovea_tests::render(&scene, &frame);
+        image.pixels
+    };
+    let clear = render_pane(0.0);
+    let absorbing = render_pane(2.0);
+    assert!(clear.iter().any(|p| p[0] > 0.1));
+    assert_eq!(clear, absorbing);
+}

@@ -560,6 +560,26 @@ impl Material {
             || self.has_extension_texture()
     }
 
+    /// Every texture index the material holds ([`INVALID_INDEX`] where it has none), for passes that
+    /// renumber textures (the CPU's loaders; not for the kernel).
+    #[must_use]
+    pub fn texture_indices_mut(&mut self) -> [&mut u32; 12] {
+        [
+            &mut self.base_color_texture,
+            &mut self.metallic_roughness_texture,
+            &mut self.normal_texture,
+            &mut self.emission_texture,
+            &mut self.alpha_texture,
+            &mut self.transmission_texture,
+            &mut self.clearcoat_texture,
+            &mut self.clearcoat_roughness_texture,
+            &mut self.sheen_texture,
+            &mut self.specular_texture,
+            &mut self.specular_color_texture,
+            &mut self.anisotropy_texture,
+        ]
+    }
+
     /// Whether the material reads one of the glTF extensions' textures (`transmission_texture` to
     /// `anisotropy_texture`).
     #[inline]
