@@ -459,3 +459,61 @@ fn shading_uses_the_vertex_tangents() {
         "{hits} hits, {tilted} tilted"
     );
 }
+
+/// A normal map that turns the shading normal away from a grazing viewer (here: every point of a quad
+/// tilted 64° towards +x by its one-texel map, seen from far along −x) is shaded with the interpolated
+/// normal instead of ending the path black: the white Lambertian quad under a uniform sky of 1 shows
+/// its albedo 0.8.
+#[test]
+fn a_normal_map_turned_from_the_viewer_falls_back_to_the_interpolated_normal() {
+    use fovea_core::scene::{INVALID_INDEX, MATERIAL_LAMBERTIAN};
+    use fovea_scene::texture::{pack_rgba8, Texture};
+
+    let material = Material {
+        base_color: [0.8, 0.8, 0.8, 1.0],
+        specular: 0.0,
+        flags: MATERIAL_LAMBERTIAN,
+        normal_texture: 0,
+        ..Material::default()
+    };
+    let mut s = fovea_tests::stability::loaded_scene(
+        vec![
+            [-1.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
+        vec![0, 0],
+        vec![material],
+    );
+    s.uvs = vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    // The tangent-space normal (0.9, 0, 0.44): towards +u, which runs along +x.
+    s.textures = vec![Texture::new(
+        "n",
+        1,
+        1,
+        false,
+        vec![pack_rgba8([242, 128, 183, 255])],
+    )];
+    let packed = fovea_tests::stability::pack(s, &Environment::Constant([1.0, 1.0, 1.0]));
+    assert_ne!(
+        packed.view().materials.list[0].normal_texture,
+        INVALID_INDEX
+    );
+    let camera = fovea_core::camera::Camera::look_at(
+        Vec3::new(-6.0, 0.0, 0.6),
+        Vec3::ZERO,
+        Vec3::Y,
+        0.05,
+        1.0,
+    );
+    let frame = fovea_tests::frame_params(camera, FoveationParams::uniform(256), 8, 8, 5);
+    let (image, _) = fovea_tests::render(&packed, &frame);
+    // The middle pixels (the outer rows see past the quad).
+    let mean = fovea_tests::mean_rgb(&image, (3..5).flat_map(|y| (3..5).map(move |x| (x, y))));
+    assert!(
+        (mean - Vec3::splat(0.8)).abs().max_element() < 0.02,
+        "{mean}"
+    );
+}
