@@ -17,7 +17,7 @@ use crate::texture::{pack_rgba8, Texture};
 pub fn normal_map_from_heights(heights: &Texture, strength: f32) -> Texture {
     let (w, h) = (heights.width as usize, heights.height as usize);
     let height_at = |x: usize, y: usize| -> f32 {
-        let [r, g, b, _] = heights.texels[y * w + x].to_le_bytes();
+        let [r, g, b, _] = heights.texel(x as u32, y as u32);
         (f32::from(r) + f32::from(g) + f32::from(b)) / (3.0 * 255.0)
     };
     let strength = if strength.is_finite() { strength } else { 1.0 };

@@ -919,10 +919,9 @@ impl Loader<'_> {
                         srgb: bool|
          -> Result<u32, SceneError> {
             let transform = crate::gltf_pbr::texture_transform(extensions);
-            // KHR_texture_transform's texCoord overrides the texture's own.
             sets.push((
                 role,
-                transform.and_then(|t| t.tex_coord).unwrap_or(tex_coord),
+                crate::gltf_pbr::coordinate_set(tex_coord, transform.as_ref()),
             ));
             this.texture_slot(&label, role, texture, transform, srgb)
         };
@@ -985,7 +984,7 @@ impl Loader<'_> {
             };
             sets.push((
                 t.role,
-                t.transform.and_then(|x| x.tex_coord).unwrap_or(t.tex_coord),
+                crate::gltf_pbr::coordinate_set(t.tex_coord, t.transform.as_ref()),
             ));
             *t.slot.field(&mut out) =
                 self.texture_slot(&label, t.role, &texture, t.transform, t.slot.srgb())?;

@@ -126,6 +126,13 @@ pub fn texture_transform(
     })
 }
 
+/// The texture-coordinate set a texture reference reads: its `KHR_texture_transform`'s `texCoord` if it
+/// has one (which overrides), else its own `texCoord`.
+#[must_use]
+pub fn coordinate_set(tex_coord: u32, transform: Option<&TextureTransform>) -> u32 {
+    transform.and_then(|t| t.tex_coord).unwrap_or(tex_coord)
+}
+
 /// Burley's `specular` for a dielectric of index `ior` and a glTF specular weight: F0 / 0.08, clamped to
 /// [0, 1].
 #[must_use]

@@ -1,7 +1,8 @@
 //! Loading a scene file: the loader is chosen by extension, and what every loader's scene must satisfy
 //! is checked after it ([`load_scene`]), where the triangles that need tangents and lack them get
-//! MikkTSpace's ([`crate::tangents`]) and textures no material reads are dropped. Above the loaders ([`crate::gltf_loader`],
-//! [`crate::obj_loader`]) and the scene types they fill ([`crate::mesh`]), so that imports run one way.
+//! MikkTSpace's ([`crate::tangents`]) and textures no material reads are dropped. Above the loaders
+//! ([`crate::gltf_loader`], [`crate::obj_loader`]) and the scene types they fill ([`crate::mesh`]), so
+//! that imports run one way.
 use std::path::Path;
 
 use crate::error::SceneError;

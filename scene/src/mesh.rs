@@ -105,6 +105,19 @@ impl LoadOptions {
     }
 }
 
+/// `tangent` (`xyz`, handedness `w`) with a unit `xyz` and a handedness of ±1, or `None` if its `xyz` is
+/// zero or not finite, or its `w` not finite.
+pub(crate) fn unit_tangent(tangent: [f32; 4]) -> Option<[f32; 4]> {
+    let [x, y, z, w] = tangent;
+    let v = Vec3::new(x, y, z);
+    if !(v.is_finite() && v != Vec3::ZERO && w.is_finite()) {
+        return None;
+    }
+    // Scaled first so that huge or tiny (finite) vectors do not overflow or underflow.
+    let v = (v / v.abs().max_element()).normalize_or_zero();
+    (v != Vec3::ZERO).then_some([v.x, v.y, v.z, if w < 0.0 { -1.0 } else { 1.0 }])
+}
+
 /// A scene as loaded from a file, before BVH construction and packing.
 ///
 /// Invariants after a successful load: every triangle index is `< positions.len()`, every material index
@@ -262,13 +275,7 @@ impl LoadedScene {
         // A tangent that is not finite or is zero is none (shading derives one); the rest are unit,
         // with a handedness of ±1.
         for t in &mut self.tangents {
-            let v = Vec3::new(t[0], t[1], t[2]);
-            *t = if v.is_finite() && v != Vec3::ZERO && t[3].is_finite() {
-                let v = (v / v.abs().max_element()).normalize_or_zero();
-                [v.x, v.y, v.z, if t[3] < 0.0 { -1.0 } else { 1.0 }]
-            } else {
-                [0.0; 4]
-            };
+            *t = unit_tangent(*t).unwrap_or([0.0; 4]);
         }
         self.sanitize_materials(file);
         self.sanitize_lights_and_camera(file);

@@ -9,15 +9,9 @@
 //! `(u, 1 − v)`. A scene without shading normals keeps the per-triangle tangent that shading derives
 //! from the texture coordinates (`fovea_core::material::shading`); without texture coordinates there is
 //! no tangent (and no normal map to read).
-use fovea_core::scene::{Material, INVALID_INDEX};
 use glam::Vec3;
 
-use crate::mesh::LoadedScene;
-
-/// Whether a material reads a tangent.
-fn needs_tangent(m: &Material) -> bool {
-    m.normal_texture != INVALID_INDEX || !(m.anisotropic == 0.0)
-}
+use crate::mesh::{unit_tangent, LoadedScene};
 
 /// The triangles MikkTSpace runs on, and its per-corner results.
 struct Faces<'a> {
@@ -82,7 +76,7 @@ pub fn generate_missing_tangents(scene: &mut LoadedScene) -> usize {
     let has = |t: &[f32; 4]| *t != [0.0; 4];
     let faces: Vec<usize> = (0..scene.triangles.len())
         .filter(|&f| {
-            needs_tangent(&scene.materials[scene.triangle_materials[f] as usize])
+            scene.materials[scene.triangle_materials[f] as usize].reads_tangent()
                 && scene.triangles[f]
                     .iter()
                     .any(|&v| !has(&scene.tangents[v as usize]))
@@ -111,12 +105,7 @@ pub fn generate_missing_tangents(scene: &mut LoadedScene) -> usize {
         for k in 0..3 {
             let v = scene.triangles[f][k];
             let vi = v as usize;
-            let t = corners[3 * i + k];
-            let [x, y, z, w] = t;
-            let t = if Vec3::new(x, y, z).is_finite() && Vec3::new(x, y, z) != Vec3::ZERO {
-                let d = Vec3::new(x, y, z).normalize();
-                [d.x, d.y, d.z, if w < 0.0 { -1.0 } else { 1.0 }]
-            } else {
+            let Some(t) = unit_tangent(corners[3 * i + k]) else {
                 continue;
             };
             // Only the file's vertices are visited (copies are made below and never revisited).
@@ -154,7 +143,7 @@ pub fn generate_missing_tangents(scene: &mut LoadedScene) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use fovea_core::scene::Material;
+    use fovea_core::scene::{Material, INVALID_INDEX};
 
     /// A unit quad in the xy plane facing +z, normal-mapped, with the texture upright (u along +x, v
     /// down the image, so along −y).

@@ -15,8 +15,8 @@ use crate::scene::features::{
     FEATURE_UVS, FEATURE_VOLUME_ABSORPTION,
 };
 use crate::scene::{
-    Features, Material, SceneSource, SceneView, INVALID_INDEX, MATERIAL_LAMBERTIAN,
-    MATERIAL_THIN_WALLED,
+    Features, Material, SceneSource, SceneView, EXTENSION_TEXTURES, INVALID_INDEX,
+    MATERIAL_LAMBERTIAN, MATERIAL_THIN_WALLED,
 };
 
 /// Everything the integrator needs at a hit point.
@@ -134,10 +134,10 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
 
     // The tangent, for the materials that need one (normal maps and anisotropy): the vertices' own
     // (glTF `TANGENT`, or MikkTSpace's at load) where all three have one, else the triangle's from its
-    // texture parameterisation (pbrt-v4 §6.5.3). `handedness` is the bitangent's side (glTF `TANGENT`'s
-    // `w`: the normal map's y points along `handedness · (n × t)`), −1 where the texture is mirrored. Other materials are
-    // isotropic, so any tangent serves and the normal's own frame is used (cheaper, and independent of
-    // whether the scene has texture coordinates).
+    // texture parameterisation (pbrt-v4 §6.5.3). `handedness` is the bitangent's side (glTF
+    // `TANGENT`'s `w`: the normal map's y points along `handedness · (n × t)`), −1 where the texture is
+    // mirrored. Other materials are isotropic, so any tangent serves and the normal's own frame is used
+    // (cheaper, and independent of whether the scene has texture coordinates).
     let needs_tangent = (scene.features.has(FEATURE_NORMAL_TEXTURE)
         && material.normal_texture != INVALID_INDEX)
         || (scene.features.has(FEATURE_LOBE_ANISOTROPY) && !(material.anisotropic == 0.0));
@@ -242,23 +242,6 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
     }
 }
 
-/// The number of glTF extension textures a [`Material`] holds ([`extension_texture`]).
-const EXTENSION_TEXTURES: u32 = 7;
-
-/// The `slot`-th of `material`'s glTF extension textures, in [`apply_extension_textures`]' order.
-#[inline(always)]
-fn extension_texture(material: &Material, slot: u32) -> u32 {
-    match slot {
-        0 => material.transmission_texture,
-        1 => material.clearcoat_texture,
-        2 => material.clearcoat_roughness_texture,
-        3 => material.sheen_texture,
-        4 => material.specular_texture,
-        5 => material.specular_color_texture,
-        _ => material.anisotropy_texture,
-    }
-}
-
 /// Multiplies the factors of `params` by the glTF material extensions' textures of `material`, each by
 /// the channel its extension's specification names: `KHR_materials_transmission` R,
 /// `KHR_materials_clearcoat` R (factor) and G (roughness), `KHR_materials_sheen` RGB (Burley's sheen is a
@@ -277,7 +260,7 @@ fn apply_extension_textures<F: Features, S: SceneSource>(
 ) {
     let mut slot = 0;
     while slot < EXTENSION_TEXTURES {
-        let index = extension_texture(material, slot);
+        let index = material.extension_texture(slot);
         if index != INVALID_INDEX {
             let t = sample_texture_lod(scene, source, index, uv, footprint_uv);
             match slot {

@@ -395,6 +395,9 @@ pub const MATERIAL_UNLIT: u32 = 8;
 /// (`crate::bsdf::dielectric::RoughDielectric::thin`).
 pub const MATERIAL_THIN_WALLED: u32 = 16;
 
+/// The number of glTF extension textures a [`Material`] holds ([`Material::extension_texture`]).
+pub const EXTENSION_TEXTURES: u32 = 7;
+
 /// A Disney "principled" material (Burley 2012) with optional textures (160 bytes).
 ///
 /// Texture values multiply the factors as in glTF: base colour (RGB, alpha in A), metallic in B and
@@ -580,18 +583,41 @@ impl Material {
         ]
     }
 
-    /// Whether the material reads one of the glTF extensions' textures (`transmission_texture` to
-    /// `anisotropy_texture`).
+    /// The `slot`-th (0 to [`EXTENSION_TEXTURES`] − 1) of the glTF extensions' textures: transmission,
+    /// clear coat, clear-coat roughness, sheen colour, specular, specular colour, anisotropy.
+    #[inline(always)]
+    #[must_use]
+    pub fn extension_texture(&self, slot: u32) -> u32 {
+        match slot {
+            0 => self.transmission_texture,
+            1 => self.clearcoat_texture,
+            2 => self.clearcoat_roughness_texture,
+            3 => self.sheen_texture,
+            4 => self.specular_texture,
+            5 => self.specular_color_texture,
+            _ => self.anisotropy_texture,
+        }
+    }
+
+    /// Whether the material reads one of the glTF extensions' textures ([`Self::extension_texture`]).
     #[inline]
     #[must_use]
     pub fn has_extension_texture(&self) -> bool {
-        self.transmission_texture != INVALID_INDEX
-            || self.clearcoat_texture != INVALID_INDEX
-            || self.clearcoat_roughness_texture != INVALID_INDEX
-            || self.sheen_texture != INVALID_INDEX
-            || self.specular_texture != INVALID_INDEX
-            || self.specular_color_texture != INVALID_INDEX
-            || self.anisotropy_texture != INVALID_INDEX
+        let mut slot = 0;
+        while slot < EXTENSION_TEXTURES {
+            if self.extension_texture(slot) != INVALID_INDEX {
+                return true;
+            }
+            slot += 1;
+        }
+        false
+    }
+
+    /// Whether shading reads a tangent at the material's points: for its normal map or its anisotropy.
+    #[inline]
+    #[must_use]
+    pub fn reads_tangent(&self) -> bool {
+        self.normal_texture != INVALID_INDEX || !(self.anisotropic == 0.0)
     }
 
     /// Whether the material's inside absorbs (`absorption` above 0 in some channel).

@@ -9,7 +9,7 @@ use fovea_core::kernel_abi::{
 use fovea_core::material::tangent::{encode_tangent, NO_TANGENT};
 use fovea_core::scene::{
     Bvh4Node, GeometryArrays, Material, TriangleBlock, TriangleInfo, TrianglePositions,
-    INVALID_INDEX, MATERIAL_ALPHA_CUTOUT,
+    MATERIAL_ALPHA_CUTOUT,
 };
 use glam::{Vec3, Vec4};
 
@@ -157,10 +157,7 @@ pub(super) fn pack_geometry(
     };
     // Each vertex's tangent rides in its normal's `w` (`fovea_core::material::tangent`), where a
     // material reads tangents.
-    let tangents = if materials
-        .iter()
-        .any(|m| m.normal_texture != INVALID_INDEX || !(m.anisotropic == 0.0))
-    {
+    let tangents = if materials.iter().any(Material::reads_tangent) {
         tangents
     } else {
         Vec::new()

@@ -138,7 +138,7 @@ fn downsample(
     let mut out = Vec::with_capacity(nw * nh);
     for y in 0..nh {
         for x in 0..nw {
-            let (mut sum, mut weighted, mut alpha, mut count) = ([0u64; 4], [0u64; 3], 0u64, 0u64);
+            let (mut sum, mut weighted, mut count) = ([0u64; 4], [0u64; 3], 0u64);
             for sy in span(y, nh, h) {
                 for sx in span(x, nw, w) {
                     let t = level[sy * w + sx];
@@ -148,10 +148,10 @@ fn downsample(
                     for k in 0..3 {
                         weighted[k] += u64::from(t[k]) * u64::from(t[3]);
                     }
-                    alpha += u64::from(t[3]);
                     count += 1;
                 }
             }
+            let alpha = sum[3];
             out.push(std::array::from_fn(|k| {
                 let v = if k < 3 && weight_by_alpha && alpha > 0 {
                     (weighted[k] + alpha / 2) / alpha
