@@ -69,6 +69,28 @@ impl Camera {
             vec3_from(self.forward) + vec3_from(self.right) * ndc_x + vec3_from(self.up) * ndc_y;
         Ray::new(vec3_from(self.position), direction.normalize())
     }
+
+    /// The inverse of [`Camera::generate_ray`]: where the ray towards `offset` (a direction from the
+    /// camera's position, or a point minus the position; need not be unit) crosses the film of a
+    /// `width` × `height` image, as (film x, film y, depth along `forward`). A point behind the camera has a
+    /// depth `<= 0` and its film position is meaningless.
+    #[inline]
+    #[must_use]
+    pub fn film_position(&self, offset: Vec3, width: u32, height: u32) -> Vec3 {
+        let forward = vec3_from(self.forward);
+        let right = vec3_from(self.right);
+        let up = vec3_from(self.up);
+        let depth = offset.dot(forward);
+        // offset = depth · (forward + ndc_x · right + ndc_y · up), the three axes orthogonal.
+        let inv = if depth > 0.0 { 1.0 / depth } else { 0.0 };
+        let ndc_x = offset.dot(right) * inv / right.length_squared().max(f32::MIN_POSITIVE);
+        let ndc_y = offset.dot(up) * inv / up.length_squared().max(f32::MIN_POSITIVE);
+        Vec3::new(
+            0.5 * (ndc_x + 1.0) * width as f32,
+            0.5 * (1.0 - ndc_y) * height as f32,
+            depth,
+        )
+    }
 }
 
 #[cfg(test)]
@@ -87,5 +109,32 @@ mod tests {
         assert!(top.direction.y > 0.0, "top of the image looks up");
         let right = cam.generate_ray(Vec2::new(100.0, 25.0), 100, 50);
         assert!(right.direction.x > 0.0, "right of the image looks right");
+    }
+
+    #[test]
+    fn film_position_inverts_generate_ray() {
+        let cam = Camera::look_at(
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(-2.0, 0.5, -4.0),
+            Vec3::Y,
+            0.9,
+            1.7,
+        );
+        for (x, y) in [
+            (0.5f32, 0.5f32),
+            (170.0, 100.0),
+            (83.25, 12.75),
+            (169.5, 0.0),
+        ] {
+            let ray = cam.generate_ray(Vec2::new(x, y), 170, 100);
+            let p = cam.film_position(ray.direction * 7.5, 170, 100);
+            assert!(
+                (p.x - x).abs() < 1e-3 && (p.y - y).abs() < 1e-3,
+                "{p} for ({x}, {y})"
+            );
+            assert!(p.z > 0.0);
+        }
+        let behind = cam.film_position(-vec3_from(cam.forward), 170, 100);
+        assert!(behind.z < 0.0);
     }
 }

@@ -38,6 +38,7 @@ pub mod post;
 pub mod rng;
 pub mod sampling;
 pub mod scene;
+pub mod temporal;
 #[cfg(test)]
 mod test_support;
 

@@ -1,0 +1,511 @@
+//! Each pixel's history and how a frame joins it: the "reproject and accumulate" pass.
+//!
+//! **Weights that respect the footprint.** A frame's filled value at a pixel comes from `spp` samples
+//! spread over its block's `b × b` pixels: it is worth `spp / b²` samples of that pixel (32 in the
+//! paper's fovea, 4 in the intermediate ring, 0.5 in the periphery), and it estimates the pixel blurred
+//! over `b` pixels. The history keeps the weighted mean of its frames' footprints, `f`, and:
+//!
+//! - *the fovea arrives* (a frame finer than the history, `b < f − 1/2`): the history was built from
+//!   blurred estimates and yields; the frame starts it afresh (no blur trail, no block pattern left in
+//!   the fovea);
+//! - *the fovea leaves* (a frame coarser than the history, `b > f`): the frame counts `(f / b)²` of its
+//!   weight, so a periphery frame adds 1/16 of 0.5 samples to a fovea history and the fine history is
+//!   not overwritten by coarse samples.
+//!
+//! **Following the camera.** The history is reprojected ([`super::reproject`]) and its weight scaled by
+//! its validity. While the camera moves, its colour is clamped to the box `μ ± γσ` of this frame's
+//! filled values at the pixel and its eight neighbours one block apart (a block-aware neighbourhood
+//! clamp: neighbours within one block would all carry the same sample), so that what the camera
+//! uncovered does not ghost. While it rests nothing is clamped and the mean converges as the plain
+//! running mean did.
+//!
+//! **History length.** The history's weight is capped at `(N − 1)` frames (of the larger of the frame's
+//! weight and the history's mean weight per frame), so a frame like the history's count at least
+//! `1 / N`: `N` = [`TemporalParams::max_frames_moving`] (16 by default) while the camera moves,
+//! [`TemporalParams::max_frames_resting`] (4096) while it rests.
+//!
+//! **Bad samples.** A non-finite frame value never joins the history (the pixel keeps what it had); a
+//! finite one is clamped to [`HISTORY_SAMPLE_MAX`], so one huge sample cannot dominate a mean forever.
+use bytemuck::{Pod, Zeroable};
+use glam::{Vec3, Vec4};
+
+use super::gbuffer::GBufferTexel;
+use super::reproject::reproject_history;
+use crate::camera::Camera;
+use crate::foveation::{owning_block, samples_in_block};
+use crate::integrator::FrameParams;
+use crate::math::color::{is_finite3, luminance};
+use crate::math::float::sqrt;
+use crate::math::vec3_from;
+
+/// [`TemporalParams::flags`]: the previous history and G-buffer hold a frame (else every pixel starts
+/// afresh).
+pub const TEMPORAL_HISTORY_VALID: u32 = 1;
+/// [`TemporalParams::flags`]: the camera differs from the previous frame's (reproject and clamp).
+pub const TEMPORAL_CAMERA_MOVED: u32 = 2;
+
+/// The largest channel value a frame may add to the history; larger finite values are clamped to it.
+pub const HISTORY_SAMPLE_MAX: f32 = 1.0e6;
+
+/// One pixel's history (32 bytes, GPU layout).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct HistoryTexel {
+    /// rgb: the mean radiance; w: its weight, in samples of this pixel.
+    pub mean: [f32; 4],
+    /// x: the mean luminance, y: the mean squared luminance (the second moment, for a variance), z: the
+    /// footprint (weighted mean block edge of the samples), w: frames in the history (capped).
+    pub moments: [f32; 4],
+}
+
+impl HistoryTexel {
+    /// No history.
+    pub const EMPTY: Self = Self {
+        mean: [0.0; 4],
+        moments: [0.0; 4],
+    };
+
+    /// The mean radiance.
+    #[inline]
+    #[must_use]
+    pub fn radiance(&self) -> Vec3 {
+        vec3_from(self.mean)
+    }
+
+    /// The pixel as displayed: the mean radiance, alpha 1 (the HDR image's layout).
+    #[inline]
+    #[must_use]
+    pub fn displayed(&self) -> [f32; 4] {
+        [self.mean[0], self.mean[1], self.mean[2], 1.0]
+    }
+
+    /// The weight (samples of this pixel behind the mean).
+    #[inline]
+    #[must_use]
+    pub fn weight(&self) -> f32 {
+        self.mean[3]
+    }
+
+    /// The footprint: the weighted mean block edge of the samples, in pixels.
+    #[inline]
+    #[must_use]
+    pub fn footprint(&self) -> f32 {
+        self.moments[2]
+    }
+
+    /// Frames in the history.
+    #[inline]
+    #[must_use]
+    pub fn frames(&self) -> f32 {
+        self.moments[3]
+    }
+
+    /// The luminance variance of the samples' means (second moment minus the squared mean).
+    #[inline]
+    #[must_use]
+    pub fn luminance_variance(&self) -> f32 {
+        (self.moments[1] - self.moments[0] * self.moments[0]).max(0.0)
+    }
+
+    /// `self + other · s`, every field (for blending taps).
+    #[inline]
+    #[must_use]
+    pub fn add_scaled(&self, other: &Self, s: f32) -> Self {
+        Self {
+            mean: (Vec4::from(self.mean) + Vec4::from(other.mean) * s).to_array(),
+            moments: (Vec4::from(self.moments) + Vec4::from(other.moments) * s).to_array(),
+        }
+    }
+
+    /// Every field times `s`.
+    #[inline]
+    #[must_use]
+    pub fn scaled(&self, s: f32) -> Self {
+        Self::EMPTY.add_scaled(self, s)
+    }
+}
+
+/// What the temporal pass needs besides the frame (96 bytes, GPU layout; its own binding).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct TemporalParams {
+    /// The previous frame's camera.
+    pub previous_camera: Camera,
+    /// The previous frame's image size (of the previous history and G-buffer).
+    pub previous_size: [u32; 2],
+    /// `TEMPORAL_*` bits.
+    pub flags: u32,
+    /// The history cap in frames while the camera rests (`N`: each frame counts at least `1 / N`).
+    pub max_frames_resting: f32,
+    /// The history cap in frames while the camera moves.
+    pub max_frames_moving: f32,
+    /// The neighbourhood clamp's half-width in standard deviations (`γ`).
+    pub clamp_gamma: f32,
+    pub _pad: [u32; 2],
+}
+
+/// Default [`TemporalParams::max_frames_resting`]: as many frames as the live view used to average.
+pub const DEFAULT_MAX_FRAMES_RESTING: f32 = 4096.0;
+/// Default [`TemporalParams::max_frames_moving`] (kajiya and SVGF keep 8 to 32 frames).
+pub const DEFAULT_MAX_FRAMES_MOVING: f32 = 16.0;
+/// Default [`TemporalParams::clamp_gamma`].
+pub const DEFAULT_CLAMP_GAMMA: f32 = 1.5;
+
+impl TemporalParams {
+    /// The parameters for `frame` after a frame rendered with `previous` (its camera and image size);
+    /// `None` starts every pixel's history afresh. Default caps and clamp.
+    #[cfg(not(target_arch = "spirv"))]
+    #[must_use]
+    pub fn after(previous: Option<(Camera, [u32; 2])>, frame: &FrameParams) -> Self {
+        let (previous_camera, previous_size, flags) = match previous {
+            None => (frame.camera, [frame.width, frame.height], 0),
+            Some((camera, size)) => {
+                let moved = camera != frame.camera || size != [frame.width, frame.height];
+                let flags = TEMPORAL_HISTORY_VALID | if moved { TEMPORAL_CAMERA_MOVED } else { 0 };
+                (camera, size, flags)
+            }
+        };
+        Self {
+            previous_camera,
+            previous_size,
+            flags,
+            max_frames_resting: DEFAULT_MAX_FRAMES_RESTING,
+            max_frames_moving: DEFAULT_MAX_FRAMES_MOVING,
+            clamp_gamma: DEFAULT_CLAMP_GAMMA,
+            _pad: [0; 2],
+        }
+    }
+}
+
+/// A frame's value at one pixel, as it joins the history.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameSample {
+    /// The filled radiance.
+    pub radiance: Vec3,
+    /// Samples of this pixel it is worth (`spp / b²`).
+    pub weight: f32,
+    /// Its footprint: the block edge `b`.
+    pub footprint: f32,
+}
+
+/// The frame's value of pixel (`x`, `y`): `filled` at the pixel, weighted by its block's samples and
+/// footprint. A non-finite value weighs 0; a finite one is clamped to `[0, HISTORY_SAMPLE_MAX]`.
+#[inline]
+#[must_use]
+pub fn frame_sample(frame: &FrameParams, filled: &[[f32; 4]], x: u32, y: u32) -> FrameSample {
+    let block = owning_block(x, y, &frame.foveation);
+    let b = block.size.max(1) as f32;
+    let c = vec3_from(filled[(y * frame.width + x) as usize]);
+    let finite = is_finite3(c);
+    FrameSample {
+        radiance: if finite {
+            c.clamp(Vec3::ZERO, Vec3::splat(HISTORY_SAMPLE_MAX))
+        } else {
+            Vec3::ZERO
+        },
+        weight: if finite {
+            samples_in_block(&block, &frame.foveation) as f32 / (b * b)
+        } else {
+            0.0
+        },
+        footprint: b,
+    }
+}
+
+/// The box `(μ − γσ, μ + γσ)` of the frame's filled values at pixel (`x`, `y`) and its eight neighbours
+/// `step` pixels apart (clamped to the image), per channel. Non-finite values are left out.
+#[must_use]
+pub fn neighbourhood_box(
+    frame: &FrameParams,
+    filled: &[[f32; 4]],
+    x: u32,
+    y: u32,
+    step: u32,
+    gamma: f32,
+) -> ClampBox {
+    let mut sum = Vec3::ZERO;
+    let mut sum_sq = Vec3::ZERO;
+    let mut n = 0.0f32;
+    let mut k = 0u32;
+    while k < 9 {
+        let ox = (k % 3) as i32 - 1;
+        let oy = (k / 3) as i32 - 1;
+        let nx = (x as i32 + ox * step as i32).clamp(0, frame.width as i32 - 1) as u32;
+        let ny = (y as i32 + oy * step as i32).clamp(0, frame.height as i32 - 1) as u32;
+        let c = vec3_from(filled[(ny * frame.width + nx) as usize]);
+        if is_finite3(c) {
+            let c = c.clamp(Vec3::ZERO, Vec3::splat(HISTORY_SAMPLE_MAX));
+            sum += c;
+            sum_sq += c * c;
+            n += 1.0;
+        }
+        k += 1;
+    }
+    if n == 0.0 {
+        return ClampBox::NONE;
+    }
+    let mean = sum / n;
+    let var = (sum_sq / n - mean * mean).max(Vec3::ZERO);
+    let sigma = Vec3::new(sqrt(var.x), sqrt(var.y), sqrt(var.z)) * gamma;
+    ClampBox {
+        lo: mean - sigma,
+        hi: mean + sigma,
+    }
+}
+
+/// A per-channel box the history's colour is clamped into.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClampBox {
+    pub lo: Vec3,
+    pub hi: Vec3,
+}
+
+impl ClampBox {
+    /// No clamp: every value the history can hold is inside.
+    pub const NONE: Self = Self {
+        lo: Vec3::ZERO,
+        hi: Vec3::splat(HISTORY_SAMPLE_MAX),
+    };
+}
+
+/// Merges `sample` into `history` (already reprojected, its weight scaled by its validity): the
+/// footprint rules, the cap of `max_frames` and the clamp of the history's colour into `clamp` (see the
+/// module documentation). A sample of weight 0 leaves the history as it is.
+#[must_use]
+pub fn blend_history(
+    history: &HistoryTexel,
+    sample: &FrameSample,
+    max_frames: f32,
+    clamp: ClampBox,
+) -> HistoryTexel {
+    if !(sample.weight > 0.0) {
+        return *history;
+    }
+    let mut w_history = history.weight();
+    let f = history.footprint();
+    let mut w_sample = sample.weight;
+    if w_history > 0.0 {
+        if sample.footprint < f - 0.5 {
+            // The fovea arrives: coarse history yields to finer samples.
+            w_history = 0.0;
+        } else if sample.footprint > f {
+            // The fovea leaves: coarse samples barely touch fine history.
+            let r = f / sample.footprint;
+            w_sample *= r * r;
+        }
+    }
+    // The cap, in frames of the history's own weight per frame (a coarse frame on a fine history
+    // must not shrink it to the coarse frame's scale).
+    let per_frame = if history.frames() > 0.0 {
+        history.weight() / history.frames()
+    } else {
+        w_sample
+    };
+    w_history = w_history.min((max_frames - 1.0).max(0.0) * w_sample.max(per_frame));
+    let mut old = history.radiance();
+    let mut old_moments = Vec4::from(history.moments);
+    let clamped = old.max(clamp.lo).min(clamp.hi);
+    if clamped != old {
+        // Keep the luminance moments consistent with the clamped colour.
+        let l = luminance(clamped);
+        old_moments.x = l;
+        old_moments.y = l * l;
+        old = clamped;
+    }
+    let total = w_history + w_sample;
+    let a = w_sample / total;
+    let l = luminance(sample.radiance);
+    let new_moments = Vec4::new(l, l * l, sample.footprint, 0.0);
+    let mut moments = old_moments + (new_moments - old_moments) * a;
+    moments.w = (if w_history > 0.0 {
+        history.frames()
+    } else {
+        0.0
+    } + 1.0)
+        .min(max_frames);
+    let mean = old + (sample.radiance - old) * a;
+    HistoryTexel {
+        mean: [mean.x, mean.y, mean.z, total],
+        moments: moments.to_array(),
+    }
+}
+
+/// The temporal pass for pixel (`x`, `y`): the previous history reprojected to it, this frame's filled
+/// value merged in, the pixel's new history returned (its `radiance` is what is displayed).
+#[must_use]
+pub fn temporal_accumulate(
+    frame: &FrameParams,
+    temporal: &TemporalParams,
+    filled: &[[f32; 4]],
+    gbuffer: &[GBufferTexel],
+    previous_gbuffer: &[GBufferTexel],
+    previous_history: &[HistoryTexel],
+    x: u32,
+    y: u32,
+) -> HistoryTexel {
+    let reprojected = reproject_history(
+        frame,
+        temporal,
+        gbuffer,
+        previous_gbuffer,
+        previous_history,
+        x,
+        y,
+    );
+    let mut history = reprojected.history;
+    history.mean[3] *= reprojected.validity;
+    let sample = frame_sample(frame, filled, x, y);
+    let moved = temporal.flags & TEMPORAL_CAMERA_MOVED != 0;
+    let (max_frames, clamp) = if moved {
+        let step = sample.footprint as u32;
+        (
+            temporal.max_frames_moving,
+            neighbourhood_box(frame, filled, x, y, step, temporal.clamp_gamma),
+        )
+    } else {
+        (temporal.max_frames_resting, ClampBox::NONE)
+    };
+    blend_history(&history, &sample, max_frames, clamp)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use std::vec;
+    use std::vec::Vec;
+
+    use super::*;
+    use crate::foveation::FoveationParams;
+    use crate::integrator::IntegratorSettings;
+
+    fn sample(v: f32, weight: f32, footprint: f32) -> FrameSample {
+        FrameSample {
+            radiance: Vec3::splat(v),
+            weight,
+            footprint,
+        }
+    }
+
+    fn run(samples: &[FrameSample], max_frames: f32) -> HistoryTexel {
+        let mut h = HistoryTexel::EMPTY;
+        for s in samples {
+            h = blend_history(&h, s, max_frames, ClampBox::NONE);
+        }
+        h
+    }
+
+    #[test]
+    fn a_resting_pixel_keeps_the_weighted_mean() {
+        let values = [1.0f32, 5.0, 2.0, 8.0, 4.0];
+        let samples: Vec<_> = values.iter().map(|&v| sample(v, 32.0, 1.0)).collect();
+        let h = run(&samples, 4096.0);
+        assert!((h.radiance().x - 4.0).abs() < 1e-5, "{h:?}");
+        assert_eq!(h.weight(), 160.0);
+        assert_eq!(h.frames(), 5.0);
+        // Second moment: mean of squared luminances (grey: luminance = value).
+        let m2 = values.iter().map(|v| v * v).sum::<f32>() / 5.0;
+        assert!((h.moments[1] - m2).abs() < 1e-3);
+        assert!((h.luminance_variance() - (m2 - 16.0)).abs() < 1e-3);
+    }
+
+    #[test]
+    fn the_fovea_arriving_replaces_coarse_history() {
+        // 50 periphery frames of a blurred value, then one fovea frame.
+        let mut samples = vec![sample(10.0, 0.5, 4.0); 50];
+        samples.push(sample(2.0, 32.0, 1.0));
+        let h = run(&samples, 4096.0);
+        assert_eq!(h.radiance().x, 2.0, "no blur trail");
+        assert_eq!(h.weight(), 32.0);
+        assert_eq!(h.footprint(), 1.0);
+        assert_eq!(h.frames(), 1.0);
+    }
+
+    #[test]
+    fn the_fovea_leaving_does_not_overwrite_fine_history() {
+        let mut samples = vec![sample(2.0, 32.0, 1.0); 10];
+        samples.extend(vec![sample(10.0, 0.5, 4.0); 20]);
+        let h = run(&samples, 4096.0);
+        // 20 periphery frames worth 0.5/16 each against 320 fovea samples: 0.2 % of the mean.
+        assert!(h.radiance().x < 2.02, "{h:?}");
+        assert!(h.footprint() < 1.01);
+        // And the fovea coming back merges with it rather than restarting it.
+        let back = blend_history(&h, &sample(2.0, 32.0, 1.0), 4096.0, ClampBox::NONE);
+        assert!(back.weight() > 350.0);
+    }
+
+    #[test]
+    fn the_intermediate_ring_merges_with_its_own_footprint() {
+        let samples = vec![sample(3.0, 4.0, 2.0); 8];
+        let h = run(&samples, 4096.0);
+        assert_eq!(h.weight(), 32.0);
+        assert_eq!(h.footprint(), 2.0);
+    }
+
+    #[test]
+    fn the_cap_keeps_each_frame_worth_one_nth() {
+        let mut samples = vec![sample(0.0, 1.0, 1.0); 100];
+        samples.push(sample(16.0, 1.0, 1.0));
+        let h = run(&samples, 16.0);
+        assert!((h.radiance().x - 1.0).abs() < 1e-5, "{h:?}");
+        assert_eq!(h.weight(), 16.0);
+        assert_eq!(h.frames(), 16.0);
+    }
+
+    #[test]
+    fn the_clamp_pulls_ghosts_into_the_box() {
+        let bright = run(&[sample(100.0, 1.0, 1.0); 8], 16.0);
+        let clamp = ClampBox {
+            lo: Vec3::splat(0.0),
+            hi: Vec3::splat(1.0),
+        };
+        let h = blend_history(&bright, &sample(0.5, 1.0, 1.0), 16.0, clamp);
+        assert!(h.radiance().x <= 1.0, "{h:?}");
+    }
+
+    fn tiny_frame(gaze: [f32; 2]) -> FrameParams {
+        FrameParams {
+            camera: Camera::default(),
+            foveation: FoveationParams::paper(gaze, 1.5, 3.0),
+            integrator: IntegratorSettings::default(),
+            width: 8,
+            height: 8,
+            frame_index: 0,
+            seed: 0,
+        }
+    }
+
+    #[test]
+    fn bad_samples_never_enter_the_history() {
+        let frame = tiny_frame([0.5, 0.5]);
+        let mut filled = vec![[1.0f32, 1.0, 1.0, 1.0]; 64];
+        filled[0] = [f32::NAN, 1.0, 1.0, 1.0];
+        filled[1] = [f32::INFINITY, 1.0, 1.0, 1.0];
+        filled[2] = [1.0e30, -5.0, 1.0, 1.0];
+        assert_eq!(frame_sample(&frame, &filled, 0, 0).weight, 0.0);
+        assert_eq!(frame_sample(&frame, &filled, 1, 0).weight, 0.0);
+        let huge = frame_sample(&frame, &filled, 2, 0);
+        assert_eq!(huge.radiance, Vec3::new(HISTORY_SAMPLE_MAX, 0.0, 1.0));
+        let h = run(&[sample(1.0, 32.0, 1.0)], 4096.0);
+        let after = blend_history(
+            &h,
+            &frame_sample(&frame, &filled, 0, 0),
+            4096.0,
+            ClampBox::NONE,
+        );
+        assert_eq!(after, h);
+        // The neighbourhood box leaves them out.
+        let b = neighbourhood_box(&frame, &filled, 1, 1, 1, 1.0);
+        assert!(b.lo.is_finite() && b.hi.is_finite(), "{b:?}");
+    }
+
+    #[test]
+    fn frame_samples_weigh_their_footprint() {
+        // Gaze in a corner of an 8 x 8 image: the far corner is periphery (4 x 4 block, 8 spp).
+        let frame = tiny_frame([0.5, 0.5]);
+        let filled = vec![[1.0f32; 4]; 64];
+        let fovea = frame_sample(&frame, &filled, 0, 0);
+        assert_eq!((fovea.weight, fovea.footprint), (32.0, 1.0));
+        let periphery = frame_sample(&frame, &filled, 7, 7);
+        assert_eq!((periphery.weight, periphery.footprint), (0.5, 4.0));
+    }
+}

@@ -1,0 +1,23 @@
+//! Temporal reuse: per-pixel history that a gaze move does not erase and that follows the camera.
+//!
+//! Each frame adds two passes after the fill ([`crate::foveation::fill`]):
+//!
+//! 1. [`gbuffer`]: the first hit through each pixel's centre (distance, normal, albedo), which
+//!    reprojection validates history with (and a denoiser guides its filter with);
+//! 2. [`history`]: each pixel's history is found where its surface was on the previous frame
+//!    ([`reproject`], bilinear, each tap checked against the previous G-buffer), merged with this frame's
+//!    filled value weighted by the samples behind it and their footprint, and written to the other
+//!    history buffer (two, used in turn).
+//!
+//! The history holds what was learned, whatever the gaze did since: a gaze move changes where the next
+//! samples go and how much they weigh, never what is already known.
+pub mod gbuffer;
+pub mod history;
+pub mod reproject;
+
+pub use gbuffer::{first_hit_gbuffer, GBufferTexel};
+pub use history::{
+    temporal_accumulate, HistoryTexel, TemporalParams, TEMPORAL_CAMERA_MOVED,
+    TEMPORAL_HISTORY_VALID,
+};
+pub use reproject::{reproject_history, Reprojected};
