@@ -227,6 +227,16 @@ pub struct RenderArgs {
     /// CSV gaze trace with lines `frame,x,y`; one output image per line.
     #[arg(long, value_name = "FILE.csv")]
     pub gaze_trace: Option<PathBuf>,
+    /// Temporal reuse over the frames of a --gaze-trace: each frame joins every pixel's history
+    /// (weighted by its samples and their footprint, as `fovea view` does) and each output image is
+    /// the history's mean, not the frame alone.
+    #[arg(long)]
+    pub history: bool,
+    /// CSV camera path with lines `frame,eye_x,eye_y,eye_z,target_x,target_y,target_z` (world
+    /// coordinates): each frame's camera. With a --gaze-trace it must give every frame the trace gives;
+    /// without, it numbers the frames itself (the gaze stays at --gaze or the centre).
+    #[arg(long, value_name = "FILE.csv")]
+    pub camera_path: Option<PathBuf>,
     #[command(flatten)]
     pub foveation: FoveationArgs,
     #[command(flatten)]

@@ -31,6 +31,8 @@ pub struct CpuRenderer {
     /// The features the CPU path is specialised for: the scene's, derived once in `set_scene`, or
     /// every feature (`--no-specialize`).
     features: fovea_core::scene::FeatureFlags,
+    /// Each pixel's history, for frames rendered with temporal reuse.
+    history: Box<fovea_cpu::TemporalHistory>,
 }
 
 /// The Vulkan context and the scene uploaded to it.
@@ -121,6 +123,7 @@ impl Renderer {
             return Ok(Self::Cpu(CpuRenderer {
                 pool: cpu_pool(threads)?,
                 features: fovea_core::scene::FeatureFlags::ALL,
+                history: Box::default(),
             }));
         }
         Self::vulkan(device, choice == Backend::Auto, traversal, threads, quiet)
@@ -171,6 +174,7 @@ impl Renderer {
                 Ok(Self::Cpu(CpuRenderer {
                     pool: cpu_pool(threads)?,
                     features: fovea_core::scene::FeatureFlags::ALL,
+                    history: Box::default(),
                 }))
             }
             Err(e) => Err(FoveaError::Backend(format!("Vulkan backend: {e}"))),
@@ -247,7 +251,9 @@ impl Renderer {
     }
 
     /// Renders one frame. On the CPU the HDR image is always returned; on Vulkan only with `want_hdr`, and
-    /// the tone-mapped bytes come from the device.
+    /// the tone-mapped bytes come from the device. With `history`, the frame joins each pixel's history
+    /// (kept by the backend from one call to the next) and the image is the history's mean.
+    #[allow(clippy::too_many_arguments)]
     pub fn render(
         &mut self,
         packed: &PackedScene,
@@ -255,6 +261,7 @@ impl Renderer {
         fill_mode: u32,
         exposure_ev: f32,
         want_hdr: bool,
+        history: bool,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Rendered> {
         match self {
@@ -262,9 +269,19 @@ impl Renderer {
                 // The CPU host always returns HDR; the CLI tone-maps it (same core function).
                 let _ = (exposure_ev, want_hdr);
                 let view = packed.view().with_features(cpu.features);
-                let (image, stats) = cpu
-                    .pool
-                    .install(|| fovea_cpu::render_frame(&view, frame, fill_mode, progress));
+                let (image, stats) = cpu.pool.install(|| {
+                    if history {
+                        fovea_cpu::render_frame_with_history(
+                            &view,
+                            frame,
+                            fill_mode,
+                            &mut cpu.history,
+                            progress,
+                        )
+                    } else {
+                        fovea_cpu::render_frame(&view, frame, fill_mode, progress)
+                    }
+                });
                 Ok(Rendered {
                     hdr: Some(image),
                     rgb8: None,
@@ -278,9 +295,8 @@ impl Renderer {
                     .scene
                     .as_ref()
                     .ok_or_else(|| FoveaError::Backend("no scene uploaded".into()))?;
-                let (image, stats) = v
-                    .ctx
-                    .render_frame_with_progress(
+                let rendered = if history {
+                    v.ctx.render_frame_with_history(
                         scene,
                         frame,
                         fill_mode,
@@ -288,7 +304,18 @@ impl Renderer {
                         want_hdr,
                         &|n| progress(n),
                     )
-                    .map_err(|e| FoveaError::Backend(format!("Vulkan backend: {e}")))?;
+                } else {
+                    v.ctx.render_frame_with_progress(
+                        scene,
+                        frame,
+                        fill_mode,
+                        exposure_ev,
+                        want_hdr,
+                        &|n| progress(n),
+                    )
+                };
+                let (image, stats) =
+                    rendered.map_err(|e| FoveaError::Backend(format!("Vulkan backend: {e}")))?;
                 let messages = v.ctx.validation_messages();
                 Ok(Rendered {
                     rgb8: Some(image.rgb8()),

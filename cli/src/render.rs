@@ -17,7 +17,7 @@ use crate::output::{
 };
 use crate::scene_setup::{choose_camera, prepare_scene, Lighting};
 use crate::stats::FrameStats;
-use crate::trace::{read_gaze_trace, GazeSample};
+use crate::trace::{read_camera_path, read_gaze_trace, CameraKey, GazeSample};
 use crate::values;
 
 /// Everything `render` needs, parsed and checked before any work starts.
@@ -26,6 +26,8 @@ struct Plan {
     foveation_template: FoveationParams,
     radii_px: [f32; 2],
     gazes: Vec<GazeSample>,
+    /// Each frame's camera (`--camera-path`), by frame number.
+    cameras: Option<std::collections::HashMap<u32, CameraKey>>,
     output: PathBuf,
     output_format: ImageFormat,
     per_frame_outputs: bool,
@@ -88,6 +90,45 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
                 gaze: [0.5 * w as f32, 0.5 * h as f32],
             }],
         };
+    let camera_keys = args
+        .camera_path
+        .as_deref()
+        .map(read_camera_path)
+        .transpose()?;
+    if camera_keys.is_some() && args.gaze_trace.is_none() && args.frame != 0 {
+        return Err(FoveaError::option(
+            "--frame",
+            "numbers a single frame; a --camera-path numbers its own frames (its first column)",
+        ));
+    }
+    let (gazes, cameras) = match camera_keys {
+        None => (gazes, None),
+        Some(keys) => {
+            let by_frame: std::collections::HashMap<u32, CameraKey> =
+                keys.iter().map(|k| (k.frame, *k)).collect();
+            let gazes = if args.gaze_trace.is_some() {
+                if let Some(g) = gazes.iter().find(|g| !by_frame.contains_key(&g.frame)) {
+                    return Err(FoveaError::option(
+                        "--camera-path",
+                        format!(
+                            "has no line for frame {}, which the --gaze-trace renders",
+                            g.frame
+                        ),
+                    ));
+                }
+                gazes
+            } else {
+                let gaze = gazes[0].gaze;
+                keys.iter()
+                    .map(|k| GazeSample {
+                        frame: k.frame,
+                        gaze,
+                    })
+                    .collect()
+            };
+            (gazes, Some(by_frame))
+        }
+    };
     for g in &gazes {
         if g.gaze.iter().any(|v| v.abs() > values::MAX_GAZE_OFFSET) {
             return Err(FoveaError::option(
@@ -95,6 +136,13 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
                 format!("{:?} is absurdly far off the image", g.gaze),
             ));
         }
+    }
+    if args.history && gazes.len() < 2 {
+        warnings.push(
+            "--history accumulates over the frames of a --gaze-trace or --camera-path; a single \
+             frame is rendered as it is"
+                .to_string(),
+        );
     }
     foveation_template.gaze = gazes[0].gaze;
     if foveation_template.validate() != FOVEATION_OK {
@@ -146,8 +194,9 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         resolution,
         foveation_template,
         radii_px,
-        per_frame_outputs: args.gaze_trace.is_some(),
+        per_frame_outputs: args.gaze_trace.is_some() || cameras.is_some(),
         gazes,
+        cameras,
         output: args.output.clone(),
         output_format,
         fill_mode: args.path.fill_mode(),
@@ -249,6 +298,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         if !args.foveation.uniform {
             foveation.gaze = g.gaze;
         }
+        let camera = match plan.cameras.as_ref().and_then(|c| c.get(&g.frame)) {
+            Some(key) => choose_camera(
+                &scene,
+                Some(key.eye),
+                Some(key.target),
+                up,
+                args.camera.fov,
+                w as f32 / h as f32,
+            )?,
+            None => camera,
+        };
         let frame = FrameParams {
             camera,
             foveation,
@@ -279,6 +339,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             plan.fill_mode,
             args.image.exposure,
             want_hdr,
+            args.history,
             &|n| bar.inc(n),
         )?;
         bar.finish_and_clear();
@@ -362,13 +423,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 }
 
 /// Fails if an output (`--output`, `--regions-overlay`, `--stats`) names one of the run's input files (the
-/// scene, `--mtl`, `--env-map`, `--gaze-trace`): fovea never overwrites its input.
+/// scene, `--mtl`, `--env-map`, `--gaze-trace`, `--camera-path`): fovea never overwrites its input.
 fn refuse_overwriting_inputs(args: &RenderArgs) -> Result<()> {
     let inputs: Vec<&Path> = [
         args.scene.as_deref(),
         args.materials.mtl.as_deref(),
         args.lighting.env_map.as_deref(),
         args.gaze_trace.as_deref(),
+        args.camera_path.as_deref(),
     ]
     .into_iter()
     .flatten()

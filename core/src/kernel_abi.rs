@@ -58,15 +58,23 @@ pub const BINDING_FRAME: u32 = 21;
 pub const BINDING_SCENE_TEXELS: u32 = 22;
 /// `TriangleBlock` array (the leaves' triangles four at a time).
 pub const BINDING_TRIANGLE_BLOCKS: u32 = 23;
-/// The live view's running mean of the filled HDR frames since the last reset (`[f32; 4]` per pixel,
-/// read and written by `accumulate`; [`crate::post::accumulate`]).
-pub const BINDING_ACCUMULATION: u32 = 24;
+/// This frame's history ([`crate::temporal::HistoryTexel`] per pixel), written by `temporal`.
+pub const BINDING_HISTORY: u32 = 24;
 /// Hardware traversal (the ray-query kernel module only): the top-level acceleration structure's
 /// device address and the map from its triangles to the scene's (`u32` words;
 /// `crate::bvh::hardware`). The host binds a placeholder for the software module.
 pub const BINDING_HARDWARE_TRAVERSAL: u32 = 25;
+/// The previous frame's history ([`crate::temporal::HistoryTexel`] per pixel of the previous size),
+/// read by `temporal`; the host swaps it with [`BINDING_HISTORY`] every frame.
+pub const BINDING_PREVIOUS_HISTORY: u32 = 26;
+/// This frame's G-buffer ([`crate::temporal::GBufferTexel`] per pixel), written by `gbuffer`.
+pub const BINDING_GBUFFER: u32 = 27;
+/// The previous frame's G-buffer, read by `temporal`; swapped with [`BINDING_GBUFFER`] every frame.
+pub const BINDING_PREVIOUS_GBUFFER: u32 = 28;
+/// The temporal pass's [`crate::temporal::TemporalParams`] (one element).
+pub const BINDING_TEMPORAL: u32 = 29;
 /// Number of bindings.
-pub const BINDING_COUNT: u32 = 26;
+pub const BINDING_COUNT: u32 = 30;
 
 /// Specialization constant id of `render_samples`' feature mask (`FEATURE_*` bits; default every
 /// feature). The host sets it per scene when it creates the pipeline.
@@ -78,8 +86,8 @@ pub const SPEC_CONSTANT_FEATURES: u32 = 0;
 /// `render_samples` renders the chunk's `block_count · spp` samples, sample `i` being sample `i % spp` of
 /// block `i / spp` (all blocks of a chunk belong to one region, so they share `spp`), about
 /// [`SAMPLES_PER_INVOCATION`] per invocation. `reduce_blocks` runs one invocation per block of the
-/// chunk. `cell_means`, `fill`, `accumulate`, `tonemap` and `overlay_regions` run one invocation per
-/// cell or pixel, `item_count` in all.
+/// chunk. `cell_means`, `fill`, `gbuffer`, `temporal`, `tonemap` and `overlay_regions` run one
+/// invocation per cell or pixel, `item_count` in all.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct KernelPushConstants {
@@ -93,9 +101,7 @@ pub struct KernelPushConstants {
     pub fill_mode: u32,
     /// Exposure compensation in EV for `tonemap`.
     pub exposure_ev: f32,
-    /// Frames already in the running mean before this one (`accumulate`; 0 starts afresh).
-    pub accumulated_frames: u32,
-    pub _pad: [u32; 2],
+    pub _pad: [u32; 3],
 }
 
 /// Workgroup size of every entry point.

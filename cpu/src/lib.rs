@@ -15,7 +15,12 @@
 //!
 //! Random numbers are keyed by block, frame and sample, and each block's samples are summed in a fixed
 //! order, so the image does not depend on the number of threads.
+//!
+//! With temporal reuse ([`temporal`]) two more passes follow: the G-buffer and the reprojection and
+//! accumulation of each pixel's history.
 pub mod render;
 pub mod specialize;
+pub mod temporal;
 
 pub use render::{render_frame, FrameImage, RenderStats};
+pub use temporal::{render_frame_with_history, TemporalHistory};

@@ -43,14 +43,20 @@ pub fn render_frame(
         },
     );
 
+    let samples_ms = start.elapsed().as_secs_f64() * 1e3;
+
     // Pass 2: the cell-mean grids of every block size above 1, in one buffer.
+    let cells_start = Instant::now();
     let cell_count = cell_buffer_len(width, height, foveation);
     let cell_means: Vec<[f32; 4]> = (0..cell_count)
         .into_par_iter()
         .map(|i| cell_mean_at(&replicated, width, height, foveation, i).to_array())
         .collect();
 
+    let cells_ms = cells_start.elapsed().as_secs_f64() * 1e3;
+
     // Pass 3: fill, in place: a pixel's fill reads only its own replicated value and the cell means.
+    let fill_start = Instant::now();
     let mut pixels = replicated;
     pixels
         .par_chunks_mut(width as usize)
@@ -71,6 +77,11 @@ pub fn render_frame(
         samples_per_region: [loaded[0], loaded[1], loaded[2]],
         blocks_per_region: [loaded[3], loaded[4], loaded[5]],
         path_features: path_mask(scene.features.bits()),
+        passes: vec![
+            ("samples", samples_ms),
+            ("cell_means", cells_ms),
+            ("fill", fill_start.elapsed().as_secs_f64() * 1e3),
+        ],
     };
     (
         FrameImage {

@@ -25,4 +25,7 @@ pub struct RenderStats {
     /// Feature mask of the compiled path that rendered the samples (the CPU's specialised path, the
     /// GPU's specialization constant).
     pub path_features: u32,
+    /// Milliseconds of each pass of the frame pipeline, in order (`samples`, `cell_means`, `fill`, and
+    /// with temporal reuse `gbuffer` and `temporal`), where the host timed them one by one.
+    pub passes: Vec<(&'static str, f64)>,
 }

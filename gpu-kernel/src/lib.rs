@@ -4,8 +4,8 @@
 //! one call into `fovea-core`; no rendering math lives here. One frame runs, per dispatch chunk of blocks
 //! of one region, `render_samples` then `reduce_blocks`, and then, once per frame, `cell_means`, `fill`
 //! and `tonemap` (the CPU host's passes 1-3 and its tone mapping, in the same order and with the same
-//! sums). The live view adds `accumulate` (between `fill` and `tonemap`) and `overlay_regions` (after
-//! `tonemap`). `probe` evaluates single core functions for the cross-backend tests.
+//! sums). Temporal reuse (the live view, `fovea render --history`) adds `gbuffer` and `temporal`
+//! between `fill` and `tonemap`, and the live view `overlay_regions` after `tonemap`. `probe` evaluates single core functions for the cross-backend tests.
 //!
 //! Built twice: the plain module traverses the software BVH; the module built with the `RayQueryKHR`
 //! capability and the crate feature `ray-query` (`--traversal hardware`) also binds [`kernel_abi::BINDING_HARDWARE_TRAVERSAL`] in the
@@ -28,7 +28,6 @@ use fovea_core::foveation::{block_extent, cell_mean_at, fill_value};
 use fovea_core::glam::{Vec3, Vec4};
 use fovea_core::integrator::{render_sample_stream, FrameParams};
 use fovea_core::kernel_abi::{self, KernelPushConstants, WORKGROUP_SIZE};
-use fovea_core::post::accumulate::accumulate_mean;
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::features::FEATURES_ALL;
 // Built for the host (a plain library), the scene texel binding is the scene's own slices.
@@ -39,6 +38,9 @@ use fovea_core::scene::SceneTexels;
 use fovea_core::scene::{
     Bvh4Node, EnvironmentArrays, FeatureFlags, GeometryArrays, Light, LightArrays, Material,
     MaterialArrays, SceneGlobals, SceneView, TextureInfo, TriangleBlock, TriangleInfo,
+};
+use fovea_core::temporal::{
+    first_hit_gbuffer, temporal_accumulate, GBufferTexel, HistoryTexel, TemporalParams,
 };
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
@@ -70,8 +72,12 @@ const _: () = {
     assert!(kernel_abi::BINDING_FRAME == 21);
     assert!(kernel_abi::BINDING_SCENE_TEXELS == 22);
     assert!(kernel_abi::BINDING_TRIANGLE_BLOCKS == 23);
-    assert!(kernel_abi::BINDING_ACCUMULATION == 24);
+    assert!(kernel_abi::BINDING_HISTORY == 24);
     assert!(kernel_abi::BINDING_HARDWARE_TRAVERSAL == 25);
+    assert!(kernel_abi::BINDING_PREVIOUS_HISTORY == 26);
+    assert!(kernel_abi::BINDING_GBUFFER == 27);
+    assert!(kernel_abi::BINDING_PREVIOUS_GBUFFER == 28);
+    assert!(kernel_abi::BINDING_TEMPORAL == 29);
     assert!(kernel_abi::BINDING_PROBE_INPUT == 15);
     assert!(kernel_abi::BINDING_PROBE_OUTPUT == 16);
     assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
@@ -300,29 +306,75 @@ pub fn tonemap(
     ldr[p as usize] = tonemap_to_rgba8(Vec3::new(c[0], c[1], c[2]), pc.exposure_ev);
 }
 
-/// Live view, between `fill` and `tonemap`: invocation `p < item_count` adds pixel `p` of the filled HDR
-/// frame to the running mean of the `accumulated_frames` frames before it (core's [`accumulate_mean`];
-/// 0 starts afresh) and writes the mean back over the HDR pixel, so that `tonemap` (and a screenshot's
-/// read-back) see the accumulated image.
+scene_entry_point! {
+    /// Temporal reuse, after `fill`: invocation `p < item_count` writes pixel `p`'s G-buffer texel, the
+    /// first hit through its centre (core's [`first_hit_gbuffer`]), with every feature on.
+    #[spirv(compute(threads(64)))]
+    pub fn gbuffer(
+        #[spirv(global_invocation_id)] id: UVec3,
+        #[spirv(num_workgroups)] num_workgroups: UVec3,
+        #[spirv(push_constant)] pc: &KernelPushConstants,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 27)] gbuffer: &mut [GBufferTexel],
+        #[spirv(descriptor_set = 0, binding = 22)] scene_texels: &SceneTexels,
+    ) with_scene(scene, FeatureFlags(FEATURES_ALL)) {
+        let p = invocation_index(id, num_workgroups);
+        if p >= pc.item_count || frame.width == 0 {
+            return;
+        }
+        gbuffer[p as usize] =
+            first_hit_gbuffer(&scene, scene_texels, frame, p % frame.width, p / frame.width);
+    }
+}
+
+/// Temporal reuse, after `gbuffer`: invocation `p < item_count` reprojects the previous history to pixel
+/// `p`, merges the filled HDR pixel into it (core's [`temporal_accumulate`]) and writes the new history.
+/// The HDR image is only read here (the clamp reads the neighbours): `resolve_history` writes it.
 #[spirv(compute(threads(64)))]
-pub fn accumulate(
+pub fn temporal(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 24)] history: &mut [HistoryTexel],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 26)] previous_history: &[HistoryTexel],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 27)] gbuffer: &[GBufferTexel],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 28)] previous_gbuffer: &[GBufferTexel],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 29)] temporal: &TemporalParams,
+) {
+    let p = invocation_index(id, num_workgroups);
+    if p >= pc.item_count || frame.width == 0 {
+        return;
+    }
+    let texel = temporal_accumulate(
+        frame,
+        temporal,
+        hdr,
+        gbuffer,
+        previous_gbuffer,
+        previous_history,
+        p % frame.width,
+        p / frame.width,
+    );
+    history[p as usize] = texel;
+}
+
+/// Temporal reuse, after `temporal`: invocation `p < item_count` writes pixel `p`'s history mean over
+/// the HDR pixel (core's [`HistoryTexel::displayed`]), so that `tonemap` and a read-back see it.
+#[spirv(compute(threads(64)))]
+pub fn resolve_history(
     #[spirv(global_invocation_id)] id: UVec3,
     #[spirv(num_workgroups)] num_workgroups: UVec3,
     #[spirv(push_constant)] pc: &KernelPushConstants,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &mut [[f32; 4]],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 24)] accumulation: &mut [[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 24)] history: &[HistoryTexel],
 ) {
     let p = invocation_index(id, num_workgroups);
     if p >= pc.item_count {
         return;
     }
-    let mean = accumulate_mean(
-        Vec4::from(accumulation[p as usize]),
-        Vec4::from(hdr[p as usize]),
-        pc.accumulated_frames,
-    );
-    accumulation[p as usize] = mean.to_array();
-    hdr[p as usize] = mean.to_array();
+    hdr[p as usize] = history[p as usize].displayed();
 }
 
 /// Live view, after `tonemap`: invocation `p < item_count` draws the region overlay over pixel `p` of

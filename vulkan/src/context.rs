@@ -65,9 +65,12 @@ pub(crate) mod pipeline {
     pub const CELL_MEANS: usize = 2;
     pub const FILL: usize = 3;
     pub const TONEMAP: usize = 4;
-    /// The live view's two passes (see [`VulkanContext::render_live_frame`]).
-    pub const ACCUMULATE: usize = 5;
+    /// Temporal reuse's three passes (the live view, `fovea render --history`).
+    pub const GBUFFER: usize = 5;
+    /// The live view's region overlay.
     pub const OVERLAY_REGIONS: usize = 6;
+    pub const TEMPORAL: usize = 7;
+    pub const RESOLVE_HISTORY: usize = 8;
 }
 
 /// Timeout of each fence wait per chunk of work.
@@ -85,7 +88,7 @@ pub struct VulkanContext {
     pub(crate) fence: vk::Fence,
     pub(crate) set_layout: vk::DescriptorSetLayout,
     pub(crate) pipeline_layout: vk::PipelineLayout,
-    pub(crate) pipelines: [vk::Pipeline; 7],
+    pub(crate) pipelines: [vk::Pipeline; 9],
     /// The kernel module, kept for re-specialising `render_samples` per scene.
     pub(crate) module: vk::ShaderModule,
     /// The feature mask `pipelines[RENDER_SAMPLES]` was specialised for.
@@ -362,7 +365,7 @@ impl VulkanContext {
             fence: vk::Fence::null(),
             set_layout: vk::DescriptorSetLayout::null(),
             pipeline_layout: vk::PipelineLayout::null(),
-            pipelines: [vk::Pipeline::null(); 7],
+            pipelines: [vk::Pipeline::null(); 9],
             module: vk::ShaderModule::null(),
             render_features: FEATURES_ALL,
             probe_pipelines: [vk::Pipeline::null(); 2],

@@ -1,14 +1,15 @@
-//! Rendering one frame on the device: the same three passes as the CPU host (samples, cell means, fill)
-//! plus the tone map, as dispatches of the kernel's entry points.
+//! Rendering one frame on the device: the same passes as the CPU host (samples, cell means, fill and,
+//! with temporal reuse, G-buffer, temporal and the history's resolve) plus the tone map, as dispatches
+//! of the kernel's entry points.
 use std::time::Instant;
 
 use ash::vk;
-use gpu_allocator::MemoryLocation;
 
 use fovea_core::foveation::fill::cell_buffer_len;
 use fovea_core::foveation::regions::FOVEATION_OK;
 use fovea_core::integrator::FrameParams;
 use fovea_core::kernel_abi::*;
+use fovea_core::temporal::{GBufferTexel, HistoryTexel, TemporalParams};
 use fovea_frame::{FrameImage, RenderStats};
 
 use crate::barrier::memory_barrier;
@@ -18,7 +19,7 @@ use crate::blocks::{
 use crate::buffer::GpuBuffer;
 use crate::context::{pipeline, VulkanContext, CHUNK_TIMEOUT};
 use crate::error::{Result, VulkanError};
-use crate::resources::{FrameResources, Sizes, PIXEL};
+use crate::resources::{FrameResources, Sizes, TemporalBuffers, PIXEL};
 use crate::scene::GpuScene;
 
 /// A frame read back from the device.
@@ -73,8 +74,8 @@ struct PreparedFrame {
     blocks_per_region: [u64; 3],
     plan_ms: f64,
     warmup_ms: f64,
-    /// The live view's accumulation buffer was created for this frame (so it holds no mean yet).
-    accumulation_is_new: bool,
+    /// With temporal reuse: the history holds no previous frame (new buffers, a new size or a reset).
+    history_is_new: bool,
 }
 
 impl PreparedFrame {
@@ -93,6 +94,7 @@ impl PreparedFrame {
                 samples_per_region,
                 blocks_per_region: self.blocks_per_region,
                 path_features: scene.features.0,
+                passes: Vec::new(),
             },
             idle_invocations: self.plan.idle_invocations(),
             chunks: self.plan.chunks.len() as u32,
@@ -109,12 +111,9 @@ impl PreparedFrame {
 pub(crate) enum FrameTail {
     /// `fovea render`: tone map, then copy the LDR (and, with `want_hdr`, the HDR) image to the host.
     ReadBack { want_hdr: bool },
-    /// `fovea view`: add the frame to the running mean of `accumulated_frames` earlier ones, tone map
-    /// the mean, draw the region overlay if asked; the image stays on the device for the swapchain.
-    Live {
-        accumulated_frames: u32,
-        overlay: bool,
-    },
+    /// `fovea view`: tone map, draw the region overlay if asked; the image stays on the device for the
+    /// swapchain.
+    Live { overlay: bool },
 }
 
 /// Records one compute dispatch over `items` invocations: binds `pipeline` and `set` (with the one dynamic
@@ -239,17 +238,74 @@ impl VulkanContext {
         want_hdr: bool,
         progress: &dyn Fn(u64),
     ) -> Result<(GpuFrame, GpuRenderStats)> {
-        let prepared = self.prepare_frame(scene, frame, false)?;
+        self.render_and_read_back(
+            scene,
+            frame,
+            fill_mode,
+            exposure_ev,
+            want_hdr,
+            false,
+            progress,
+        )
+    }
+
+    /// [`Self::render_frame_with_progress`] with temporal reuse: after the fill, the `gbuffer`,
+    /// `temporal` and `resolve_history` passes add the frame to each pixel's history (kept on the
+    /// device from one call to the next; [`Self::reset_history`] forgets it), and the images read back
+    /// are the history's mean.
+    pub fn render_frame_with_history(
+        &mut self,
+        scene: &GpuScene,
+        frame: &FrameParams,
+        fill_mode: u32,
+        exposure_ev: f32,
+        want_hdr: bool,
+        progress: &dyn Fn(u64),
+    ) -> Result<(GpuFrame, GpuRenderStats)> {
+        self.render_and_read_back(
+            scene,
+            frame,
+            fill_mode,
+            exposure_ev,
+            want_hdr,
+            true,
+            progress,
+        )
+    }
+
+    /// Forgets the history: the next frame with temporal reuse starts every pixel afresh.
+    pub fn reset_history(&mut self) {
+        if let Some(t) = self.frame.as_mut().and_then(|f| f.temporal.as_mut()) {
+            t.previous = None;
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn render_and_read_back(
+        &mut self,
+        scene: &GpuScene,
+        frame: &FrameParams,
+        fill_mode: u32,
+        exposure_ev: f32,
+        want_hdr: bool,
+        temporal: bool,
+        progress: &dyn Fn(u64),
+    ) -> Result<(GpuFrame, GpuRenderStats)> {
+        let prepared = self.prepare_frame(scene, frame, temporal)?;
         let tail = FrameTail::ReadBack { want_hdr };
         let result = self.dispatch_frame(
             &prepared.plan,
             &prepared.sizes,
             fill_mode,
             exposure_ev,
+            temporal,
             tail,
             progress,
         );
         let (render_ms, gpu_timestamps, submissions) = result?;
+        if temporal {
+            self.history_advanced(frame);
+        }
 
         let pixels = prepared.sizes.pixels;
         let (w, h) = (frame.width, frame.height);
@@ -276,12 +332,12 @@ impl VulkanContext {
         ))
     }
 
-    /// Renders one frame of the live view (`fovea view`): the same passes as [`Self::render_frame`],
-    /// then the frame joins the running mean of the `accumulated_frames` frames before it (0 starts
-    /// afresh), the mean is tone-mapped and, with `overlay`, the regions are drawn over it. Nothing is
-    /// read back: [`Self::present`] shows the image, [`Self::read_back_hdr`] fetches the mean for a
-    /// screenshot. Returns the statistics and the number of earlier frames actually averaged in (0 when
-    /// the frame's buffers had to be re-created, which loses the mean).
+    /// Renders one frame of the live view (`fovea view`): the same passes as
+    /// [`Self::render_frame_with_history`] (`accumulated_frames` frames since the history's last reset;
+    /// 0 resets it), then the history's mean is tone-mapped and, with `overlay`, the regions are drawn
+    /// over it. Nothing is read back: [`Self::present`] shows the image, [`Self::read_back_hdr`] fetches
+    /// the mean for a screenshot. Returns the statistics and the number of earlier frames actually in
+    /// the history (0 when it had to restart, e.g. after a resize).
     pub fn render_live_frame(
         &mut self,
         scene: &GpuScene,
@@ -291,26 +347,35 @@ impl VulkanContext {
         accumulated_frames: u32,
         overlay: bool,
     ) -> Result<(GpuRenderStats, u32)> {
+        if accumulated_frames == 0 {
+            self.reset_history();
+        }
         let prepared = self.prepare_frame(scene, frame, true)?;
-        let accumulated_frames = if prepared.accumulation_is_new {
+        let accumulated_frames = if prepared.history_is_new {
             0
         } else {
             accumulated_frames
-        };
-        let tail = FrameTail::Live {
-            accumulated_frames,
-            overlay,
         };
         let (render_ms, gpu_timestamps, submissions) = self.dispatch_frame(
             &prepared.plan,
             &prepared.sizes,
             fill_mode,
             exposure_ev,
-            tail,
+            true,
+            FrameTail::Live { overlay },
             &|_| {},
         )?;
+        self.history_advanced(frame);
         let stats = prepared.stats(scene, render_ms, gpu_timestamps, submissions);
         Ok((stats, accumulated_frames))
+    }
+
+    /// After a frame with temporal reuse: its history and G-buffer become the previous ones.
+    fn history_advanced(&mut self, frame: &FrameParams) {
+        if let Some(t) = self.frame.as_mut().and_then(|f| f.temporal.as_mut()) {
+            t.previous = Some((frame.camera, [frame.width, frame.height]));
+            t.current = 1 - t.current;
+        }
     }
 
     /// The HDR image of the last frame (with the live view, the running mean), copied to the host.
@@ -350,13 +415,13 @@ impl VulkanContext {
     }
 
     /// Checks the frame, plans its blocks and chunks, makes sure the frame's buffers fit (with
-    /// `live`, also the accumulation buffer) and point the bindings at them, specialises and warms up the
-    /// pipelines.
+    /// `temporal`, also the history and G-buffers, and writes the temporal parameters) and point the
+    /// bindings at them, specialises and warms up the pipelines.
     fn prepare_frame(
         &mut self,
         scene: &GpuScene,
         frame: &FrameParams,
-        live: bool,
+        temporal: bool,
     ) -> Result<PreparedFrame> {
         self.check_usable()?;
         scene.check_uploaded_to(&self.shared)?;
@@ -402,37 +467,27 @@ impl VulkanContext {
             self.frame = Some(FrameResources::new(&self.shared, &self.limits, sizes)?);
         }
         if self.last_frame_size != Some((w, h)) {
-            // A mean of another image size is meaningless.
+            // A history of another image size is not this image's.
             if let Some(res) = self.frame.as_mut() {
-                res.accumulation = None;
+                res.temporal = None;
             }
         }
         self.last_frame_size = Some((w, h));
-        let mut accumulation_is_new = false;
-        if live
-            && self
-                .frame
-                .as_ref()
-                .is_some_and(|f| f.accumulation.is_none())
-        {
-            let buffer = GpuBuffer::new(
-                &self.shared,
-                "live-view accumulation",
-                pixels * PIXEL,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-                MemoryLocation::GpuOnly,
-            )?;
-            self.frame
-                .as_mut()
-                .expect("frame resources exist")
-                .accumulation = Some(buffer);
-            accumulation_is_new = true;
-        }
+        let mut history_is_new = false;
         {
             let res = self
                 .frame
                 .as_mut()
                 .expect("frame resources were just created");
+            if temporal {
+                if res.temporal.is_none() {
+                    res.temporal = Some(TemporalBuffers::new(&self.shared, &self.limits, pixels)?);
+                }
+                let t = res.temporal.as_mut().expect("just created");
+                history_is_new = t.previous.is_none();
+                t.params
+                    .write(&[TemporalParams::after(t.previous, frame)])?;
+            }
             res.frame.write(&[*frame])?;
             res.blocks.write(&block_data)?;
         }
@@ -457,7 +512,7 @@ impl VulkanContext {
             sizes,
             plan_ms,
             warmup_ms,
-            accumulation_is_new,
+            history_is_new,
         })
     }
 
@@ -483,17 +538,44 @@ impl VulkanContext {
                 &res.frame,
                 std::mem::size_of::<FrameParams>() as u64,
             ),
-            // Only `accumulate` reads it, and only live frames (which create it) dispatch that; until
-            // then the binding points at the cell means, so that every binding is valid.
-            match &res.accumulation {
-                Some(a) => (BINDING_ACCUMULATION, a, sizes.pixels * PIXEL),
-                None => (
-                    BINDING_ACCUMULATION,
-                    &res.cell_means,
-                    sizes.cells.max(1) * PIXEL,
-                ),
-            },
         ];
+        // Temporal reuse's buffers: this frame writes `[current]` and reads `[1 - current]`. Only frames
+        // with temporal reuse (which create them) dispatch the passes that read them; until then the
+        // bindings point at the cell means, so that every binding is valid.
+        let placeholder = (&res.cell_means, sizes.cells.max(1) * PIXEL);
+        let history_bytes = sizes.pixels * std::mem::size_of::<HistoryTexel>() as u64;
+        let gbuffer_bytes = sizes.pixels * std::mem::size_of::<GBufferTexel>() as u64;
+        let temporal_buffers: [(u32, (&GpuBuffer, u64)); 5] = match &res.temporal {
+            Some(t) => {
+                let (now, before) = (t.current, 1 - t.current);
+                [
+                    (BINDING_HISTORY, (&t.history[now], history_bytes)),
+                    (
+                        BINDING_PREVIOUS_HISTORY,
+                        (&t.history[before], history_bytes),
+                    ),
+                    (BINDING_GBUFFER, (&t.gbuffer[now], gbuffer_bytes)),
+                    (
+                        BINDING_PREVIOUS_GBUFFER,
+                        (&t.gbuffer[before], gbuffer_bytes),
+                    ),
+                    (
+                        BINDING_TEMPORAL,
+                        (&t.params, std::mem::size_of::<TemporalParams>() as u64),
+                    ),
+                ]
+            }
+            None => [
+                (BINDING_HISTORY, placeholder),
+                (BINDING_PREVIOUS_HISTORY, placeholder),
+                (BINDING_GBUFFER, placeholder),
+                (BINDING_PREVIOUS_GBUFFER, placeholder),
+                (BINDING_TEMPORAL, placeholder),
+            ],
+        };
+        let frame_buffers = frame_buffers
+            .into_iter()
+            .chain(temporal_buffers.map(|(binding, (buf, range))| (binding, buf, range)));
         for (binding, buf, range) in frame_buffers {
             infos.push((
                 binding,
@@ -534,8 +616,7 @@ impl VulkanContext {
             item_count: 0,
             fill_mode: 0,
             exposure_ev: 0.0,
-            accumulated_frames: 0,
-            _pad: [0; 2],
+            _pad: [0; 3],
         };
         let max_x = self.limits.max_workgroup_count_x;
         self.submit_and_wait("the pipeline warm-up", CHUNK_TIMEOUT, |device, cb| {
@@ -555,6 +636,7 @@ impl VulkanContext {
         sizes: &Sizes,
         fill_mode: u32,
         exposure_ev: f32,
+        temporal: bool,
         tail: FrameTail,
         progress: &dyn Fn(u64),
     ) -> Result<(f64, bool, u32)> {
@@ -588,8 +670,7 @@ impl VulkanContext {
             item_count: 0,
             fill_mode,
             exposure_ev,
-            accumulated_frames: 0,
-            _pad: [0; 2],
+            _pad: [0; 3],
         };
 
         let wall = Instant::now();
@@ -657,16 +738,15 @@ impl VulkanContext {
             };
             dispatch(device, cb, pipeline::FILL, 0, &pc, pixels);
             barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
-            if let FrameTail::Live {
-                accumulated_frames, ..
-            } = tail
-            {
-                let pc = KernelPushConstants {
-                    accumulated_frames,
-                    ..pc
-                };
-                dispatch(device, cb, pipeline::ACCUMULATE, 0, &pc, pixels);
-                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+            if temporal {
+                for p in [
+                    pipeline::GBUFFER,
+                    pipeline::TEMPORAL,
+                    pipeline::RESOLVE_HISTORY,
+                ] {
+                    dispatch(device, cb, p, 0, &pc, pixels);
+                    barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+                }
             }
             dispatch(device, cb, pipeline::TONEMAP, 0, &pc, pixels);
             if matches!(tail, FrameTail::Live { overlay: true, .. }) {

@@ -189,8 +189,7 @@ impl VulkanContext {
             item_count,
             fill_mode: 0,
             exposure_ev: 0.0,
-            accumulated_frames: 0,
-            _pad: [0; 2],
+            _pad: [0; 3],
         };
         let layout = self.pipeline_layout;
         let max_x = self.limits.max_workgroup_count_x;

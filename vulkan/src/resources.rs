@@ -5,7 +5,9 @@ use std::sync::Arc;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
+use fovea_core::camera::Camera;
 use fovea_core::integrator::FrameParams;
+use fovea_core::temporal::{GBufferTexel, HistoryTexel, TemporalParams};
 
 use crate::buffer::GpuBuffer;
 use crate::error::Result;
@@ -47,8 +49,58 @@ pub(crate) struct FrameResources {
     pub ldr: GpuBuffer,
     pub ldr_readback: GpuBuffer,
     pub hdr_readback: GpuBuffer,
-    /// The live view's running mean ([`BINDING_ACCUMULATION`]), created by the first live frame.
-    pub accumulation: Option<GpuBuffer>,
+    /// Temporal reuse's history and G-buffers, created by the first frame that asks for them.
+    pub temporal: Option<TemporalBuffers>,
+}
+
+/// The buffers temporal reuse keeps from frame to frame: two histories and two G-buffers, used in
+/// turn (this frame writes `[current]`, the previous frame's is `[1 - current]`).
+pub(crate) struct TemporalBuffers {
+    pub history: [GpuBuffer; 2],
+    pub gbuffer: [GpuBuffer; 2],
+    /// The frame's [`TemporalParams`] (`BINDING_TEMPORAL`).
+    pub params: GpuBuffer,
+    /// Which of each pair the next frame writes.
+    pub current: usize,
+    /// The previous frame's camera and size; `None` when the buffers hold no frame yet (or a reset).
+    pub previous: Option<(Camera, [u32; 2])>,
+}
+
+impl TemporalBuffers {
+    pub fn new(shared: &Arc<Shared>, limits: &Limits, pixels: u64) -> Result<Self> {
+        let history_bytes = pixels * std::mem::size_of::<HistoryTexel>() as u64;
+        let gbuffer_bytes = pixels * std::mem::size_of::<GBufferTexel>() as u64;
+        limits.check_size("the history", history_bytes)?;
+        limits.check_size("the G-buffer", gbuffer_bytes)?;
+        let buffer = |what: &str, bytes: u64| {
+            GpuBuffer::new(
+                shared,
+                what,
+                bytes,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+            )
+        };
+        Ok(Self {
+            history: [
+                buffer("history A", history_bytes)?,
+                buffer("history B", history_bytes)?,
+            ],
+            gbuffer: [
+                buffer("G-buffer A", gbuffer_bytes)?,
+                buffer("G-buffer B", gbuffer_bytes)?,
+            ],
+            params: GpuBuffer::new(
+                shared,
+                "temporal parameters",
+                std::mem::size_of::<TemporalParams>() as u64,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::CpuToGpu,
+            )?,
+            current: 0,
+            previous: None,
+        })
+    }
 }
 
 impl FrameResources {
@@ -123,7 +175,7 @@ impl FrameResources {
                 dst,
                 MemoryLocation::GpuToCpu,
             )?,
-            accumulation: None,
+            temporal: None,
         })
     }
 }

@@ -8,14 +8,16 @@ pub static EMBEDDED_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_SPV"));
 pub static EMBEDDED_RAY_QUERY_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_RQ_SPV"));
 
 /// Entry points the host creates a pipeline for, in [`crate::context`]'s pipeline order.
-pub const ENTRY_POINTS: [&str; 7] = [
+pub const ENTRY_POINTS: [&str; 9] = [
     "render_samples",
     "reduce_blocks",
     "cell_means",
     "fill",
     "tonemap",
-    "accumulate",
+    "gbuffer",
     "overlay_regions",
+    "temporal",
+    "resolve_history",
 ];
 
 /// The probe entry points (cross-backend tests), whose pipelines are created on first use.

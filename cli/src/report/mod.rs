@@ -472,6 +472,7 @@ fn run_scene(
                 plan.fill_mode,
                 args.exposure,
                 true,
+                false,
                 &|n| bar.inc(n),
             )?;
             let image = rendered
@@ -644,6 +645,7 @@ impl Measurer<'_> {
                 self.plan.fill_mode,
                 self.args.exposure,
                 first.is_none(),
+                false,
                 &|n| self.bar.inc(n),
             )?;
             runs_ms.push(rendered.stats.render_ms);

@@ -1,14 +1,13 @@
 //! The live view's window and event loop (winit): input and scripted events change the viewer's
 //! state; each redraw reads the newest gaze, moves the camera, renders one frame (or a budgeted
-//! fraction of one) into the running mean, presents it with the on-screen figures, and records it.
+//! fraction of one), adds it to each pixel's history, presents it with the on-screen figures, and
+//! records it.
 //!
-//! **Accumulation** restarts when the camera moves, the gaze moves by half a pixel or more (foveated
-//! only: a uniform frame does not depend on the gaze), the window's size, the configuration or the
-//! uniform toggle changes, or on `R` (not when the budget changes the samples per frame: see
-//! [`crate::view::sampling`]). A moving gaze restarts the whole mean rather
-//! than only where the regions changed: every pixel's owning block and sample jitter depend on the
-//! gaze, so a partial restart would need per-pixel sample counts on both backends; the budget keeps
-//! restarts cheap, and the eye, once it rests, sees the image converge from there.
+//! **History** (`fovea_core::temporal`) survives what a frame does not invalidate: a gaze move changes
+//! where the next samples go and how much they weigh, a camera move reprojects the history (and a
+//! disocclusion restarts it there), a new configuration or the uniform toggle only changes the next
+//! samples. It restarts only when the rendered size changes or on `R`. After
+//! [`MAX_ACCUMULATED_FRAMES`] frames with nothing changing, the view stops rendering and waits.
 use std::collections::HashSet;
 use std::time::{Duration, Instant};
 
@@ -155,7 +154,7 @@ struct Viewer {
     present_mode: &'static str,
 }
 
-/// What a running mean depends on: any change starts a new one.
+/// What the view was rendered with: a change renders a new frame even after convergence.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct MeanKey {
     size: [u32; 2],
@@ -248,13 +247,13 @@ impl Viewer {
             && self.window_size[0] > 0
             && self.window_size[1] > 0
             && (self.accumulated < MAX_ACCUMULATED_FRAMES
-                || self.view_changed_since_mean()
+                || self.view_changed_since_last_frame()
                 || !self.held.is_empty()
                 || !self.tapped.is_empty())
     }
 
-    fn view_changed_since_mean(&self) -> bool {
-        self.mean_is_stale(&self.mean_key_now())
+    fn view_changed_since_last_frame(&self) -> bool {
+        self.reset_requested || self.camera_moved || self.mean_key != Some(self.mean_key_now())
     }
 
     /// The rendered size: the window's times `--render-scale`.
@@ -274,20 +273,13 @@ impl Viewer {
         }
     }
 
-    /// Whether the running mean must restart before a frame with `key` joins it.
-    fn mean_is_stale(&self, key: &MeanKey) -> bool {
+    /// Whether the history must restart before a frame with `key` joins it: on `R` and when the
+    /// rendered size changes (its pixels are not the history's). Gaze, camera, configuration and the
+    /// uniform toggle keep it.
+    fn history_is_stale(&self, key: &MeanKey) -> bool {
         match self.mean_key {
             None => true,
-            Some(old) => {
-                self.reset_requested
-                    || self.camera_moved
-                    || old.size != key.size
-                    || old.config_index != key.config_index
-                    || old.uniform != key.uniform
-                    || (!self.uniform
-                        && ((old.gaze[0] - key.gaze[0]).abs() >= 0.5
-                            || (old.gaze[1] - key.gaze[1]).abs() >= 0.5))
-            }
+            Some(old) => self.reset_requested || old.size != key.size,
         }
     }
 
@@ -529,7 +521,7 @@ impl Viewer {
         ];
         let config = self.options.configs[self.config_index].clone();
         let radii = self.options.radii.radii_px(size);
-        let accumulated_before = if self.mean_is_stale(&key) {
+        let accumulated_before = if self.history_is_stale(&key) {
             0
         } else {
             self.accumulated
@@ -719,9 +711,10 @@ impl Viewer {
                 stats.primary_samples as f64 * 1e-6
             ),
             format!(
-                "accumulated {} frames  effective spp {}/{}/{}",
+                "history {} frames since reset  effective spp {}/{}/{}",
                 self.accumulated, eff[0], eff[1], eff[2]
             ),
+            pass_line(stats),
             format!(
                 "gaze {:.0},{:.0} ({})  speed {:.3}/s",
                 self.gaze[0],
@@ -860,6 +853,19 @@ impl Viewer {
 }
 
 /// The viewer's key for a physical key, if it has one.
+/// The HUD line of the frame's pass timings ("passes -" where the backend timed only the whole frame).
+fn pass_line(stats: &fovea_cpu::RenderStats) -> String {
+    if stats.passes.is_empty() {
+        return "passes -".to_string();
+    }
+    let parts: Vec<String> = stats
+        .passes
+        .iter()
+        .map(|(name, ms)| format!("{name} {ms:.1}"))
+        .collect();
+    format!("passes (ms) {}", parts.join("  "))
+}
+
 fn view_key(code: KeyCode) -> Option<ViewKey> {
     Some(match code {
         KeyCode::KeyW => ViewKey::W,
@@ -967,11 +973,8 @@ impl ApplicationHandler for Viewer {
         }
         let live_gaze = !matches!(self.options.gaze, GazeInput::Mouse);
         if live_gaze && !self.wants_frame() && !self.paused && !self.minimized {
-            // Converged: a new gaze sample starts a new mean.
+            // Converged: a new gaze sample renders again (into the same history).
             self.poll_gaze();
-            if self.mean_key.is_some_and(|k| k.gaze != self.gaze) {
-                self.reset_requested = true;
-            }
         }
         if self.wants_frame() {
             self.request_redraw();

@@ -1,29 +1,30 @@
-//! The live view's renderer: a frame on the CPU host or the Vulkan kernel, accumulated, tone-mapped,
-//! overlaid and presented to the window through the Vulkan context (which owns the window's surface in
-//! both cases). An adapter around the hosts: the accumulation, tone map and overlay are core functions.
+//! The live view's renderer: a frame on the CPU host or the Vulkan kernel, added to each pixel's
+//! history, tone-mapped, overlaid and presented to the window through the Vulkan context (which owns
+//! the window's surface in both cases). An adapter around the hosts: the history, tone map and overlay
+//! are core functions.
 use rayon::prelude::*;
 
 use fovea_core::foveation::overlay::overlay_rgba8;
 use fovea_core::integrator::FrameParams;
-use fovea_core::post::accumulate::accumulate_mean;
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::FeatureFlags;
-use fovea_cpu::{FrameImage, RenderStats};
+use fovea_cpu::{render_frame_with_history, FrameImage, RenderStats, TemporalHistory};
 use fovea_scene::pack::PackedScene;
 use fovea_vulkan::{
     ContextOptions, GpuScene, HudOverlay, PresentOutcome, PresentSource, VulkanContext,
     WindowHandles,
 };
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 
 use crate::error::{FoveaError, Result};
 
 /// Where frames are rendered.
 enum LiveBackend {
-    /// The CPU host; the running mean and the presented RGBA8 image live on the host.
+    /// The CPU host; the history, its image and the presented RGBA8 image live on the host.
     Cpu {
         pool: rayon::ThreadPool,
         features: FeatureFlags,
+        history: Box<TemporalHistory>,
         mean: Option<FrameImage>,
         rgba: Vec<u32>,
     },
@@ -107,6 +108,7 @@ impl LiveRenderer {
                     } else {
                         FeatureFlags::ALL
                     },
+                    history: Box::default(),
                     mean: None,
                     rgba: Vec::new(),
                 },
@@ -119,10 +121,10 @@ impl LiveRenderer {
         }
     }
 
-    /// Renders `frame`, adds it to the running mean of `accumulated_before` earlier frames (0: a new
-    /// mean), tone-maps the mean with `exposure_ev` and draws the region overlay if asked. Returns the
-    /// frame's statistics and the number of earlier frames actually in the mean (0 where the mean had
-    /// to restart, e.g. after a resize).
+    /// Renders `frame`, adds it to each pixel's history (`accumulated_before` frames since the last
+    /// reset; 0 resets it), tone-maps the history's mean with `exposure_ev` and draws the region overlay
+    /// if asked. Returns the frame's statistics and the number of earlier frames actually in the
+    /// history (0 where it had to restart, e.g. after a resize).
     pub fn render(
         &mut self,
         packed: &PackedScene,
@@ -136,33 +138,22 @@ impl LiveRenderer {
             LiveBackend::Cpu {
                 pool,
                 features,
+                history,
                 mean,
                 rgba,
             } => {
                 let view = packed.view().with_features(*features);
-                let (image, stats) =
-                    pool.install(|| fovea_cpu::render_frame(&view, frame, fill_mode, &|_| {}));
-                let before = match mean {
-                    Some(m) if m.width == image.width && m.height == image.height => {
-                        accumulated_before
-                    }
-                    _ => 0,
-                };
-                let mean = match mean {
-                    Some(m) if before > 0 => {
-                        pool.install(|| {
-                            m.pixels
-                                .par_iter_mut()
-                                .zip(image.pixels.par_iter())
-                                .for_each(|(m, x)| {
-                                    *m = accumulate_mean(Vec4::from(*m), Vec4::from(*x), before)
-                                        .to_array();
-                                });
-                        });
-                        m
-                    }
-                    slot => slot.insert(image),
-                };
+                let resized = mean
+                    .as_ref()
+                    .is_none_or(|m| m.width != frame.width || m.height != frame.height);
+                let before = if resized { 0 } else { accumulated_before };
+                if before == 0 {
+                    history.reset();
+                }
+                let (image, stats) = pool.install(|| {
+                    render_frame_with_history(&view, frame, fill_mode, history, &|_| {})
+                });
+                let mean = mean.insert(image);
                 let (w, fov) = (mean.width, frame.foveation);
                 rgba.resize(mean.pixels.len(), 0);
                 pool.install(|| {

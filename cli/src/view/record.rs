@@ -53,6 +53,13 @@ impl FrameRecord {
             "primary_samples": self.render.primary_samples,
             "samples_per_region": self.render.samples_per_region,
             "accumulated_frames": self.accumulated_frames,
+            "history_frames": self.accumulated_frames,
+            "pass_ms": self
+                .render
+                .passes
+                .iter()
+                .map(|(name, ms)| (name.to_string(), json!(ms)))
+                .collect::<serde_json::Map<String, Value>>(),
             "effective_spp": self.effective_spp,
             "render_ms": self.render_ms,
             "present_ms": self.present_ms,

@@ -1,10 +1,7 @@
 //! Post-processing of the filled HDR image (Mohanto et al. 2023, section 3.4): exposure compensation and
-//! Reinhard tone mapping to 8-bit sRGB ([`tonemap`]), and the live view's progressive accumulation
-//! ([`accumulate`]).
-pub mod accumulate;
+//! Reinhard tone mapping to 8-bit sRGB ([`tonemap`]). What frames accumulate over time is
+//! [`crate::temporal`].
 pub mod tonemap;
-
-pub use accumulate::accumulate_mean;
 
 pub use tonemap::{
     exposure_scale, pack_rgba8, reinhard, sanitize_hdr, tonemap_linear, tonemap_to_rgba8,
