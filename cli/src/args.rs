@@ -103,14 +103,19 @@ pub struct ViewArgs {
     /// datagrams to 127.0.0.1:PORT; see docs/view.md, "Eye-tracker protocol") or `trace` (--gaze-trace).
     #[arg(long, default_value = "mouse", value_name = "SOURCE")]
     pub gaze_source: GazeSourceArg,
-    /// Gaze trace to replay with its timestamps: lines `t,x,y` (seconds since the start, coordinates
-    /// as for UDP). Implies --gaze-source trace.
+    /// Gaze trace to replay: timed lines `t,x,y` (seconds since the start; the default) or, after a
+    /// header `frame,x,y`, one line per frame; coordinates as for UDP. Implies --gaze-source trace.
     #[arg(long, value_name = "FILE.csv")]
     pub gaze_trace: Option<PathBuf>,
     /// Gaze coordinates are window pixels with the origin at the bottom left (as Pupil exports),
     /// instead of 0..1 of the window with the origin at the top left (as Tobii reports).
     #[arg(long)]
     pub gaze_pixels: bool,
+    /// Fixation filter for eye-tracker gaze (udp and trace): I-DT with this dispersion radius in
+    /// degrees of visual angle on the display model; the regions sit on each fixation's centroid and
+    /// jump at saccades. 0 follows every raw sample.
+    #[arg(long, default_value_t = 1.0, value_name = "DEG")]
+    pub fixation_filter: f32,
     #[command(flatten)]
     pub foveation: FoveationArgs,
     /// Frame-time budget in milliseconds: frames that would take longer render a fraction of the
@@ -224,9 +229,17 @@ pub struct RenderArgs {
     /// Fixation in pixels X,Y (default: the image centre). A gaze off the image is allowed.
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
     pub gaze: Option<PixelPoint>,
-    /// CSV gaze trace with lines `frame,x,y`; one output image per line.
+    /// CSV gaze trace: lines `frame,x,y` (the default; one output image per line) or, after a header
+    /// `t,x,y`, timed samples rendered at --trace-fps; x,y in image pixels, origin top-left (or
+    /// --gaze-normalized).
     #[arg(long, value_name = "FILE.csv")]
     pub gaze_trace: Option<PathBuf>,
+    /// Frames per second at which a timed gaze trace (`t,x,y`) is rendered.
+    #[arg(long, default_value_t = 30.0, value_name = "FPS")]
+    pub trace_fps: f64,
+    /// The gaze trace's x,y are 0..1 of the image (origin top-left), as `fovea view` reads them.
+    #[arg(long)]
+    pub gaze_normalized: bool,
     /// Temporal reuse over the frames of a --gaze-trace: each frame joins every pixel's history
     /// (weighted by its samples and their footprint, as `fovea view` does) and each output image is
     /// the history's mean, not the frame alone.

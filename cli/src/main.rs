@@ -2,13 +2,15 @@
 mod args;
 mod backend;
 mod bench;
+mod camera_path;
 mod error;
+mod fixation;
+mod gaze;
 mod output;
 mod render;
 mod report;
 mod scene_setup;
 mod stats;
-mod trace;
 mod values;
 mod view;
 

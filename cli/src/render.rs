@@ -10,14 +10,22 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::RenderArgs;
 use crate::backend::Renderer;
+use crate::camera_path::{read_camera_path, CameraKey};
 use crate::error::{FoveaError, Result};
+use crate::gaze::{GazeConvention, GazeTrace, TraceTiming};
 use crate::output::{
     check_json_path, check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png,
     ImageFormat,
 };
 use crate::scene_setup::{choose_camera, prepare_scene, Lighting};
 use crate::stats::FrameStats;
-use crate::trace::{read_camera_path, read_gaze_trace, CameraKey, GazeSample};
+
+/// One frame to render: its number (part of the random-number key) and the gaze in image pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct GazeSample {
+    frame: u32,
+    gaze: [f32; 2],
+}
 use crate::values;
 
 /// Everything `render` needs, parsed and checked before any work starts.
@@ -80,7 +88,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
                 "--frame",
                 "numbers a single frame; a --gaze-trace numbers its own frames (its first column)",
             )),
-            (Some(path), None) => read_gaze_trace(path)?,
+            (Some(path), None) => read_gaze_frames(args, path, resolution)?,
             (None, Some(g)) => vec![GazeSample {
                 frame: args.frame,
                 gaze: g.0,
@@ -203,6 +211,29 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         lighting,
         warnings,
     })
+}
+
+/// The frames of `--gaze-trace` (see [`crate::gaze`]): per-frame lines, or a timed trace sampled at
+/// `--trace-fps`, in image pixels.
+fn read_gaze_frames(args: &RenderArgs, path: &Path, image: [u32; 2]) -> Result<Vec<GazeSample>> {
+    if !(args.trace_fps > 0.0 && args.trace_fps <= 10_000.0) {
+        return Err(FoveaError::option(
+            "--trace-fps",
+            format!("{} is not in (0, 10000] frames per second", args.trace_fps),
+        ));
+    }
+    let convention = if args.gaze_normalized {
+        GazeConvention::Normalized
+    } else {
+        GazeConvention::PixelsTopLeft
+    };
+    let trace = GazeTrace::read(path, convention, TraceTiming::Frames)
+        .map_err(|e| FoveaError::option("--gaze-trace", e))?;
+    Ok(trace
+        .frames(args.trace_fps, image)
+        .into_iter()
+        .map(|(frame, gaze)| GazeSample { frame, gaze })
+        .collect())
 }
 
 /// `out.png` → `out_00012.png` for frame 12 of a gaze trace.

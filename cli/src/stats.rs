@@ -58,6 +58,7 @@ pub fn build_report(
                 "render_ms": f.render.render_ms,
                 "primary_samples": f.render.primary_samples,
                 "samples_per_region": region_object(f.render.samples_per_region),
+                "pass_ms": pass_object(&f.render.passes),
             })
         })
         .collect();
@@ -94,6 +95,16 @@ pub fn build_report(
         "warnings": scene.warnings,
         "backend_details": backend_details,
     })
+}
+
+/// Each pass's milliseconds by name (empty where the backend timed only the whole frame).
+pub fn pass_object(passes: &[(&'static str, f64)]) -> Value {
+    Value::Object(
+        passes
+            .iter()
+            .map(|(name, ms)| (name.to_string(), json!(ms)))
+            .collect(),
+    )
 }
 
 /// The names of the `FEATURE_*` bits set in `mask`.

@@ -225,6 +225,109 @@ fn gaze_trace_writes_one_numbered_image_per_frame() {
     assert!(dir.join("f_00000.png").is_file() && dir.join("f_00001.png").is_file());
 }
 
+/// `--history` over a `--camera-path` and a timed gaze trace: one image per frame, each the history's
+/// mean, the temporal passes timed in the stats; a bad camera path fails cleanly.
+#[test]
+fn history_renders_a_camera_path_and_a_timed_trace() {
+    let dir = temp_dir("history");
+    let path = dir.join("camera.csv");
+    std::fs::write(
+        &path,
+        "frame,ex,ey,ez,tx,ty,tz\n0,0,1,3.9,0,1,0\n1,0.02,1,3.9,0.02,1,0\n2,0.04,1,3.9,0.04,1,0\n",
+    )
+    .unwrap();
+    let trace = dir.join("gaze.csv");
+    std::fs::write(&trace, "t,x,y\n0,0.5,0.5\n0.05,0.4,0.5\n").unwrap();
+    let stats = dir.join("s.json");
+    let run = |extra: &[&str], out: &str| {
+        fovea()
+            .arg("render")
+            .arg(cornell())
+            .args(["--fov", "38", "--resolution", "48x32", "--spp", "2,1,1"])
+            .args(["--radii", "6,12", "-q", "--history"])
+            .args(extra)
+            .arg("-o")
+            .arg(dir.join(out))
+            .arg("--stats")
+            .arg(&stats)
+            .output()
+            .unwrap()
+    };
+    let out = run(&["--camera-path", path.to_str().unwrap()], "p.png");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for f in 0..3 {
+        assert!(dir.join(format!("p_{f:05}.png")).is_file(), "frame {f}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let frames = json["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 3);
+    for pass in ["samples", "fill", "gbuffer", "temporal"] {
+        assert!(
+            frames[2]["pass_ms"][pass].as_f64().is_some(),
+            "{pass}: {json}"
+        );
+    }
+    // A timed trace (0..1 of the image) at 40 frames per second: frames 0, 1, 2 (t = 0, 0.025, 0.05).
+    let out = run(
+        &[
+            "--gaze-trace",
+            trace.to_str().unwrap(),
+            "--gaze-normalized",
+            "--trace-fps",
+            "40",
+            "--eye",
+            "0,1,3.9",
+            "--target",
+            "0,1,0",
+        ],
+        "t.png",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let gazes: Vec<f64> = json["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["gaze"][0].as_f64().unwrap())
+        .collect();
+    assert_eq!(gazes.len(), 3);
+    for (g, want) in gazes.iter().zip([24.0, 24.0, 19.2]) {
+        assert!((g - want).abs() < 1e-4, "{gazes:?}");
+    }
+    // A camera path that lacks a frame of the gaze trace, and a malformed one.
+    std::fs::write(&trace, "frame,x,y\n0,1,1\n5,1,1\n").unwrap();
+    let png = dir.join("bad.png");
+    let scene = cornell();
+    let args = [
+        scene.to_str().unwrap(),
+        "--gaze-trace",
+        trace.to_str().unwrap(),
+        "--camera-path",
+        path.to_str().unwrap(),
+    ];
+    expect_failure(&args, "no line for frame 5", &png);
+    std::fs::write(&path, "0,0,1,3.9,0,1\n").unwrap();
+    expect_failure(
+        &[
+            scene.to_str().unwrap(),
+            "--camera-path",
+            path.to_str().unwrap(),
+        ],
+        "line 1: 6 fields",
+        &png,
+    );
+}
+
 /// `--traversal hardware` renders through the driver's acceleration structures (lavapipe has them) and
 /// reports them in the stats; `auto` on a CPU device keeps software and says why; the CPU backend
 /// refuses hardware traversal.

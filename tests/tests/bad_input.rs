@@ -500,7 +500,7 @@ fn cli_reports_bad_scenes_and_options_without_writing() {
                 "--gaze-trace".into(),
                 f("gaze_trace_bad.csv"),
             ],
-            "line 4: 'abc' is not a number",
+            "line 4: x \"abc\" is not a number",
         ),
         (
             vec![

@@ -26,9 +26,10 @@ use winit::window::{Window, WindowId};
 
 use crate::args::Backend;
 use crate::error::{FoveaError, Result};
+use crate::fixation::FixationFilter;
+use crate::gaze::GazeConvention;
 use crate::scene_setup::{choose_camera, prepare_scene, PreparedScene};
 use crate::view::fly::{FlyCamera, Movement};
-use crate::view::gaze::GazeConvention;
 use crate::view::hud::render_hud;
 use crate::view::live::LiveRenderer;
 use crate::view::options::{GazeInput, ViewOptions};
@@ -114,8 +115,11 @@ struct Viewer {
     window_size: [u32; 2],
     minimized: bool,
 
-    // Gaze: the newest sample in window pixels and when it arrived.
+    // Gaze: where the regions go (the fixation filter's output) in window pixels, the newest raw
+    // sample, and when it arrived.
     gaze: [f32; 2],
+    raw_gaze: [f32; 2],
+    fixation: FixationFilter,
     gaze_arrived: Option<Instant>,
     gaze_used: Option<Instant>,
     started: Instant,
@@ -188,6 +192,8 @@ impl Viewer {
             budget: BudgetController::new(options.budget_ms),
             window_size: options.window_size,
             gaze: [0.5 * w as f32, 0.5 * h as f32],
+            raw_gaze: [0.5 * w as f32, 0.5 * h as f32],
+            fixation: FixationFilter::new(0.0),
             options,
             scene,
             use_gpu,
@@ -366,8 +372,7 @@ impl Viewer {
         match event {
             ScriptEvent::Gaze { x, y } => {
                 let [w, h] = self.window_size;
-                self.gaze =
-                    crate::view::gaze::to_window_pixels(GazeConvention::Normalized, x, y, [w, h]);
+                self.gaze = crate::gaze::to_window_pixels(GazeConvention::Normalized, x, y, [w, h]);
                 self.gaze_arrived = Some(now);
             }
             ScriptEvent::Mouse { x, y } => self.cursor_moved(x, y, now),
@@ -405,12 +410,24 @@ impl Viewer {
     /// Reads the live gaze sources (UDP, trace) just before a frame.
     fn poll_gaze(&mut self) {
         let size = self.window_size;
+        // The filter's radius in window pixels, on the display model that the window's width fills.
+        let (display_cm, distance_cm) = self.options.display;
+        let ppd = fovea_core::foveation::pixels_per_degree(&crate::values::display_at(
+            display_cm,
+            distance_cm,
+            size,
+        ));
+        let radius = self.options.fixation_filter_deg * ppd;
+        if self.fixation.radius() != radius {
+            self.fixation = FixationFilter::new(radius);
+        }
         match &mut self.options.gaze {
             GazeInput::Mouse => {}
             GazeInput::Udp(source) => {
                 let poll = source.poll(size);
                 if let Some((sample, at)) = poll.newest {
-                    self.gaze = [sample.x, sample.y];
+                    self.raw_gaze = [sample.x, sample.y];
+                    self.gaze = self.fixation.push(self.raw_gaze);
                     self.gaze_arrived = Some(at);
                 }
                 for m in poll.malformed {
@@ -424,9 +441,10 @@ impl Viewer {
             }
             GazeInput::Trace(trace) => {
                 let t = self.started.elapsed().as_secs_f64();
-                if let Some(sample) = trace.sample_at(t, size) {
-                    if [sample.x, sample.y] != self.gaze {
-                        self.gaze = [sample.x, sample.y];
+                if let Some(sample) = trace.sample_for(t, self.frame, size) {
+                    if [sample.x, sample.y] != self.raw_gaze {
+                        self.raw_gaze = [sample.x, sample.y];
+                        self.gaze = self.fixation.push(self.raw_gaze);
                         self.gaze_arrived = Some(Instant::now());
                     }
                 }
@@ -613,6 +631,7 @@ impl Viewer {
         let record = FrameRecord {
             frame: self.frame,
             gaze: self.gaze,
+            raw_gaze: self.raw_gaze,
             uniform: self.uniform,
             config: config.name.clone(),
             frame_spp,

@@ -9,7 +9,6 @@
 #[cfg(feature = "vulkan")]
 mod app;
 pub mod fly;
-pub mod gaze;
 pub mod hud;
 #[cfg(feature = "vulkan")]
 mod live;

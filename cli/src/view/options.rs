@@ -7,9 +7,9 @@ use fovea_core::integrator::IntegratorSettings;
 
 use crate::args::{Backend, GazeSourceArg, ViewArgs};
 use crate::error::{FoveaError, Result};
+use crate::gaze::{GazeConvention, GazeTrace, TraceTiming, UdpGazeSource};
 use crate::scene_setup::Lighting;
 use crate::values;
-use crate::view::gaze::{GazeConvention, GazeTrace, UdpGazeSource};
 use crate::view::sampling::{configurations, SamplingConfig};
 use crate::view::script::Script;
 
@@ -78,6 +78,9 @@ pub struct ViewOptions {
     pub gaze: GazeInput,
     pub configs: Vec<SamplingConfig>,
     pub radii: RadiiRule,
+    /// The fixation filter's radius in degrees (0: raw gaze) and the display model it is measured on.
+    pub fixation_filter_deg: f32,
+    pub display: (values::DisplayCm, f32),
     pub uniform: bool,
     pub overlay: bool,
     pub budget_ms: f64,
@@ -114,6 +117,12 @@ impl ViewOptions {
                 distance_cm: args.foveation.display.distance_cm,
             },
         };
+        if !(args.fixation_filter.is_finite() && (0.0..=30.0).contains(&args.fixation_filter)) {
+            return Err(FoveaError::option(
+                "--fixation-filter",
+                "must be 0 (raw gaze) to 30 degrees",
+            ));
+        }
         let convention = if args.gaze_pixels {
             GazeConvention::PixelsBottomLeft
         } else {
@@ -133,7 +142,7 @@ impl ViewOptions {
                 ))
             }
             (GazeSourceArg::Mouse | GazeSourceArg::Trace, Some(path)) => GazeInput::Trace(
-                GazeTrace::read(path, convention)
+                GazeTrace::read(path, convention, TraceTiming::Seconds)
                     .map_err(|e| FoveaError::option("--gaze-trace", e))?,
             ),
             (GazeSourceArg::Udp(port), None) => {
@@ -214,6 +223,11 @@ impl ViewOptions {
             gaze,
             configs: configurations(spp, blocks),
             radii,
+            fixation_filter_deg: args.fixation_filter,
+            display: (
+                args.foveation.display.display_cm,
+                args.foveation.display.distance_cm,
+            ),
             uniform: args.foveation.uniform,
             overlay: args.overlay,
             budget_ms: args.budget_ms,

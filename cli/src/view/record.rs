@@ -16,6 +16,8 @@ pub struct FrameRecord {
     /// Frame number (ticks of the view, the clock scripts use).
     pub frame: u64,
     pub gaze: [f32; 2],
+    /// The eye tracker's sample before the fixation filter.
+    pub raw_gaze: [f32; 2],
     pub uniform: bool,
     pub config: String,
     /// Samples per pixel / block of this frame (after the budget shift).
@@ -46,6 +48,7 @@ impl FrameRecord {
         json!({
             "frame": self.frame,
             "gaze": self.gaze,
+            "raw_gaze": self.raw_gaze,
             "uniform": self.uniform,
             "config": self.config,
             "frame_spp": self.frame_spp,
@@ -54,12 +57,7 @@ impl FrameRecord {
             "samples_per_region": self.render.samples_per_region,
             "accumulated_frames": self.accumulated_frames,
             "history_frames": self.accumulated_frames,
-            "pass_ms": self
-                .render
-                .passes
-                .iter()
-                .map(|(name, ms)| (name.to_string(), json!(ms)))
-                .collect::<serde_json::Map<String, Value>>(),
+            "pass_ms": crate::stats::pass_object(&self.render.passes),
             "effective_spp": self.effective_spp,
             "render_ms": self.render_ms,
             "present_ms": self.present_ms,

@@ -1,5 +1,6 @@
-//! Live gaze sources for `fovea view`: gaze samples from an eye tracker over UDP
-//! (`--gaze-source udp:PORT`), and the replay of a recorded gaze trace (`--gaze-trace FILE`).
+//! Gaze: samples from an eye tracker over UDP (`fovea view --gaze-source udp:PORT`), and gaze traces
+//! (`--gaze-trace FILE`), the one reader that `fovea view` replays and `fovea render` renders frame by
+//! frame.
 //!
 //! # UDP protocol
 //!
@@ -35,10 +36,16 @@
 //!
 //! # Gaze trace files
 //!
-//! A gaze trace is a CSV file of timed samples, one `t,x,y` per line, replayed in real time:
-//! `t` is seconds from the start of the replay (non-decreasing, not negative) and `x,y` use the
-//! same conventions as the UDP protocol. An optional header line whose first field is not a number
-//! (e.g. `t,x,y`) may come first; `#` starts a comment, and blank lines are ignored.
+//! A gaze trace is a CSV file of samples `key,x,y`, one per line, keyed in one of two ways
+//! ([`TraceTiming`]), told apart by the header:
+//!
+//! * `t,x,y` (timed): `t` is seconds from the start of the replay (non-decreasing, not negative);
+//! * `frame,x,y` (per frame): `frame` is a frame number (increasing integers).
+//!
+//! A first line whose first field is not a number is a header: `frame` makes the trace per frame, `t`
+//! (or `time`, `seconds`, `timestamp`) timed; without a header, or with another first field, the
+//! command's default applies (`view`: timed, `render`: per frame). `x,y` are in the command's
+//! [`GazeConvention`]. `#` starts a comment, and blank lines are ignored.
 //!
 //! ```text
 //! t,x,y
@@ -46,6 +53,9 @@
 //! 0.0,0.5,0.5
 //! 0.5,0.1,0.1
 //! ```
+//!
+//! `view` replays a timed trace in real time and a per-frame trace frame by frame; `render` renders a
+//! per-frame trace's frames and a timed trace at `--trace-fps` frames per second.
 use std::fmt::Write as _;
 use std::net::{SocketAddr, UdpSocket};
 use std::path::Path;
@@ -68,6 +78,9 @@ pub const MAX_MESSAGES_PER_POLL: usize = 16;
 /// datagrams cannot stall a frame; the rest wait for the next poll.
 pub const MAX_DATAGRAMS_PER_POLL: usize = 4096;
 
+/// The most samples a gaze trace may hold (and the most frames `render` makes of a timed one).
+pub const MAX_TRACE_SAMPLES: usize = 1_000_000;
+
 /// The longest datagram text quoted in an error message, in characters.
 const MAX_QUOTED_CHARS: usize = 64;
 
@@ -79,6 +92,8 @@ pub enum GazeConvention {
     Normalized,
     /// Window pixels, origin bottom-left (as Pupil Labs exports gaze).
     PixelsBottomLeft,
+    /// Image pixels, origin top-left (`fovea render`'s traces and `--gaze`).
+    PixelsTopLeft,
 }
 
 impl GazeConvention {
@@ -86,7 +101,7 @@ impl GazeConvention {
     fn example(self) -> &'static str {
         match self {
             GazeConvention::Normalized => "12.5,0.4,0.6",
-            GazeConvention::PixelsBottomLeft => "12.5,640,360",
+            GazeConvention::PixelsBottomLeft | GazeConvention::PixelsTopLeft => "12.5,640,360",
         }
     }
 }
@@ -117,6 +132,7 @@ pub fn to_window_pixels(
     match convention {
         GazeConvention::Normalized => [raw_x * width, raw_y * height],
         GazeConvention::PixelsBottomLeft => [raw_x, height - raw_y],
+        GazeConvention::PixelsTopLeft => [raw_x, raw_y],
     }
 }
 
@@ -130,7 +146,7 @@ pub fn parse_sample(
     convention: GazeConvention,
     window: [u32; 2],
 ) -> Result<GazeSample, String> {
-    let (t, x, y) = parse_fields(text, convention).map_err(|problem| {
+    let (t, x, y) = parse_fields(text, convention, TraceTiming::Seconds).map_err(|problem| {
         format!(
             "malformed gaze datagram {}: {problem}",
             quote(text.trim_end())
@@ -141,14 +157,21 @@ pub fn parse_sample(
 }
 
 /// Parses `t,x,y` into raw `(t, x, y)`; the error describes the problem (without saying where).
-fn parse_fields(text: &str, convention: GazeConvention) -> Result<(f64, f32, f32), String> {
-    let expected = format!(
-        "expected \"t,x,y\" with three numbers (e.g. \"{}\")",
-        convention.example()
-    );
+fn parse_fields(
+    text: &str,
+    convention: GazeConvention,
+    timing: TraceTiming,
+) -> Result<(f64, f32, f32), String> {
+    let (key, example) = match timing {
+        TraceTiming::Seconds => ("t", convention.example().to_string()),
+        TraceTiming::Frames => ("frame", convention.example().replacen("12.5", "12", 1)),
+    };
+    let expected = format!("expected \"{key},x,y\" with three numbers (e.g. \"{example}\")");
     let fields: Vec<&str> = text.split(',').map(str::trim).collect();
     let [t, x, y] = fields[..] else {
-        return Err(expected);
+        let n = fields.len();
+        let plural = if n == 1 { "" } else { "s" };
+        return Err(format!("{n} field{plural}; {expected}"));
     };
     let number = |name: &str, field: &str| -> Result<f64, String> {
         let value: f64 = field
@@ -163,7 +186,7 @@ fn parse_fields(text: &str, convention: GazeConvention) -> Result<(f64, f32, f32
             ))
         }
     };
-    let t = number("t", t)?;
+    let t = number(key, t)?;
     let coordinate = |name: &str, field: &str| -> Result<f32, String> {
         let value = number(name, field)?;
         let (limit, what) = match convention {
@@ -171,7 +194,9 @@ fn parse_fields(text: &str, convention: GazeConvention) -> Result<(f64, f32, f32
                 MAX_NORMALIZED_COORDINATE,
                 "for normalised gaze (0..1 spans the window)",
             ),
-            GazeConvention::PixelsBottomLeft => (MAX_PIXEL_COORDINATE, "pixels"),
+            GazeConvention::PixelsBottomLeft | GazeConvention::PixelsTopLeft => {
+                (MAX_PIXEL_COORDINATE, "pixels")
+            }
         };
         if value.abs() > limit {
             return Err(format!(
@@ -350,26 +375,55 @@ struct RawSample {
     y: f32,
 }
 
-/// A recorded gaze trace for replay (`--gaze-trace FILE`; see the [module documentation](self)).
+/// How a trace's lines are keyed (see the [module documentation](self)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TraceTiming {
+    /// `t,x,y`: seconds from the start of the replay.
+    Seconds,
+    /// `frame,x,y`: frame numbers.
+    Frames,
+}
+
+impl TraceTiming {
+    /// The timing a header's first field names, if any.
+    fn from_header(field: &str) -> Option<Self> {
+        match field.to_ascii_lowercase().as_str() {
+            "frame" => Some(Self::Frames),
+            "t" | "time" | "seconds" | "timestamp" => Some(Self::Seconds),
+            _ => None,
+        }
+    }
+}
+
+/// A recorded gaze trace (`--gaze-trace FILE`; see the [module documentation](self)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GazeTrace {
+    /// Sorted by `t` (seconds, or frame numbers for [`TraceTiming::Frames`]).
     samples: Vec<RawSample>,
     convention: GazeConvention,
+    timing: TraceTiming,
 }
 
 impl GazeTrace {
-    /// Parses trace text; `path_for_messages` names the file in error messages. Coordinates are
-    /// kept raw and converted to window pixels by [`GazeTrace::sample_at`].
+    /// Parses trace text; `path_for_messages` names the file in error messages; `timing` applies
+    /// where no header names one. Coordinates are kept raw and converted to window pixels by
+    /// [`GazeTrace::sample_at`].
     ///
     /// # Errors
     /// A message naming the file and line and saying what is wrong (a malformed line, a decreasing
-    /// or negative timestamp), or that the trace has no samples.
+    /// or negative timestamp, a frame number that is not an increasing integer), or that the trace
+    /// has no samples.
     pub fn parse(
         path_for_messages: &str,
         text: &str,
         convention: GazeConvention,
+        timing: TraceTiming,
     ) -> Result<Self, String> {
+        let mut timing = timing;
         let mut samples: Vec<RawSample> = Vec::new();
+        // Frame number -> the line that gave it (a per-frame trace): two lines for one frame would
+        // render it twice.
+        let mut frame_lines = std::collections::HashMap::new();
         let mut previous_line = 0;
         let mut seen_content = false;
         for (index, raw) in text.lines().enumerate() {
@@ -382,25 +436,56 @@ impl GazeTrace {
             seen_content = true;
             let first_field = content.split(',').next().unwrap_or("").trim();
             if first_content && first_field.parse::<f64>().is_err() {
-                continue; // A header such as `t,x,y`.
+                // A header such as `t,x,y` or `frame,x,y`.
+                timing = TraceTiming::from_header(first_field).unwrap_or(timing);
+                continue;
             }
             let at = |problem: String| {
                 format!("gaze trace '{path_for_messages}' line {line}: {problem}")
             };
-            let (t, x, y) = parse_fields(content, convention).map_err(at)?;
-            if t < 0.0 {
-                return Err(at(format!(
-                    "timestamp {t} is negative; trace timestamps are seconds from the start of the replay"
-                )));
-            }
-            if let Some(last) = samples.last() {
-                if t < last.t {
-                    return Err(at(format!(
-                        "timestamp {t} is earlier than {} on line {previous_line}; \
-                         timestamps must not decrease",
-                        last.t
-                    )));
+            let (t, x, y) = parse_fields(content, convention, timing).map_err(at)?;
+            match timing {
+                TraceTiming::Seconds => {
+                    if t < 0.0 {
+                        return Err(at(format!(
+                            "timestamp {t} is negative; trace timestamps are seconds from the start of the replay"
+                        )));
+                    }
+                    if let Some(last) = samples.last() {
+                        if t < last.t {
+                            return Err(at(format!(
+                                "timestamp {t} is earlier than {} on line {previous_line}; \
+                                 timestamps must not decrease",
+                                last.t
+                            )));
+                        }
+                    }
                 }
+                TraceTiming::Frames => {
+                    if !(t >= 0.0 && t <= f64::from(u32::MAX) && t.fract() == 0.0) {
+                        return Err(at(format!(
+                            "frame {t} is not a frame number (0, 1, 2, ...)"
+                        )));
+                    }
+                    if let Some(first) = frame_lines.insert(t as u32, line) {
+                        return Err(at(format!(
+                            "lines {first} and {line} both give frame {t}, whose image would be \
+                             rendered twice; give each frame once"
+                        )));
+                    }
+                    if let Some(last) = samples.last() {
+                        if t < last.t {
+                            return Err(at(format!(
+                                "frame {t} comes after frame {} on line {previous_line}; frames must \
+                                 increase",
+                                last.t
+                            )));
+                        }
+                    }
+                }
+            }
+            if samples.len() >= MAX_TRACE_SAMPLES {
+                return Err(at(format!("more than {MAX_TRACE_SAMPLES} samples")));
             }
             samples.push(RawSample { t, x, y });
             previous_line = line;
@@ -408,13 +493,15 @@ impl GazeTrace {
         if samples.is_empty() {
             return Err(format!(
                 "gaze trace '{path_for_messages}' has no samples; expected lines \"t,x,y\" \
-                 (e.g. \"{}\"), t in seconds from the start of the replay",
+                 (e.g. \"{}\"), t in seconds from the start of the replay, or \"frame,x,y\" \
+                 after a header line \"frame,x,y\"",
                 convention.example()
             ));
         }
         Ok(Self {
             samples,
             convention,
+            timing,
         })
     }
 
@@ -423,21 +510,67 @@ impl GazeTrace {
     /// # Errors
     /// A message naming the path and the OS error if the file cannot be read, or as
     /// [`GazeTrace::parse`].
-    pub fn read(path: &Path, convention: GazeConvention) -> Result<Self, String> {
+    pub fn read(
+        path: &Path,
+        convention: GazeConvention,
+        timing: TraceTiming,
+    ) -> Result<Self, String> {
         let shown = path.display().to_string();
         let text = std::fs::read_to_string(path)
             .map_err(|error| format!("gaze trace '{shown}': cannot read it: {error}"))?;
-        Self::parse(&shown, &text, convention)
+        Self::parse(&shown, &text, convention, timing)
     }
 
-    /// The newest sample with `t <= seconds` (`None` before the first sample), converted to window
-    /// pixels (origin top-left) for a window of `window = [width, height]`.
+    /// How the trace is keyed.
     #[must_use]
-    pub fn sample_at(&self, seconds: f64, window: [u32; 2]) -> Option<GazeSample> {
-        let count = self.samples.partition_point(|sample| sample.t <= seconds);
+    #[cfg(test)]
+    pub fn timing(&self) -> TraceTiming {
+        self.timing
+    }
+
+    /// The newest sample with `key <= at` (`None` before the first sample), converted to window
+    /// pixels (origin top-left) for a window of `window = [width, height]`. `at` is seconds for a timed
+    /// trace, a frame number for a per-frame one ([`Self::sample_for`] picks).
+    #[must_use]
+    pub fn sample_at(&self, at: f64, window: [u32; 2]) -> Option<GazeSample> {
+        let count = self.samples.partition_point(|sample| sample.t <= at);
         let sample = self.samples.get(count.checked_sub(1)?)?;
         let [x, y] = to_window_pixels(self.convention, sample.x, sample.y, window);
         Some(GazeSample { t: sample.t, x, y })
+    }
+
+    /// The sample for the replay's `seconds` (a timed trace) or its `frame` (a per-frame trace).
+    #[must_use]
+    pub fn sample_for(&self, seconds: f64, frame: u64, window: [u32; 2]) -> Option<GazeSample> {
+        match self.timing {
+            TraceTiming::Seconds => self.sample_at(seconds, window),
+            TraceTiming::Frames => self.sample_at(frame as f64, window),
+        }
+    }
+
+    /// The frames `fovea render` renders from this trace, with their gaze in pixels of an `image`:
+    /// a per-frame trace's lines, or a timed trace sampled at `fps` frames per second from 0 to its
+    /// last timestamp.
+    #[must_use]
+    pub fn frames(&self, fps: f64, image: [u32; 2]) -> Vec<(u32, [f32; 2])> {
+        let convert = |s: &RawSample| to_window_pixels(self.convention, s.x, s.y, image);
+        match self.timing {
+            TraceTiming::Frames => self
+                .samples
+                .iter()
+                .map(|s| (s.t as u32, convert(s)))
+                .collect(),
+            TraceTiming::Seconds => {
+                let last = self.samples.last().map_or(0.0, |s| s.t);
+                let count = ((last * fps).floor() as u64 + 1).min(MAX_TRACE_SAMPLES as u64) as u32;
+                (0..count)
+                    .filter_map(|frame| {
+                        let s = self.sample_at(f64::from(frame) / fps, image)?;
+                        Some((frame, [s.x, s.y]))
+                    })
+                    .collect()
+            }
+        }
     }
 
     /// The timestamp of the last sample: seconds from the start of the replay to its end.
@@ -532,7 +665,7 @@ mod tests {
         let message = parse_sample("abc", GazeConvention::Normalized, WINDOW).unwrap_err();
         assert_eq!(
             message,
-            "malformed gaze datagram \"abc\": expected \"t,x,y\" with three numbers \
+            "malformed gaze datagram \"abc\": 1 field; expected \"t,x,y\" with three numbers \
              (e.g. \"12.5,0.4,0.6\")"
         );
         for (text, word) in [
@@ -681,7 +814,13 @@ mod tests {
     fn trace_parses_and_looks_up() {
         let text =
             "t,x,y\n# start centred\n0.0,0.5,0.5\n\n0.5, 0.25, 0.75 # left\n0.5,0.1,0.1\n2,1,1\r\n";
-        let trace = GazeTrace::parse("f.csv", text, GazeConvention::Normalized).unwrap();
+        let trace = GazeTrace::parse(
+            "f.csv",
+            text,
+            GazeConvention::Normalized,
+            TraceTiming::Seconds,
+        )
+        .unwrap();
         assert_eq!(trace.len(), 4);
         assert!(!trace.is_empty());
         assert_eq!(trace.duration(), 2.0);
@@ -715,6 +854,7 @@ mod tests {
             "p.csv",
             "0,10,20\n1,30,40\n",
             GazeConvention::PixelsBottomLeft,
+            TraceTiming::Seconds,
         )
         .unwrap();
         assert_eq!(
@@ -730,7 +870,14 @@ mod tests {
 
     #[test]
     fn trace_errors_name_file_and_line() {
-        let parse = |text: &str| GazeTrace::parse("f.csv", text, GazeConvention::Normalized);
+        let parse = |text: &str| {
+            GazeTrace::parse(
+                "f.csv",
+                text,
+                GazeConvention::Normalized,
+                TraceTiming::Seconds,
+            )
+        };
         for (text, line, word) in [
             ("t,x,y\n0,0.5,0.5\n1,0.5\n", 3, "\"t,x,y\""),
             ("0,0.5,0.5\n1,0.5,0.5,9\n", 2, "\"t,x,y\""),
@@ -768,19 +915,22 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let good = dir.join("trace.csv");
         std::fs::write(&good, "t,x,y\n0,0.5,0.5\n3,0.5,0.5\n").unwrap();
-        let trace = GazeTrace::read(&good, GazeConvention::Normalized).unwrap();
+        let trace =
+            GazeTrace::read(&good, GazeConvention::Normalized, TraceTiming::Seconds).unwrap();
         assert_eq!(trace.duration(), 3.0);
 
         let bad = dir.join("bad.csv");
         std::fs::write(&bad, "0,0.5,0.5\n0,0.5\n").unwrap();
-        let message = GazeTrace::read(&bad, GazeConvention::Normalized).unwrap_err();
+        let message =
+            GazeTrace::read(&bad, GazeConvention::Normalized, TraceTiming::Seconds).unwrap_err();
         assert!(
             message.starts_with(&format!("gaze trace '{}' line 2: ", bad.display())),
             "{message}"
         );
 
         let missing = dir.join("missing.csv");
-        let message = GazeTrace::read(&missing, GazeConvention::Normalized).unwrap_err();
+        let message = GazeTrace::read(&missing, GazeConvention::Normalized, TraceTiming::Seconds)
+            .unwrap_err();
         assert!(
             message.starts_with(&format!(
                 "gaze trace '{}': cannot read it: ",
@@ -789,5 +939,50 @@ mod tests {
             "{message}"
         );
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn per_frame_traces_are_told_apart_by_the_header() {
+        let parse = |text: &str, timing| {
+            GazeTrace::parse("f.csv", text, GazeConvention::PixelsTopLeft, timing)
+        };
+        // The header decides, whatever the command's default.
+        let frames = parse(
+            "frame,x,y\n0, 10, 20\n# c\n3,11.5,-3\n",
+            TraceTiming::Seconds,
+        )
+        .unwrap();
+        assert_eq!(frames.timing(), TraceTiming::Frames);
+        assert_eq!(
+            frames.frames(30.0, WINDOW),
+            vec![(0, [10.0, 20.0]), (3, [11.5, -3.0])]
+        );
+        assert_eq!(frames.sample_for(100.0, 2, WINDOW).unwrap().x, 10.0);
+        assert_eq!(frames.sample_for(0.0, 3, WINDOW).unwrap().x, 11.5);
+        let timed = parse("t,x,y\n0,1,2\n0.1,3,4\n", TraceTiming::Frames).unwrap();
+        assert_eq!(timed.timing(), TraceTiming::Seconds);
+        assert_eq!(
+            timed.frames(20.0, WINDOW),
+            vec![(0, [1.0, 2.0]), (1, [1.0, 2.0]), (2, [3.0, 4.0])]
+        );
+        // Without a header, the default.
+        assert_eq!(
+            parse("0,1,2\n1,1,2\n", TraceTiming::Frames)
+                .unwrap()
+                .timing(),
+            TraceTiming::Frames
+        );
+        for (text, needle) in [
+            (
+                "frame,x,y\n0,1,2\n1,1,2\n1,3,4\n",
+                "lines 3 and 4 both give frame 1",
+            ),
+            ("frame,x,y\n1,1,2\n0,3,4\n", "comes after frame 1"),
+            ("frame,x,y\n1.5,1,2\n", "not a frame number"),
+            ("frame,x,y\n-1,1,2\n", "not a frame number"),
+        ] {
+            let e = parse(text, TraceTiming::Seconds).unwrap_err();
+            assert!(e.contains(needle), "{text:?}: {e}");
+        }
     }
 }
