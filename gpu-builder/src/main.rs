@@ -10,7 +10,7 @@
 //! spirv-opt stays on: it fuses `a * b + c` into `Fma`, but lavapipe splits `Fma` back into a multiply and
 //! an add (llvmpipe's NIR option `lower_ffma32`), so `--no-spirv-opt` renders the same pixels there while
 //! the module grows from 0.3 to 1.7 MB and pipeline creation and frames get slower (docs/architecture.md, "GPU build").
-//! `vulkan/build.rs` runs this binary; it can also be run by hand:
+//! `host-vulkan/build.rs` runs this binary; it can also be run by hand:
 //!
 //! ```text
 //! cargo +nightly-2026-08-15 run --release --manifest-path gpu-builder/Cargo.toml \

@@ -16,7 +16,7 @@
 //! `id.x + id.y · (num_workgroups.x · 64)`, so a host may dispatch up to 65535 workgroups in x and more
 //! rows in y; invocations past the item count return at once.
 //!
-//! Built to SPIR-V by `gpu-builder/` (run from `vulkan/build.rs`); on the host it compiles as a plain
+//! Built to SPIR-V by `gpu-builder/` (run from `host-vulkan/build.rs`); on the host it compiles as a plain
 //! library (the attributes are then inert).
 #![cfg_attr(target_arch = "spirv", no_std)]
 // Entry points take one argument per binding.
@@ -24,7 +24,7 @@
 
 use fovea_core::foveation::overlay::overlay_rgba8;
 use fovea_core::foveation::OwnedBlock;
-use fovea_core::foveation::{block_extent, cell_mean_at, fill_value};
+use fovea_core::foveation::{block_extent, block_mean, cell_mean_at, fill_value};
 use fovea_core::glam::{Vec3, Vec4};
 use fovea_core::integrator::{render_sample_stream, FrameParams};
 use fovea_core::kernel_abi::{self, KernelPushConstants, WORKGROUP_SIZE};
@@ -226,8 +226,7 @@ pub fn reduce_blocks(
         let v = samples[(first + s) as usize];
         sum += Vec3::new(v[0], v[1], v[2]);
     }
-    let mean = sum / spp.max(1) as f32;
-    let value = [mean.x, mean.y, mean.z, 1.0];
+    let value = block_mean(sum, spp);
     let block = blocks[j as usize];
     let extent = block_extent(&block, frame.width, frame.height);
     for dy in 0..extent[1] {

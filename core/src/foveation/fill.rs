@@ -32,7 +32,7 @@
 //! image is its value at the cell's centre, and bilinear interpolation reproduces affine functions); in a
 //! finer ring next to a coarser one the error is at most a fraction of the gradient times the coarse block
 //! size.
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 
 use super::blocks::owning_block;
 use super::regions::{FoveationParams, REGION_COUNT};
@@ -42,6 +42,15 @@ use crate::math::float::floor;
 pub const FILL_BILINEAR: u32 = 0;
 /// Fill mode: every pixel keeps its block's value (the paper's public code).
 pub const FILL_REPLICATE: u32 = 1;
+
+/// Pass 0's value of a block: the mean of its `spp` samples (`sum` of them, added in sample order from
+/// zero), alpha 1, which every pixel of the block holds in the replicated image. Both hosts write it.
+#[inline]
+#[must_use]
+pub fn block_mean(sum: Vec3, spp: u32) -> [f32; 4] {
+    let mean = sum / spp.max(1) as f32;
+    [mean.x, mean.y, mean.z, 1.0]
+}
 
 /// Dimensions of the grid of aligned `b × b` cells covering a `width × height` image (partial cells at
 /// the right and bottom count).

@@ -17,8 +17,8 @@ pub use display::{
     DisplayGeometry, FOVEA_ECCENTRICITY_DEG, INTERMEDIATE_ECCENTRICITY_DEG,
 };
 pub use fill::{
-    cell_buffer_len, cell_grid_offset, cell_grid_size, cell_mean, cell_mean_at, fill_pixel,
-    fill_value, FILL_BILINEAR, FILL_REPLICATE,
+    block_mean, cell_buffer_len, cell_grid_offset, cell_grid_size, cell_mean, cell_mean_at,
+    fill_pixel, fill_value, FILL_BILINEAR, FILL_REPLICATE,
 };
 pub use regions::{
     region_of_pixel, region_of_point, FoveationParams, FOVEATION_ERROR_BAD_GAZE,

@@ -3,7 +3,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use fovea_core::foveation::blocks::{owning_block, samples_in_block};
-use fovea_core::foveation::fill::{cell_buffer_len, cell_mean_at, fill_value};
+use fovea_core::foveation::fill::{block_mean, cell_buffer_len, cell_mean_at, fill_value};
 use fovea_core::foveation::regions::REGION_COUNT;
 use fovea_core::integrator::{block_sample_sum, FrameParams};
 use fovea_core::scene::{Features, SceneView};
@@ -129,9 +129,7 @@ impl WithScene for SamplePass<'_> {
                             continue;
                         }
                         let spp = samples_in_block(&block, foveation);
-                        let sum = block_sample_sum(scene, frame, &block, spp);
-                        let mean = sum / spp.max(1) as f32;
-                        let value = [mean.x, mean.y, mean.z, 1.0];
+                        let value = block_mean(block_sample_sum(scene, frame, &block, spp), spp);
                         let x_end = (block.origin[0] + block.size).min(width);
                         let y_end = (block.origin[1] + block.size).min(height);
                         for by in block.origin[1]..y_end {

@@ -79,13 +79,13 @@ struct PreparedFrame {
 }
 
 impl PreparedFrame {
-    fn stats(
-        &self,
-        scene: &GpuScene,
-        render_ms: f64,
-        gpu_timestamps: bool,
-        submissions: u32,
-    ) -> GpuRenderStats {
+    fn stats(&self, scene: &GpuScene, timing: FrameTiming) -> GpuRenderStats {
+        let FrameTiming {
+            render_ms,
+            gpu_timestamps,
+            submissions,
+            passes,
+        } = timing;
         let samples_per_region = self.plan.samples_per_region();
         GpuRenderStats {
             render: RenderStats {
@@ -94,7 +94,7 @@ impl PreparedFrame {
                 samples_per_region,
                 blocks_per_region: self.blocks_per_region,
                 path_features: scene.features.0,
-                passes: Vec::new(),
+                passes,
             },
             idle_invocations: self.plan.idle_invocations(),
             chunks: self.plan.chunks.len() as u32,
@@ -104,6 +104,18 @@ impl PreparedFrame {
             warmup_ms: self.warmup_ms,
         }
     }
+}
+
+/// What a frame's dispatches took.
+struct FrameTiming {
+    /// GPU time from the first dispatch to the end (host wall time where the device has no
+    /// timestamps).
+    render_ms: f64,
+    gpu_timestamps: bool,
+    submissions: u32,
+    /// Each pass's GPU milliseconds ([`PASS_TIMESTAMPS`], then the tone map and read-back), empty
+    /// without timestamps.
+    passes: Vec<(&'static str, f64)>,
 }
 
 /// What the last submission of a frame does after the fill.
@@ -169,11 +181,46 @@ fn host_read_barrier(device: &ash::Device, cb: vk::CommandBuffer) {
 }
 
 /// Resets the frame's two timestamp queries and writes the first one.
+/// Timestamp queries of a frame: 0 its start, 1 its end, and [`PASS_TIMESTAMPS`] after the samples
+/// and after each per-frame pass.
+pub(crate) const TIMESTAMP_QUERIES: u32 = 2 + PASS_TIMESTAMPS.len() as u32;
+
+/// The passes of the last submission, in order, each timed to the timestamp written after it (query
+/// `2 + k`); the samples end where the last submission starts. Passes a frame does not run take no
+/// time (their timestamp follows the previous one).
+const PASS_TIMESTAMPS: [&str; 6] = [
+    "samples",
+    "cell_means",
+    "fill",
+    "gbuffer",
+    "temporal",
+    "resolve_history",
+];
+
 fn write_start_timestamp(device: &ash::Device, cb: vk::CommandBuffer, query_pool: vk::QueryPool) {
-    // SAFETY: the query pool has two queries; they are reset before being written.
+    // SAFETY: the query pool has TIMESTAMP_QUERIES queries; they are reset before being written.
     unsafe {
-        device.cmd_reset_query_pool(cb, query_pool, 0, 2);
+        device.cmd_reset_query_pool(cb, query_pool, 0, TIMESTAMP_QUERIES);
         device.cmd_write_timestamp(cb, vk::PipelineStageFlags::TOP_OF_PIPE, query_pool, 0);
+    }
+}
+
+/// Writes the timestamp that ends pass `k` of [`PASS_TIMESTAMPS`].
+fn write_pass_timestamp(
+    device: &ash::Device,
+    cb: vk::CommandBuffer,
+    query_pool: vk::QueryPool,
+    k: u32,
+) {
+    // SAFETY: `2 + k` < TIMESTAMP_QUERIES, reset by `write_start_timestamp` in this frame's first
+    // submission, which was waited on before this one.
+    unsafe {
+        device.cmd_write_timestamp(
+            cb,
+            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+            query_pool,
+            2 + k,
+        );
     }
 }
 
@@ -302,7 +349,7 @@ impl VulkanContext {
             tail,
             progress,
         );
-        let (render_ms, gpu_timestamps, submissions) = result?;
+        let timing = result?;
         if temporal {
             self.history_advanced(frame);
         }
@@ -320,7 +367,7 @@ impl VulkanContext {
         } else {
             None
         };
-        let stats = prepared.stats(scene, render_ms, gpu_timestamps, submissions);
+        let stats = prepared.stats(scene, timing);
         Ok((
             GpuFrame {
                 width: w,
@@ -356,7 +403,7 @@ impl VulkanContext {
         } else {
             accumulated_frames
         };
-        let (render_ms, gpu_timestamps, submissions) = self.dispatch_frame(
+        let timing = self.dispatch_frame(
             &prepared.plan,
             &prepared.sizes,
             fill_mode,
@@ -366,7 +413,7 @@ impl VulkanContext {
             &|_| {},
         )?;
         self.history_advanced(frame);
-        let stats = prepared.stats(scene, render_ms, gpu_timestamps, submissions);
+        let stats = prepared.stats(scene, timing);
         Ok((stats, accumulated_frames))
     }
 
@@ -493,14 +540,16 @@ impl VulkanContext {
         }
         self.write_descriptors(scene, &sizes);
         self.specialize_render_pipeline(scene.features.0)?;
-        let warmup_ms = if self.warmed_up {
-            0.0
-        } else {
-            let start = Instant::now();
-            self.warm_up()?;
+        let start = Instant::now();
+        if !self.warmed_up {
+            self.warm_up(&pipeline::FRAME_PASSES)?;
             self.warmed_up = true;
-            start.elapsed().as_secs_f64() * 1e3
-        };
+        }
+        if temporal && !self.temporal_warmed_up {
+            self.warm_up(&pipeline::TEMPORAL_PASSES)?;
+            self.temporal_warmed_up = true;
+        }
+        let warmup_ms = start.elapsed().as_secs_f64() * 1e3;
 
         Ok(PreparedFrame {
             blocks_per_region: [
@@ -604,12 +653,13 @@ impl VulkanContext {
         unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
     }
 
-    /// Dispatches one workgroup of every frame pipeline with zero items (each returns at once), so that
-    /// lazy shader compilation happens here. The descriptors must already point at live buffers.
-    fn warm_up(&mut self) -> Result<()> {
+    /// Dispatches one workgroup of each of `which` (indices into the frame pipelines) with zero items
+    /// (each returns at once), so that lazy shader compilation happens here; one submission each, so
+    /// that each compilation has the whole timeout (lavapipe compiles the general ray-query kernels for
+    /// tens of seconds each). The descriptors must already point at live buffers.
+    fn warm_up(&mut self, which: &[usize]) -> Result<()> {
         let layout = self.pipeline_layout;
         let set = self.descriptor_set;
-        let pipelines = self.pipelines;
         let pc = KernelPushConstants {
             block_count: 0,
             spp: 0,
@@ -619,13 +669,15 @@ impl VulkanContext {
             _pad: [0; 3],
         };
         let max_x = self.limits.max_workgroup_count_x;
-        self.submit_and_wait("the pipeline warm-up", CHUNK_TIMEOUT, |device, cb| {
-            for p in pipelines {
+        for &p in which {
+            let pipeline = self.pipelines[p];
+            self.submit_and_wait("the pipeline warm-up", CHUNK_TIMEOUT, |device, cb| {
                 // Zero counts make every invocation return at once.
-                record_dispatch(device, cb, p, layout, set, 0, &pc, 1, max_x);
+                record_dispatch(device, cb, pipeline, layout, set, 0, &pc, 1, max_x);
                 barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
-            }
-        })
+            })?;
+        }
+        Ok(())
     }
 
     /// Records and submits all dispatches of a frame; returns (render ms, whether GPU-timed, submissions).
@@ -639,7 +691,7 @@ impl VulkanContext {
         temporal: bool,
         tail: FrameTail,
         progress: &dyn Fn(u64),
-    ) -> Result<(f64, bool, u32)> {
+    ) -> Result<FrameTiming> {
         let layout = self.pipeline_layout;
         let set = self.descriptor_set;
         let pipelines = self.pipelines;
@@ -721,9 +773,15 @@ impl VulkanContext {
         let (pixels, cells) = (sizes.pixels, sizes.cells);
         let no_chunks = plan.chunks.is_empty();
         self.submit_and_wait("the fill and tone map", CHUNK_TIMEOUT, |device, cb| {
+            let pass_done = |k: u32| {
+                if timed {
+                    write_pass_timestamp(device, cb, query_pool, k);
+                }
+            };
             if no_chunks && timed {
                 write_start_timestamp(device, cb, query_pool);
             }
+            pass_done(0);
             if cells > 0 {
                 let pc = KernelPushConstants {
                     item_count: cells as u32,
@@ -732,21 +790,27 @@ impl VulkanContext {
                 dispatch(device, cb, pipeline::CELL_MEANS, 0, &pc, cells);
                 barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
             }
+            pass_done(1);
             let pc = KernelPushConstants {
                 item_count: pixels as u32,
                 ..base
             };
             dispatch(device, cb, pipeline::FILL, 0, &pc, pixels);
             barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
-            if temporal {
-                for p in [
-                    pipeline::GBUFFER,
-                    pipeline::TEMPORAL,
-                    pipeline::RESOLVE_HISTORY,
-                ] {
+            pass_done(2);
+            for (k, p) in [
+                pipeline::GBUFFER,
+                pipeline::TEMPORAL,
+                pipeline::RESOLVE_HISTORY,
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                if temporal {
                     dispatch(device, cb, p, 0, &pc, pixels);
                     barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
                 }
+                pass_done(3 + k as u32);
             }
             dispatch(device, cb, pipeline::TONEMAP, 0, &pc, pixels);
             if matches!(tail, FrameTail::Live { overlay: true, .. }) {
@@ -788,8 +852,8 @@ impl VulkanContext {
         let wall_ms = wall.elapsed().as_secs_f64() * 1e3;
 
         if timed {
-            let mut ticks = [0u64; 2];
-            // SAFETY: both queries were written by the submissions waited on above.
+            let mut ticks = [0u64; TIMESTAMP_QUERIES as usize];
+            // SAFETY: every query was written by the submissions waited on above.
             let r = unsafe {
                 self.shared.device.get_query_pool_results(
                     query_pool,
@@ -799,11 +863,34 @@ impl VulkanContext {
                 )
             };
             if r.is_ok() {
-                let dt = ticks[1].wrapping_sub(ticks[0]) & self.timestamp_mask;
-                let ms = dt as f64 * f64::from(self.timestamp_period) * 1e-6;
-                return Ok((ms, true, submissions));
+                let ms = |from: u64, to: u64| {
+                    (to.wrapping_sub(from) & self.timestamp_mask) as f64
+                        * f64::from(self.timestamp_period)
+                        * 1e-6
+                };
+                let mut passes = Vec::new();
+                let mut previous = ticks[0];
+                for (k, name) in PASS_TIMESTAMPS.iter().enumerate() {
+                    let t = ticks[2 + k];
+                    if temporal || k < 3 {
+                        passes.push((*name, ms(previous, t)));
+                    }
+                    previous = t;
+                }
+                passes.push(("tonemap", ms(previous, ticks[1])));
+                return Ok(FrameTiming {
+                    render_ms: ms(ticks[0], ticks[1]),
+                    gpu_timestamps: true,
+                    submissions,
+                    passes,
+                });
             }
         }
-        Ok((wall_ms, false, submissions))
+        Ok(FrameTiming {
+            render_ms: wall_ms,
+            gpu_timestamps: false,
+            submissions,
+            passes: Vec::new(),
+        })
     }
 }

@@ -1,7 +1,7 @@
 //! The SPIR-V kernel: where it comes from and which device features its capabilities need.
 use crate::error::{Result, VulkanError};
 
-/// The kernel module built by `vulkan/build.rs` (rust-gpu), embedded in the binary.
+/// The kernel module built by `host-vulkan/build.rs` (rust-gpu), embedded in the binary.
 pub static EMBEDDED_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_SPV"));
 /// The same kernel built with ray queries (`--traversal hardware`; core's `bvh::hardware`); empty
 /// where the build had none (a prebuilt software module without its twin).

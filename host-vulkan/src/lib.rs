@@ -1,7 +1,7 @@
 //! # fovea-vulkan
 //!
 //! The ash Vulkan host of fovea: it uploads the packed scene of `fovea-scene` once per scene and runs the
-//! rust-gpu kernel (`fovea-gpu-kernel`, built to SPIR-V by `vulkan/build.rs`) over it, with the
+//! rust-gpu kernel (`fovea-gpu-kernel`, built to SPIR-V by `host-vulkan/build.rs`) over it, with the
 //! bindings and push constants of `fovea_core::kernel_abi`. A frame is the CPU host's three passes as
 //! dispatches, plus the tone map:
 //!

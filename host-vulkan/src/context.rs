@@ -71,6 +71,17 @@ pub(crate) mod pipeline {
     pub const OVERLAY_REGIONS: usize = 6;
     pub const TEMPORAL: usize = 7;
     pub const RESOLVE_HISTORY: usize = 8;
+    /// Temporal reuse's pipelines, in their order in a frame.
+    pub const TEMPORAL_PASSES: [usize; 3] = [GBUFFER, TEMPORAL, RESOLVE_HISTORY];
+    /// Every frame's pipelines.
+    pub const FRAME_PASSES: [usize; 6] = [
+        RENDER_SAMPLES,
+        REDUCE_BLOCKS,
+        CELL_MEANS,
+        FILL,
+        TONEMAP,
+        OVERLAY_REGIONS,
+    ];
 }
 
 /// Timeout of each fence wait per chunk of work.
@@ -121,6 +132,9 @@ pub struct VulkanContext {
     /// Whether every frame pipeline has been dispatched once (the first frame does it before its own
     /// dispatches, so that its `render_ms` excludes a driver's lazy shader compilation).
     pub(crate) warmed_up: bool,
+    /// Whether temporal reuse's pipelines ([`pipeline::TEMPORAL_PASSES`]) have been dispatched once
+    /// (by the first frame with temporal reuse; other frames never compile them).
+    pub(crate) temporal_warmed_up: bool,
     /// Whether the kernel is the ray-query module (scenes get acceleration structures).
     pub(crate) hardware_traversal: bool,
     /// Why `Traversal::Auto` chose software, if it did.
@@ -390,6 +404,7 @@ impl VulkanContext {
             },
             pipeline_create_ms: 0.0,
             warmed_up: false,
+            temporal_warmed_up: false,
             hardware_traversal: hardware,
             traversal_note,
             hardware_scratch_alignment,
@@ -510,7 +525,7 @@ impl VulkanContext {
                     .create_query_pool(
                         &vk::QueryPoolCreateInfo::default()
                             .query_type(vk::QueryType::TIMESTAMP)
-                            .query_count(2),
+                            .query_count(crate::frame::TIMESTAMP_QUERIES),
                         None,
                     )
                     .during("vkCreateQueryPool")?;
