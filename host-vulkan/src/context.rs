@@ -87,6 +87,10 @@ pub(crate) mod pipeline {
 /// Timeout of each fence wait per chunk of work.
 pub const CHUNK_TIMEOUT: Duration = Duration::from_secs(60);
 
+/// Timeout of each pipeline's warm-up dispatch: a software driver compiles the shader there (lavapipe:
+/// LLVM), which for the general kernels takes tens of seconds alone and longer on a loaded machine.
+pub const WARMUP_TIMEOUT: Duration = Duration::from_secs(300);
+
 /// A Vulkan device ready to run the fovea kernel: one compute queue, one pipeline per entry point (all from
 /// the one SPIR-V module, created once), and the buffers of the last frame size, reused across frames.
 pub struct VulkanContext {

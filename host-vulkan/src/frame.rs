@@ -17,7 +17,7 @@ use crate::blocks::{
     block_buffer_contents, enumerate_blocks, plan_chunks, workgroups_2d, ChunkPlan,
 };
 use crate::buffer::GpuBuffer;
-use crate::context::{pipeline, VulkanContext, CHUNK_TIMEOUT};
+use crate::context::{pipeline, VulkanContext, CHUNK_TIMEOUT, WARMUP_TIMEOUT};
 use crate::error::{Result, VulkanError};
 use crate::resources::{FrameResources, Sizes, TemporalBuffers, PIXEL};
 use crate::scene::GpuScene;
@@ -671,7 +671,7 @@ impl VulkanContext {
         let max_x = self.limits.max_workgroup_count_x;
         for &p in which {
             let pipeline = self.pipelines[p];
-            self.submit_and_wait("the pipeline warm-up", CHUNK_TIMEOUT, |device, cb| {
+            self.submit_and_wait("the pipeline warm-up", WARMUP_TIMEOUT, |device, cb| {
                 // Zero counts make every invocation return at once.
                 record_dispatch(device, cb, pipeline, layout, set, 0, &pc, 1, max_x);
                 barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
