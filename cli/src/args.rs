@@ -28,7 +28,7 @@ pub enum Command {
     /// (load, build, render, peak memory).
     Bench(BenchArgs),
     /// Live view: a window whose fovea follows the gaze (mouse, an eye tracker over UDP, or a trace),
-    /// with fly controls, accumulation while the eye rests and a frame-time budget.
+    /// with fly controls, per-pixel history that survives gaze and camera moves, and a frame-time budget.
     View(Box<ViewArgs>),
     /// List the devices fovea can render on.
     Devices,

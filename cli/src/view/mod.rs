@@ -1,6 +1,7 @@
 //! `fovea view`: a window that renders continuously, its fovea following the gaze (the mouse pointer,
 //! an eye tracker over UDP, or a replayed trace), with fly controls, keys, on-screen figures,
-//! accumulation while the eye rests and a frame-time budget (README, "Live view"; docs/view.md).
+//! per-pixel history that survives gaze and camera moves, and a frame-time budget (README, "Live
+//! view"; docs/view.md).
 //!
 //! Modules, one concept each: [`options`] (the command line, checked), [`sampling`] (configurations and
 //! the budget), [`gaze`] (UDP and trace sources), [`script`] (scripted input), [`fly`] (camera controls),
