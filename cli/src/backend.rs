@@ -295,27 +295,18 @@ impl Renderer {
                     .scene
                     .as_ref()
                     .ok_or_else(|| FoveaError::Backend("no scene uploaded".into()))?;
-                let rendered = if history {
-                    v.ctx.render_frame_with_history(
+                let (image, stats) = v
+                    .ctx
+                    .render_frame_and_history(
                         scene,
                         frame,
                         fill_mode,
                         exposure_ev,
                         want_hdr,
+                        history,
                         &|n| progress(n),
                     )
-                } else {
-                    v.ctx.render_frame_with_progress(
-                        scene,
-                        frame,
-                        fill_mode,
-                        exposure_ev,
-                        want_hdr,
-                        &|n| progress(n),
-                    )
-                };
-                let (image, stats) =
-                    rendered.map_err(|e| FoveaError::Backend(format!("Vulkan backend: {e}")))?;
+                    .map_err(|e| FoveaError::Backend(format!("Vulkan backend: {e}")))?;
                 let messages = v.ctx.validation_messages();
                 Ok(Rendered {
                     rgb8: Some(image.rgb8()),

@@ -285,37 +285,13 @@ impl VulkanContext {
         want_hdr: bool,
         progress: &dyn Fn(u64),
     ) -> Result<(GpuFrame, GpuRenderStats)> {
-        self.render_and_read_back(
+        self.render_frame_and_history(
             scene,
             frame,
             fill_mode,
             exposure_ev,
             want_hdr,
             false,
-            progress,
-        )
-    }
-
-    /// [`Self::render_frame_with_progress`] with temporal reuse: after the fill, the `gbuffer`,
-    /// `temporal` and `resolve_history` passes add the frame to each pixel's history (kept on the
-    /// device from one call to the next; [`Self::reset_history`] forgets it), and the images read back
-    /// are the history's mean.
-    pub fn render_frame_with_history(
-        &mut self,
-        scene: &GpuScene,
-        frame: &FrameParams,
-        fill_mode: u32,
-        exposure_ev: f32,
-        want_hdr: bool,
-        progress: &dyn Fn(u64),
-    ) -> Result<(GpuFrame, GpuRenderStats)> {
-        self.render_and_read_back(
-            scene,
-            frame,
-            fill_mode,
-            exposure_ev,
-            want_hdr,
-            true,
             progress,
         )
     }
@@ -327,17 +303,22 @@ impl VulkanContext {
         }
     }
 
+    /// [`Self::render_frame_with_progress`], with temporal reuse where `history` holds: after the fill,
+    /// the `gbuffer`, `temporal` and `resolve_history` passes add the frame to each pixel's history
+    /// (kept on the device from one call to the next; [`Self::reset_history`] forgets it), and the images
+    /// read back are the history's mean.
     #[allow(clippy::too_many_arguments)]
-    fn render_and_read_back(
+    pub fn render_frame_and_history(
         &mut self,
         scene: &GpuScene,
         frame: &FrameParams,
         fill_mode: u32,
         exposure_ev: f32,
         want_hdr: bool,
-        temporal: bool,
+        history: bool,
         progress: &dyn Fn(u64),
     ) -> Result<(GpuFrame, GpuRenderStats)> {
+        let temporal = history;
         let prepared = self.prepare_frame(scene, frame, temporal)?;
         let tail = FrameTail::ReadBack { want_hdr };
         let result = self.dispatch_frame(
@@ -380,7 +361,7 @@ impl VulkanContext {
     }
 
     /// Renders one frame of the live view (`fovea view`): the same passes as
-    /// [`Self::render_frame_with_history`] (`accumulated_frames` frames since the history's last reset;
+    /// [`Self::render_frame_and_history`] (`accumulated_frames` frames since the history's last reset;
     /// 0 resets it), then the history's mean is tone-mapped and, with `overlay`, the regions are drawn
     /// over it. Nothing is read back: [`Self::present`] shows the image, [`Self::read_back_hdr`] fetches
     /// the mean for a screenshot. Returns the statistics and the number of earlier frames actually in

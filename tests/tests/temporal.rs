@@ -358,7 +358,7 @@ fn cpu_and_lavapipe_histories_agree_after_16_frames() {
             render_frame_with_history(&scene.view(), &f, FILL_BILINEAR, &mut history, &|_| {}).0,
         );
         let (image, _) = ctx
-            .render_frame_with_history(&gpu_scene, &f, FILL_BILINEAR, 0.0, true, &|_| {})
+            .render_frame_and_history(&gpu_scene, &f, FILL_BILINEAR, 0.0, true, true, &|_| {})
             .expect("the device renders");
         gpu = Some(image);
     }
