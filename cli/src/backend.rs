@@ -9,16 +9,41 @@ use crate::stats::cpu_device_name;
 
 /// One rendered frame, as the backend produced it.
 pub struct Rendered {
-    /// Linear HDR (always on the CPU; on Vulkan only when asked for).
+    /// Linear HDR, when asked for ([`FrameOutput::ReadBack`]'s `want_hdr`; the CPU has it anyway).
     pub hdr: Option<FrameImage>,
-    /// Tone-mapped 8-bit sRGB RGB bytes, when the backend tone-mapped (Vulkan).
+    /// Tone-mapped 8-bit sRGB RGB bytes (with [`FrameOutput::ReadBack`]).
     pub rgb8: Option<Vec<u8>>,
     pub stats: RenderStats,
+    /// With history: this frame started every pixel's history afresh (the first frame, a reset, a
+    /// new size).
+    pub history_restarted: bool,
     /// Backend-specific figures for the stats JSON.
     pub extra: Option<serde_json::Value>,
 }
 
-/// A ready backend.
+/// Where a frame goes once it is rendered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameOutput {
+    /// Back to the host (`render`, `report`): the RGB bytes and, with `want_hdr`, the HDR image.
+    ReadBack { want_hdr: bool },
+    /// To the window (`view`), with the regions drawn over it if `overlay`; kept by the backend for
+    /// [`Renderer::present_source`] and [`Renderer::last_hdr`].
+    Present { overlay: bool },
+}
+
+/// How to render a frame beyond its [`FrameParams`]: the same on every backend.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameRequest {
+    /// `FILL_BILINEAR` or `FILL_REPLICATE`.
+    pub fill_mode: u32,
+    pub exposure_ev: f32,
+    /// Temporal reuse: the frame joins each pixel's history, kept by the backend from one frame to
+    /// the next ([`Renderer::reset_history`] forgets it), and the image is the history's mean.
+    pub history: bool,
+    pub output: FrameOutput,
+}
+
+/// A ready backend: the one type `render`, `report` and `view` drive.
 pub enum Renderer {
     Cpu(CpuRenderer),
     #[cfg(feature = "vulkan")]
@@ -33,6 +58,19 @@ pub struct CpuRenderer {
     features: fovea_core::scene::FeatureFlags,
     /// Each pixel's history, for frames rendered with temporal reuse.
     history: Box<fovea_cpu::TemporalHistory>,
+    /// The last frame rendered for the window ([`FrameOutput::Present`]).
+    presented: Option<fovea_cpu::CpuFrame>,
+}
+
+impl CpuRenderer {
+    fn new(threads: Option<usize>) -> Result<Self> {
+        Ok(Self {
+            pool: cpu_pool(threads)?,
+            features: fovea_core::scene::FeatureFlags::ALL,
+            history: Box::default(),
+            presented: None,
+        })
+    }
 }
 
 /// The Vulkan context and the scene uploaded to it.
@@ -120,13 +158,16 @@ impl Renderer {
             }
         };
         if !want_vulkan {
-            return Ok(Self::Cpu(CpuRenderer {
-                pool: cpu_pool(threads)?,
-                features: fovea_core::scene::FeatureFlags::ALL,
-                history: Box::default(),
-            }));
+            return Ok(Self::Cpu(CpuRenderer::new(threads)?));
         }
-        Self::vulkan(device, choice == Backend::Auto, traversal, threads, quiet)
+        Self::vulkan(
+            device,
+            choice == Backend::Auto,
+            traversal,
+            threads,
+            quiet,
+            None,
+        )
     }
 
     #[cfg(feature = "vulkan")]
@@ -141,6 +182,38 @@ impl Renderer {
         )
     }
 
+    /// The live view's backend on `window`: the Vulkan device that presents renders too (`use_gpu`),
+    /// or the CPU renders and a Vulkan context only presents (returned beside it).
+    #[cfg(feature = "vulkan")]
+    pub fn for_window(
+        window: fovea_vulkan::WindowHandles,
+        device: Option<usize>,
+        traversal: crate::args::Traversal,
+        use_gpu: bool,
+        threads: Option<usize>,
+    ) -> Result<(Self, Option<fovea_vulkan::VulkanContext>)> {
+        if use_gpu {
+            return Ok((
+                Self::vulkan(device, false, traversal, threads, true, Some(window))?,
+                None,
+            ));
+        }
+        let options = fovea_vulkan::ContextOptions {
+            device_index: device,
+            validation: fovea_vulkan::validation_requested(),
+            window: Some(window),
+            // The CPU backend only presents: no acceleration structures for it.
+            traversal: fovea_vulkan::Traversal::Software,
+        };
+        let presenter = fovea_vulkan::VulkanContext::new(&options).map_err(|e| {
+            FoveaError::View(format!(
+                "cannot present to the window through Vulkan: {e} (the view needs a Vulkan driver even \
+                 with --backend cpu; lavapipe, Debian's mesa-vulkan-drivers, is enough)"
+            ))
+        })?;
+        Ok((Self::Cpu(CpuRenderer::new(threads)?), Some(presenter)))
+    }
+
     #[cfg(feature = "vulkan")]
     fn vulkan(
         device: Option<usize>,
@@ -148,11 +221,13 @@ impl Renderer {
         traversal: crate::args::Traversal,
         threads: Option<usize>,
         quiet: bool,
+        window: Option<fovea_vulkan::WindowHandles>,
     ) -> Result<Self> {
+        let presents = window.is_some();
         let options = fovea_vulkan::ContextOptions {
             device_index: device,
             validation: fovea_vulkan::validation_requested(),
-            window: None,
+            window,
             traversal: traversal.into(),
         };
         match fovea_vulkan::VulkanContext::new(&options) {
@@ -171,12 +246,11 @@ impl Renderer {
                 if !quiet {
                     eprintln!("note: rendering on the CPU: Vulkan failed: {e}");
                 }
-                Ok(Self::Cpu(CpuRenderer {
-                    pool: cpu_pool(threads)?,
-                    features: fovea_core::scene::FeatureFlags::ALL,
-                    history: Box::default(),
-                }))
+                Ok(Self::Cpu(CpuRenderer::new(threads)?))
             }
+            Err(e) if presents => Err(FoveaError::View(format!(
+                "cannot present to the window through Vulkan: {e}"
+            ))),
             Err(e) => Err(FoveaError::Backend(format!("Vulkan backend: {e}"))),
         }
     }
@@ -188,6 +262,7 @@ impl Renderer {
         _: crate::args::Traversal,
         _: Option<usize>,
         _: bool,
+        _: Option<()>,
     ) -> Result<Self> {
         Err(FoveaError::Backend(
             "this build of fovea has no Vulkan backend (built without the `vulkan` feature); use --backend cpu"
@@ -250,42 +325,61 @@ impl Renderer {
         }
     }
 
-    /// Renders one frame. On the CPU the HDR image is always returned; on Vulkan only with `want_hdr`, and
-    /// the tone-mapped bytes come from the device. With `history`, the frame joins each pixel's history
-    /// (kept by the backend from one call to the next) and the image is the history's mean.
-    #[allow(clippy::too_many_arguments)]
+    /// Forgets the history: the next frame with temporal reuse starts every pixel afresh.
+    pub fn reset_history(&mut self) {
+        match self {
+            Self::Cpu(cpu) => cpu.history.reset(),
+            #[cfg(feature = "vulkan")]
+            Self::Vulkan(v) => v.ctx.reset_history(),
+        }
+    }
+
+    /// Renders one frame through core's pass list on this backend (see [`FrameRequest`]).
     pub fn render(
         &mut self,
         packed: &PackedScene,
         frame: &FrameParams,
-        fill_mode: u32,
-        exposure_ev: f32,
-        want_hdr: bool,
-        history: bool,
+        request: &FrameRequest,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Rendered> {
         match self {
             Self::Cpu(cpu) => {
-                // The CPU host always returns HDR; the CLI tone-maps it (same core function).
-                let _ = (exposure_ev, want_hdr);
                 let view = packed.view().with_features(cpu.features);
+                let history_restarted = request.history && !cpu.history.continues(frame);
+                let options = fovea_cpu::CpuFrameOptions {
+                    fill_mode: request.fill_mode,
+                    exposure_ev: request.exposure_ev,
+                    setup: fovea_core::passes::FrameSetup {
+                        history: request.history,
+                        tonemap: true,
+                        overlay: request.output == FrameOutput::Present { overlay: true },
+                    },
+                };
                 let (image, stats) = cpu.pool.install(|| {
-                    if history {
-                        fovea_cpu::render_frame_with_history(
-                            &view,
-                            frame,
-                            fill_mode,
-                            &mut cpu.history,
-                            progress,
-                        )
-                    } else {
-                        fovea_cpu::render_frame(&view, frame, fill_mode, progress)
-                    }
+                    fovea_cpu::render_frame_passes(
+                        &view,
+                        frame,
+                        &options,
+                        &mut cpu.history,
+                        progress,
+                    )
                 });
+                let (hdr, rgb8) = match request.output {
+                    FrameOutput::ReadBack { .. } => {
+                        cpu.presented = None;
+                        let rgb8 = image.rgb8();
+                        (Some(image.hdr), rgb8)
+                    }
+                    FrameOutput::Present { .. } => {
+                        cpu.presented = Some(image);
+                        (None, None)
+                    }
+                };
                 Ok(Rendered {
-                    hdr: Some(image),
-                    rgb8: None,
+                    hdr,
+                    rgb8,
                     stats,
+                    history_restarted,
                     extra: None,
                 })
             }
@@ -295,22 +389,33 @@ impl Renderer {
                     .scene
                     .as_ref()
                     .ok_or_else(|| FoveaError::Backend("no scene uploaded".into()))?;
+                let output = match request.output {
+                    FrameOutput::ReadBack { want_hdr } => {
+                        fovea_vulkan::FrameOutput::ReadBack { want_hdr }
+                    }
+                    FrameOutput::Present { overlay } => {
+                        fovea_vulkan::FrameOutput::Present { overlay }
+                    }
+                };
+                let vulkan_request = fovea_vulkan::FrameRequest {
+                    fill_mode: request.fill_mode,
+                    exposure_ev: request.exposure_ev,
+                    history: request.history,
+                    output,
+                };
                 let (image, stats) = v
                     .ctx
-                    .render_frame_and_history(
-                        scene,
-                        frame,
-                        fill_mode,
-                        exposure_ev,
-                        want_hdr,
-                        history,
-                        &|n| progress(n),
-                    )
+                    .render(scene, frame, &vulkan_request, &|n| progress(n))
                     .map_err(|e| FoveaError::Backend(format!("Vulkan backend: {e}")))?;
                 let messages = v.ctx.validation_messages();
+                let rgb8 = match request.output {
+                    FrameOutput::ReadBack { .. } => Some(image.rgb8()),
+                    FrameOutput::Present { .. } => None,
+                };
                 Ok(Rendered {
-                    rgb8: Some(image.rgb8()),
+                    rgb8,
                     hdr: image.hdr,
+                    history_restarted: stats.history_restarted,
                     extra: Some(serde_json::json!({
                         "chunks": stats.chunks,
                         "submissions": stats.submissions,
@@ -337,6 +442,56 @@ impl Renderer {
                     stats: stats.render,
                 })
             }
+        }
+    }
+
+    /// The last frame rendered with [`FrameOutput::Present`]: on the CPU its RGBA8 pixels, width and
+    /// height (for a presenting context to upload); `None` on Vulkan, where it stays on the device, or
+    /// before the first such frame.
+    pub fn presented_rgba8(&self) -> Option<(&[u32], u32, u32)> {
+        match self {
+            Self::Cpu(cpu) => cpu.presented.as_ref().and_then(|f| {
+                f.rgba8
+                    .as_deref()
+                    .map(|pixels| (pixels, f.hdr.width, f.hdr.height))
+            }),
+            #[cfg(feature = "vulkan")]
+            Self::Vulkan(_) => None,
+        }
+    }
+
+    /// The HDR image of the last frame rendered with [`FrameOutput::Present`] (with history, its mean),
+    /// for a screenshot.
+    pub fn last_hdr(&mut self) -> Result<FrameImage> {
+        match self {
+            Self::Cpu(cpu) => cpu
+                .presented
+                .as_ref()
+                .map(|f| f.hdr.clone())
+                .ok_or_else(|| FoveaError::View("nothing rendered to save".into())),
+            #[cfg(feature = "vulkan")]
+            Self::Vulkan(v) => v
+                .ctx
+                .read_back_hdr()
+                .map_err(|e| FoveaError::View(format!("Vulkan: {e}"))),
+        }
+    }
+
+    /// Everything the Vulkan validation layer reported on the rendering device (none on the CPU).
+    pub fn validation_messages(&self) -> Vec<String> {
+        match self {
+            Self::Cpu(_) => Vec::new(),
+            #[cfg(feature = "vulkan")]
+            Self::Vulkan(v) => v.ctx.validation_messages(),
+        }
+    }
+
+    /// The Vulkan context that renders, if this backend is Vulkan.
+    #[cfg(feature = "vulkan")]
+    pub fn vulkan_context(&mut self) -> Option<&mut fovea_vulkan::VulkanContext> {
+        match self {
+            Self::Cpu(_) => None,
+            Self::Vulkan(v) => Some(&mut v.ctx),
         }
     }
 }

@@ -9,7 +9,7 @@ use fovea_core::integrator::FrameParams;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::RenderArgs;
-use crate::backend::Renderer;
+use crate::backend::{FrameOutput, FrameRequest, Renderer};
 use crate::camera_path::{read_camera_path, CameraKey};
 use crate::error::{FoveaError, Result};
 use crate::gaze::{GazeConvention, GazeTrace, TraceTiming};
@@ -364,15 +364,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         };
         // The HDR image is needed for EXR output; PNG and the overlay use the backend's tone map.
         let want_hdr = plan.output_format == ImageFormat::Exr;
-        let rendered = renderer.render(
-            &scene.packed,
-            &frame,
-            plan.fill_mode,
-            args.image.exposure,
-            want_hdr,
-            args.history,
-            &|n| bar.inc(n),
-        )?;
+        let request = FrameRequest {
+            fill_mode: plan.fill_mode,
+            exposure_ev: args.image.exposure,
+            history: args.history,
+            output: FrameOutput::ReadBack { want_hdr },
+        };
+        let rendered = renderer.render(&scene.packed, &frame, &request, &|n| bar.inc(n))?;
         bar.finish_and_clear();
         let rgb8 = match (rendered.rgb8, &rendered.hdr) {
             (Some(bytes), _) => bytes,

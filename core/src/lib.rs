@@ -34,6 +34,9 @@ pub mod kernel_abi;
 pub mod lights;
 pub mod material;
 pub mod math;
+// Host-side scheduling: names and kernel entry points as `&str`, which the kernel has no use for.
+#[cfg(not(target_arch = "spirv"))]
+pub mod passes;
 pub mod post;
 pub mod rng;
 pub mod sampling;

@@ -1,74 +1,137 @@
-//! Rendering one foveated frame on the CPU.
+//! Rendering one foveated frame on the CPU: core's pass list, each pass a rayon loop over its core
+//! function.
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use fovea_core::foveation::blocks::{owning_block, samples_in_block};
+use fovea_core::foveation::blocks::{for_each_block_in_rows, samples_in_block};
 use fovea_core::foveation::fill::{block_mean, cell_buffer_len, cell_mean_at, fill_value};
+use fovea_core::foveation::overlay::overlay_rgba8;
 use fovea_core::foveation::regions::REGION_COUNT;
 use fovea_core::integrator::{block_sample_sum, FrameParams};
+use fovea_core::passes::{frame_passes, FramePass, FrameSetup};
+use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::{Features, SceneView};
 
 use crate::specialize::{dispatch, path_mask, WithScene};
-use glam::Vec4;
+use crate::temporal::TemporalHistory;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 pub use fovea_frame::{FrameImage, RenderStats};
 
-/// Renders one frame of `scene`. `fill_mode` is `FILL_BILINEAR` or `FILL_REPLICATE`. `progress` is called
-/// from worker threads with the number of camera samples just finished.
+/// What the CPU host made of a frame: the HDR image (filled, or with history its mean) and, where the
+/// frame's [`FrameSetup`] asked for the tone map, the RGBA8 image (R in the low byte, as the kernel's).
+#[derive(Clone, Debug)]
+pub struct CpuFrame {
+    pub hdr: FrameImage,
+    pub rgba8: Option<Vec<u32>>,
+}
+
+impl CpuFrame {
+    /// The RGBA8 image as 8-bit sRGB RGB bytes (what a PNG stores), if the frame was tone-mapped.
+    #[must_use]
+    pub fn rgb8(&self) -> Option<Vec<u8>> {
+        self.rgba8.as_ref().map(|pixels| {
+            pixels
+                .iter()
+                .flat_map(|p| [*p as u8, (*p >> 8) as u8, (*p >> 16) as u8])
+                .collect()
+        })
+    }
+}
+
+/// How the CPU runs a frame beyond its [`FrameParams`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CpuFrameOptions {
+    /// `FILL_BILINEAR` or `FILL_REPLICATE`.
+    pub fill_mode: u32,
+    /// The tone map's exposure (stops).
+    pub exposure_ev: f32,
+    /// Which passes run ([`fovea_core::passes::frame_passes`]).
+    pub setup: FrameSetup,
+}
+
+/// Renders one frame of `scene` by walking core's pass list ([`frame_passes`]) and running each pass's
+/// CPU step: one rayon loop over its core function. With `setup.history` the frame joins `history`
+/// (kept from one call to the next; a frame of another size starts afresh) and the HDR image is the
+/// history's mean. `progress` is called from worker threads with the camera samples just finished.
 ///
 /// The samples are traced by the compiled path for `scene.features` ([`crate::specialize`]): pass
 /// `packed.view().with_features(packed.features())` to leave out what the scene lacks, or the plain
 /// view (every feature) for the general path. Both give the same image.
-pub fn render_frame(
+pub fn render_frame_passes(
     scene: &SceneView,
     frame: &FrameParams,
-    fill_mode: u32,
+    options: &CpuFrameOptions,
+    history: &mut TemporalHistory,
     progress: &(dyn Fn(u64) + Sync),
-) -> (FrameImage, RenderStats) {
+) -> (CpuFrame, RenderStats) {
     let start = Instant::now();
     let (width, height) = (frame.width, frame.height);
     let foveation = &frame.foveation;
-    let mut replicated = vec![[0.0f32; 4]; width as usize * height as usize];
+    let mut pixels = vec![[0.0f32; 4]; width as usize * height as usize];
+    let mut cell_means: Vec<[f32; 4]> = Vec::new();
+    let mut rgba8: Option<Vec<u32>> = None;
+    let temporal = history.params_for(frame);
     let counters: [AtomicU64; 6] = Default::default();
+    let mut passes = Vec::new();
 
-    // Pass 1: samples, band by band.
-    dispatch(
-        scene,
-        SamplePass {
-            frame,
-            replicated: &mut replicated,
-            counters: &counters,
-            progress,
-        },
-    );
-
-    let samples_ms = start.elapsed().as_secs_f64() * 1e3;
-
-    // Pass 2: the cell-mean grids of every block size above 1, in one buffer.
-    let cells_start = Instant::now();
-    let cell_count = cell_buffer_len(width, height, foveation);
-    let cell_means: Vec<[f32; 4]> = (0..cell_count)
-        .into_par_iter()
-        .map(|i| cell_mean_at(&replicated, width, height, foveation, i).to_array())
-        .collect();
-
-    let cells_ms = cells_start.elapsed().as_secs_f64() * 1e3;
-
-    // Pass 3: fill, in place: a pixel's fill reads only its own replicated value and the cell means.
-    let fill_start = Instant::now();
-    let mut pixels = replicated;
-    pixels
-        .par_chunks_mut(width as usize)
-        .enumerate()
-        .for_each(|(y, row)| {
-            for (x, pixel) in row.iter_mut().enumerate() {
-                let own = Vec4::from(*pixel);
-                let (x, y) = (x as u32, y as u32);
-                let v = fill_value(own, &cell_means, width, height, foveation, x, y, fill_mode);
-                *pixel = [v.x, v.y, v.z, 1.0];
+    for pass in frame_passes(options.setup) {
+        let pass_start = Instant::now();
+        match pass {
+            FramePass::Samples => dispatch(
+                scene,
+                SamplePass {
+                    frame,
+                    replicated: &mut pixels,
+                    counters: &counters,
+                    progress,
+                },
+            ),
+            // The cell-mean grids of every block size above 1, in one buffer.
+            FramePass::CellMeans => {
+                cell_means = (0..cell_buffer_len(width, height, foveation))
+                    .into_par_iter()
+                    .map(|i| cell_mean_at(&pixels, width, height, foveation, i).to_array())
+                    .collect();
             }
-        });
+            // In place: a pixel's fill reads only its own replicated value and the cell means.
+            FramePass::Fill => for_each_pixel(&mut pixels, width, |x, y, pixel| {
+                let own = Vec4::from(*pixel);
+                let v = fill_value(
+                    own,
+                    &cell_means,
+                    width,
+                    height,
+                    foveation,
+                    x,
+                    y,
+                    options.fill_mode,
+                );
+                *pixel = [v.x, v.y, v.z, 1.0];
+            }),
+            FramePass::GBuffer => history.gbuffer_pass(scene, frame),
+            FramePass::Temporal => history.temporal_pass(frame, &temporal, &pixels),
+            FramePass::ResolveHistory => history.resolve_pass(&mut pixels),
+            FramePass::ToneMap => {
+                let exposure = options.exposure_ev;
+                rgba8 = Some(
+                    pixels
+                        .par_iter()
+                        .map(|p| tonemap_to_rgba8(Vec3::new(p[0], p[1], p[2]), exposure))
+                        .collect(),
+                );
+            }
+            FramePass::Overlay => {
+                if let Some(rgba) = rgba8.as_mut() {
+                    for_each_pixel(rgba, width, |x, y, c| {
+                        *c = overlay_rgba8(*c, x, y, foveation);
+                    });
+                }
+            }
+        }
+        passes.push((pass.name(), pass_start.elapsed().as_secs_f64() * 1e3));
+    }
 
     let loaded: Vec<u64> = counters.iter().map(|c| c.load(Ordering::Relaxed)).collect();
     let stats = RenderStats {
@@ -77,23 +140,74 @@ pub fn render_frame(
         samples_per_region: [loaded[0], loaded[1], loaded[2]],
         blocks_per_region: [loaded[3], loaded[4], loaded[5]],
         path_features: path_mask(scene.features.bits()),
-        passes: vec![
-            ("samples", samples_ms),
-            ("cell_means", cells_ms),
-            ("fill", fill_start.elapsed().as_secs_f64() * 1e3),
-        ],
+        passes,
     };
-    (
-        FrameImage {
-            width,
-            height,
-            pixels,
-        },
-        stats,
-    )
+    let hdr = FrameImage {
+        width,
+        height,
+        pixels,
+    };
+    (CpuFrame { hdr, rgba8 }, stats)
 }
 
-/// Pass 1 of [`render_frame`]: every block's samples, band by band, written to every pixel of the block.
+/// Runs `f(x, y, element)` over a row-major image `width` wide, rows in parallel.
+fn for_each_pixel<T: Send>(image: &mut [T], width: u32, f: impl Fn(u32, u32, &mut T) + Sync) {
+    image
+        .par_chunks_mut(width as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, element) in row.iter_mut().enumerate() {
+                f(x as u32, y as u32, element);
+            }
+        });
+}
+
+/// The foveated HDR image alone (samples, cell means, fill): [`render_frame_passes`] without history
+/// or tone map. `fill_mode` is `FILL_BILINEAR` or `FILL_REPLICATE`.
+pub fn render_frame(
+    scene: &SceneView,
+    frame: &FrameParams,
+    fill_mode: u32,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (FrameImage, RenderStats) {
+    let options = CpuFrameOptions {
+        fill_mode,
+        exposure_ev: 0.0,
+        setup: FrameSetup::default(),
+    };
+    let (out, stats) = render_frame_passes(
+        scene,
+        frame,
+        &options,
+        &mut TemporalHistory::new(),
+        progress,
+    );
+    (out.hdr, stats)
+}
+
+/// [`render_frame`] with temporal reuse: the frame joins `history` and the returned image is the
+/// history's mean. The statistics list the six passes.
+pub fn render_frame_with_history(
+    scene: &SceneView,
+    frame: &FrameParams,
+    fill_mode: u32,
+    history: &mut TemporalHistory,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (FrameImage, RenderStats) {
+    let options = CpuFrameOptions {
+        fill_mode,
+        exposure_ev: 0.0,
+        setup: FrameSetup {
+            history: true,
+            ..FrameSetup::default()
+        },
+    };
+    let (out, stats) = render_frame_passes(scene, frame, &options, history, progress);
+    (out.hdr, stats)
+}
+
+/// The samples pass of [`render_frame_passes`]: every block's samples, band by band (core's walk over
+/// the blocks in each band's rows), written to every pixel of the block.
 struct SamplePass<'a> {
     frame: &'a FrameParams,
     replicated: &'a mut [[f32; 4]],
@@ -121,28 +235,20 @@ impl WithScene for SamplePass<'_> {
                 let y0 = band_index as u32 * band;
                 let rows_in_band = (rows.len() / width as usize) as u32;
                 let mut local = [0u64; 6];
-                for dy in 0..rows_in_band {
-                    let y = y0 + dy;
-                    for x in 0..width {
-                        let block = owning_block(x, y, foveation);
-                        if block.origin != [x, y] {
-                            continue;
-                        }
-                        let spp = samples_in_block(&block, foveation);
-                        let value = block_mean(block_sample_sum(scene, frame, &block, spp), spp);
-                        let x_end = (block.origin[0] + block.size).min(width);
-                        let y_end = (block.origin[1] + block.size).min(height);
-                        for by in block.origin[1]..y_end {
-                            let row = ((by - y0) * width) as usize;
-                            for bx in block.origin[0]..x_end {
-                                rows[row + bx as usize] = value;
-                            }
-                        }
-                        let region = block.region.min(REGION_COUNT - 1) as usize;
-                        local[region] += spp as u64;
-                        local[3 + region] += 1;
+                let y_band_end = y0 + rows_in_band;
+                for_each_block_in_rows(width, height, y0, y_band_end, foveation, |block| {
+                    let spp = samples_in_block(&block, foveation);
+                    let value = block_mean(block_sample_sum(scene, frame, &block, spp), spp);
+                    let x_end = (block.origin[0] + block.size).min(width);
+                    let y_end = (block.origin[1] + block.size).min(y_band_end);
+                    for by in block.origin[1]..y_end {
+                        let row = ((by - y0) * width) as usize;
+                        rows[row + block.origin[0] as usize..row + x_end as usize].fill(value);
                     }
-                }
+                    let region = block.region.min(REGION_COUNT - 1) as usize;
+                    local[region] += spp as u64;
+                    local[3 + region] += 1;
+                });
                 // Once per band: a progress bar's update is an atomic read-modify-write (1 % of the
                 // run time when it was per block).
                 progress(local[0] + local[1] + local[2]);

@@ -1,9 +1,7 @@
-//! The CPU's temporal passes: after [`crate::render_frame`]'s fill, the G-buffer
+//! The CPU's temporal passes: after the fill, the G-buffer
 //! ([`fovea_core::temporal::first_hit_gbuffer`]) and the reproject-and-accumulate pass
 //! ([`fovea_core::temporal::temporal_accumulate`]), over two history buffers used in turn. The state
 //! between frames (history, G-buffer, the previous camera) lives in [`TemporalHistory`].
-use std::time::Instant;
-
 use fovea_core::camera::Camera;
 use fovea_core::integrator::FrameParams;
 use fovea_core::scene::{SceneSlices, SceneView};
@@ -12,7 +10,7 @@ use fovea_core::temporal::{
 };
 use rayon::prelude::*;
 
-use crate::render::{render_frame, FrameImage, RenderStats};
+use crate::render::FrameImage;
 
 /// Each pixel's history and what it was rendered with, carried from frame to frame.
 #[derive(Default)]
@@ -38,6 +36,14 @@ impl TemporalHistory {
         self.previous = None;
     }
 
+    /// Whether `frame` continues this history: there was a previous frame since the last reset, of
+    /// the same size. Otherwise the frame starts every pixel afresh.
+    #[must_use]
+    pub fn continues(&self, frame: &FrameParams) -> bool {
+        self.previous
+            .is_some_and(|(_, size)| size == [frame.width, frame.height])
+    }
+
     /// The history of the last frame (row-major), empty before the first.
     #[must_use]
     pub fn texels(&self) -> &[HistoryTexel] {
@@ -60,20 +66,11 @@ impl TemporalHistory {
         TemporalParams::after(previous, frame)
     }
 
-    /// Adds `filled` (the frame's filled HDR image, from [`render_frame`]) to the history: the G-buffer
-    /// pass, then the temporal pass with `temporal` (usually [`Self::params_for`]). Returns the two
-    /// passes' milliseconds.
-    pub fn accumulate(
-        &mut self,
-        scene: &SceneView,
-        frame: &FrameParams,
-        temporal: &TemporalParams,
-        filled: &FrameImage,
-    ) -> [(&'static str, f64); 2] {
+    /// The G-buffer pass: each pixel's first hit ([`first_hit_gbuffer`]) into this frame's G-buffer.
+    pub fn gbuffer_pass(&mut self, scene: &SceneView, frame: &FrameParams) {
         let (w, h) = (frame.width, frame.height);
-        let n = w as usize * h as usize;
-        let start = Instant::now();
-        self.next_gbuffer.resize(n, GBufferTexel::SKY);
+        self.next_gbuffer
+            .resize(w as usize * h as usize, GBufferTexel::SKY);
         self.next_gbuffer
             .par_chunks_mut(w as usize)
             .enumerate()
@@ -82,10 +79,20 @@ impl TemporalHistory {
                     *texel = first_hit_gbuffer(scene, &SceneSlices, frame, x as u32, y as u32);
                 }
             });
-        let gbuffer_ms = start.elapsed().as_secs_f64() * 1e3;
+    }
 
-        let start = Instant::now();
-        self.next_history.resize(n, HistoryTexel::EMPTY);
+    /// The temporal pass: `filled` (the frame's filled HDR image) reprojected into each pixel's history
+    /// ([`temporal_accumulate`], with `temporal`, usually [`Self::params_for`]), after
+    /// [`Self::gbuffer_pass`]. This frame's history and G-buffer then become the previous ones.
+    pub fn temporal_pass(
+        &mut self,
+        frame: &FrameParams,
+        temporal: &TemporalParams,
+        filled: &[[f32; 4]],
+    ) {
+        let (w, h) = (frame.width, frame.height);
+        self.next_history
+            .resize(w as usize * h as usize, HistoryTexel::EMPTY);
         let (gbuffer, previous_gbuffer, previous_history) =
             (&self.next_gbuffer, &self.gbuffer, &self.history);
         self.next_history
@@ -96,7 +103,7 @@ impl TemporalHistory {
                     *texel = temporal_accumulate(
                         frame,
                         temporal,
-                        &filled.pixels,
+                        filled,
                         gbuffer,
                         previous_gbuffer,
                         previous_history,
@@ -108,41 +115,25 @@ impl TemporalHistory {
         std::mem::swap(&mut self.history, &mut self.next_history);
         std::mem::swap(&mut self.gbuffer, &mut self.next_gbuffer);
         self.previous = Some((frame.camera, [w, h]));
-        [
-            ("gbuffer", gbuffer_ms),
-            ("temporal", start.elapsed().as_secs_f64() * 1e3),
-        ]
     }
 
-    /// The displayed image: each pixel's history mean (alpha 1).
-    #[must_use]
-    pub fn image(&self, width: u32, height: u32) -> FrameImage {
-        FrameImage {
-            width,
-            height,
-            pixels: self
-                .history
-                .par_iter()
-                .map(HistoryTexel::displayed)
-                .collect(),
-        }
+    /// The resolve pass: each pixel's history mean ([`HistoryTexel::displayed`]) into `hdr`.
+    pub fn resolve_pass(&self, hdr: &mut [[f32; 4]]) {
+        hdr.par_iter_mut()
+            .zip(self.history.par_iter())
+            .for_each(|(out, texel)| *out = texel.displayed());
     }
-}
 
-/// [`render_frame`] followed by the temporal passes: the frame joins `history`, and the returned image
-/// is the history's mean. The statistics list all five passes.
-pub fn render_frame_with_history(
-    scene: &SceneView,
-    frame: &FrameParams,
-    fill_mode: u32,
-    history: &mut TemporalHistory,
-    progress: &(dyn Fn(u64) + Sync),
-) -> (FrameImage, RenderStats) {
-    let (filled, mut stats) = render_frame(scene, frame, fill_mode, progress);
-    let start = Instant::now();
-    let temporal = history.params_for(frame);
-    let passes = history.accumulate(scene, frame, &temporal, &filled);
-    stats.passes.extend(passes);
-    stats.render_ms += start.elapsed().as_secs_f64() * 1e3;
-    (history.image(frame.width, frame.height), stats)
+    /// Adds `filled` to the history outside a frame (the G-buffer and temporal passes with `temporal`):
+    /// for tests that feed the history images of their own.
+    pub fn accumulate(
+        &mut self,
+        scene: &SceneView,
+        frame: &FrameParams,
+        temporal: &TemporalParams,
+        filled: &FrameImage,
+    ) {
+        self.gbuffer_pass(scene, frame);
+        self.temporal_pass(frame, temporal, &filled.pixels);
+    }
 }

@@ -1,6 +1,6 @@
 //! Host-side work planning: the blocks of a frame, grouped by region, and their split into dispatch
 //! chunks of bounded size (one `render_samples` + `reduce_blocks` pair per chunk).
-use fovea_core::foveation::blocks::owning_block;
+use fovea_core::foveation::blocks::for_each_block;
 use fovea_core::foveation::regions::{FoveationParams, REGION_COUNT};
 use fovea_core::foveation::OwnedBlock;
 use fovea_core::kernel_abi::{SAMPLES_PER_INVOCATION, WORKGROUP_SIZE};
@@ -13,42 +13,14 @@ pub const DEFAULT_MAX_CHUNK_SAMPLES: u32 = 1 << 20;
 /// per 2^18 samples on two cores: far from the per-chunk timeout even for heavier scenes.
 pub const SOFTWARE_MAX_CHUNK_SAMPLES: u32 = 1 << 18;
 
-/// Every block of a `width × height` image, one list per region. A block is the pixel `p` with
-/// `owning_block(p).origin == p`; the walk visits only candidate origins on the nested grids (periphery
-/// squares, then their intermediate sub-squares, then fovea sub-squares), in the order the grids nest.
+/// Every block of a `width × height` image, one list per region, in the order of core's one walk over
+/// the blocks ([`for_each_block`]).
 #[must_use]
 pub fn enumerate_blocks(width: u32, height: u32, params: &FoveationParams) -> [Vec<OwnedBlock>; 3] {
     let mut out: [Vec<OwnedBlock>; 3] = Default::default();
-    let mut push = |x: u32, y: u32| {
-        let b = owning_block(x, y, params);
-        if b.origin == [x, y] {
-            let region = b.region.min(REGION_COUNT - 1);
-            out[region as usize].push(OwnedBlock {
-                origin: b.origin,
-                size: b.size,
-                region,
-            });
-        }
-    };
-    let [bf, bi, bp] = [
-        params.block_size[0].max(1),
-        params.block_size[1].max(1),
-        params.block_size[2].max(1),
-    ];
-    for py in (0..height).step_by(bp as usize) {
-        for px in (0..width).step_by(bp as usize) {
-            // Sub-squares down to the fovea grid; `push` keeps only block origins.
-            for iy in (py..(py + bp).min(height)).step_by(bi as usize) {
-                for ix in (px..(px + bp).min(width)).step_by(bi as usize) {
-                    for fy in (iy..(iy + bi).min(height)).step_by(bf as usize) {
-                        for fx in (ix..(ix + bi).min(width)).step_by(bf as usize) {
-                            push(fx, fy);
-                        }
-                    }
-                }
-            }
-        }
-    }
+    for_each_block(width, height, params, |block| {
+        out[block.region.min(REGION_COUNT - 1) as usize].push(block);
+    });
     out
 }
 
@@ -207,7 +179,7 @@ pub fn workgroups_2d(items: u64, max_x: u32) -> [u32; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use fovea_core::foveation::blocks::{count_blocks, count_samples};
+    use fovea_core::foveation::blocks::{count_blocks, count_samples, owning_block};
 
     fn params(gaze: [f32; 2], r: [f32; 2], blocks: [u32; 3]) -> FoveationParams {
         FoveationParams {

@@ -9,6 +9,7 @@ use fovea_core::foveation::fill::cell_buffer_len;
 use fovea_core::foveation::regions::FOVEATION_OK;
 use fovea_core::integrator::FrameParams;
 use fovea_core::kernel_abi::*;
+use fovea_core::passes::{frame_passes, FramePass, FrameSetup};
 use fovea_core::temporal::{GBufferTexel, HistoryTexel, TemporalParams};
 use fovea_frame::{FrameImage, RenderStats};
 
@@ -65,6 +66,9 @@ pub struct GpuRenderStats {
     /// per frame pipeline, which makes a driver that compiles shaders lazily (lavapipe: LLVM at the first
     /// dispatch) do so outside `render_ms`. Zero on later frames.
     pub warmup_ms: f64,
+    /// With temporal reuse: the history held no previous frame (new buffers, a new size or a reset),
+    /// so this frame started every pixel afresh.
+    pub history_restarted: bool,
 }
 
 /// A frame planned and bound, ready for [`VulkanContext::dispatch_frame`].
@@ -102,6 +106,7 @@ impl PreparedFrame {
             gpu_timestamps,
             plan_ms: self.plan_ms,
             warmup_ms: self.warmup_ms,
+            history_restarted: false,
         }
     }
 }
@@ -113,19 +118,68 @@ struct FrameTiming {
     render_ms: f64,
     gpu_timestamps: bool,
     submissions: u32,
-    /// Each pass's GPU milliseconds ([`PASS_TIMESTAMPS`], then the tone map and read-back), empty
+    /// Each pass's GPU milliseconds (named by [`FramePass::name`], then `read_back`), empty
     /// without timestamps.
     passes: Vec<(&'static str, f64)>,
 }
 
-/// What the last submission of a frame does after the fill.
+/// Where a frame's image goes after the tone map.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum FrameTail {
-    /// `fovea render`: tone map, then copy the LDR (and, with `want_hdr`, the HDR) image to the host.
+pub enum FrameOutput {
+    /// `fovea render`: copy the LDR (and, with `want_hdr`, the HDR) image to the host.
     ReadBack { want_hdr: bool },
-    /// `fovea view`: tone map, draw the region overlay if asked; the image stays on the device for the
-    /// swapchain.
-    Live { overlay: bool },
+    /// `fovea view`: draw the region overlay if asked; the image stays on the device for the swapchain
+    /// ([`VulkanContext::present`]).
+    Present { overlay: bool },
+}
+
+/// How to render a frame beyond its [`FrameParams`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameRequest {
+    /// `FILL_BILINEAR` or `FILL_REPLICATE`.
+    pub fill_mode: u32,
+    /// The tone map's exposure (stops).
+    pub exposure_ev: f32,
+    /// Temporal reuse: the frame joins each pixel's history (kept on the device from one frame to the
+    /// next; [`VulkanContext::reset_history`] forgets it), and the image is the history's mean.
+    pub history: bool,
+    pub output: FrameOutput,
+}
+
+impl FrameRequest {
+    /// The passes this frame runs: the device always tone-maps.
+    #[must_use]
+    pub fn setup(&self) -> FrameSetup {
+        FrameSetup {
+            history: self.history,
+            tonemap: true,
+            overlay: matches!(self.output, FrameOutput::Present { overlay: true }),
+        }
+    }
+}
+
+/// The pipelines (indices into [`VulkanContext::pipelines`]) that run `pass`, in dispatch order: those
+/// of its [`FramePass::kernel_entries`] (checked by a test against [`crate::spirv::ENTRY_POINTS`]).
+#[must_use]
+pub(crate) const fn pass_pipelines(pass: FramePass) -> &'static [usize] {
+    match pass {
+        FramePass::Samples => &[pipeline::RENDER_SAMPLES, pipeline::REDUCE_BLOCKS],
+        FramePass::CellMeans => &[pipeline::CELL_MEANS],
+        FramePass::Fill => &[pipeline::FILL],
+        FramePass::GBuffer => &[pipeline::GBUFFER],
+        FramePass::Temporal => &[pipeline::TEMPORAL],
+        FramePass::ResolveHistory => &[pipeline::RESOLVE_HISTORY],
+        FramePass::ToneMap => &[pipeline::TONEMAP],
+        FramePass::Overlay => &[pipeline::OVERLAY_REGIONS],
+    }
+}
+
+/// The index of `pass` in [`FramePass::ALL`]: its timestamp is query `2 + index`.
+fn pass_index(pass: FramePass) -> u32 {
+    FramePass::ALL
+        .iter()
+        .position(|p| *p == pass)
+        .expect("every pass is in FramePass::ALL") as u32
 }
 
 /// Records one compute dispatch over `items` invocations: binds `pipeline` and `set` (with the one dynamic
@@ -180,22 +234,10 @@ fn host_read_barrier(device: &ash::Device, cb: vk::CommandBuffer) {
     );
 }
 
-/// Resets the frame's two timestamp queries and writes the first one.
-/// Timestamp queries of a frame: 0 its start, 1 its end, and [`PASS_TIMESTAMPS`] after the samples
-/// and after each per-frame pass.
-pub(crate) const TIMESTAMP_QUERIES: u32 = 2 + PASS_TIMESTAMPS.len() as u32;
-
-/// The passes of the last submission, in order, each timed to the timestamp written after it (query
-/// `2 + k`); the samples end where the last submission starts. Passes a frame does not run take no
-/// time (their timestamp follows the previous one).
-const PASS_TIMESTAMPS: [&str; 6] = [
-    "samples",
-    "cell_means",
-    "fill",
-    "gbuffer",
-    "temporal",
-    "resolve_history",
-];
+/// Timestamp queries of a frame: 0 its start, 1 its end (after the read-back copies), and `2 + k`
+/// after pass `k` of [`FramePass::ALL`] where the frame runs it. The samples end where the last
+/// submission starts.
+pub(crate) const TIMESTAMP_QUERIES: u32 = 2 + FramePass::ALL.len() as u32;
 
 fn write_start_timestamp(device: &ash::Device, cb: vk::CommandBuffer, query_pool: vk::QueryPool) {
     // SAFETY: the query pool has TIMESTAMP_QUERIES queries; they are reset before being written.
@@ -205,7 +247,7 @@ fn write_start_timestamp(device: &ash::Device, cb: vk::CommandBuffer, query_pool
     }
 }
 
-/// Writes the timestamp that ends pass `k` of [`PASS_TIMESTAMPS`].
+/// Writes the timestamp that ends pass `k` of [`FramePass::ALL`].
 fn write_pass_timestamp(
     device: &ash::Device,
     cb: vk::CommandBuffer,
@@ -303,10 +345,8 @@ impl VulkanContext {
         }
     }
 
-    /// [`Self::render_frame_with_progress`], with temporal reuse where `history` holds: after the fill,
-    /// the `gbuffer`, `temporal` and `resolve_history` passes add the frame to each pixel's history
-    /// (kept on the device from one call to the next; [`Self::reset_history`] forgets it), and the images
-    /// read back are the history's mean.
+    /// [`Self::render_frame_with_progress`], with temporal reuse where `history` holds (see
+    /// [`FrameRequest::history`]); the images read back are then the history's mean.
     #[allow(clippy::too_many_arguments)]
     pub fn render_frame_and_history(
         &mut self,
@@ -318,37 +358,57 @@ impl VulkanContext {
         history: bool,
         progress: &dyn Fn(u64),
     ) -> Result<(GpuFrame, GpuRenderStats)> {
-        let temporal = history;
-        let prepared = self.prepare_frame(scene, frame, temporal)?;
-        let tail = FrameTail::ReadBack { want_hdr };
-        let result = self.dispatch_frame(
-            &prepared.plan,
-            &prepared.sizes,
+        let request = FrameRequest {
             fill_mode,
             exposure_ev,
-            temporal,
-            tail,
-            progress,
-        );
-        let timing = result?;
-        if temporal {
+            history,
+            output: FrameOutput::ReadBack { want_hdr },
+        };
+        self.render(scene, frame, &request, progress)
+    }
+
+    /// Renders one frame: plans its blocks on the host, then runs core's pass list
+    /// ([`fovea_core::passes::frame_passes`] for [`FrameRequest::setup`]) as dispatches of the kernel's
+    /// entry points: `render_samples` and `reduce_blocks` per chunk (one submission each, each waited
+    /// on with a timeout), then one submission for every later pass and the read-back.
+    /// `progress` receives the samples of each finished chunk.
+    ///
+    /// With [`FrameOutput::Present`] nothing is read back (`ldr` is empty): [`Self::present`] shows the
+    /// image and [`Self::read_back_hdr`] fetches its HDR for a screenshot.
+    pub fn render(
+        &mut self,
+        scene: &GpuScene,
+        frame: &FrameParams,
+        request: &FrameRequest,
+        progress: &dyn Fn(u64),
+    ) -> Result<(GpuFrame, GpuRenderStats)> {
+        let prepared = self.prepare_frame(scene, frame, request.history)?;
+        let timing = self.dispatch_frame(&prepared.plan, &prepared.sizes, request, progress)?;
+        if request.history {
             self.history_advanced(frame);
         }
+        let mut stats = prepared.stats(scene, timing);
+        stats.history_restarted = request.history && prepared.history_is_new;
 
-        let pixels = prepared.sizes.pixels;
+        let pixels = prepared.sizes.pixels as usize;
         let (w, h) = (frame.width, frame.height);
         let res = self.frame.as_mut().expect("frame resources exist");
-        let ldr = res.ldr_readback.read::<u32>(pixels as usize)?;
-        let hdr = if want_hdr {
-            Some(FrameImage {
-                width: w,
-                height: h,
-                pixels: res.hdr_readback.read::<[f32; 4]>(pixels as usize)?,
-            })
-        } else {
-            None
+        let (ldr, hdr) = match request.output {
+            FrameOutput::Present { .. } => (Vec::new(), None),
+            FrameOutput::ReadBack { want_hdr } => {
+                let ldr = res.ldr_readback.read::<u32>(pixels)?;
+                let hdr = if want_hdr {
+                    Some(FrameImage {
+                        width: w,
+                        height: h,
+                        pixels: res.hdr_readback.read::<[f32; 4]>(pixels)?,
+                    })
+                } else {
+                    None
+                };
+                (ldr, hdr)
+            }
         };
-        let stats = prepared.stats(scene, timing);
         Ok((
             GpuFrame {
                 width: w,
@@ -358,44 +418,6 @@ impl VulkanContext {
             },
             stats,
         ))
-    }
-
-    /// Renders one frame of the live view (`fovea view`): the same passes as
-    /// [`Self::render_frame_and_history`] (`accumulated_frames` frames since the history's last reset;
-    /// 0 resets it), then the history's mean is tone-mapped and, with `overlay`, the regions are drawn
-    /// over it. Nothing is read back: [`Self::present`] shows the image, [`Self::read_back_hdr`] fetches
-    /// the mean for a screenshot. Returns the statistics and the number of earlier frames actually in
-    /// the history (0 when it had to restart, e.g. after a resize).
-    pub fn render_live_frame(
-        &mut self,
-        scene: &GpuScene,
-        frame: &FrameParams,
-        fill_mode: u32,
-        exposure_ev: f32,
-        accumulated_frames: u32,
-        overlay: bool,
-    ) -> Result<(GpuRenderStats, u32)> {
-        if accumulated_frames == 0 {
-            self.reset_history();
-        }
-        let prepared = self.prepare_frame(scene, frame, true)?;
-        let accumulated_frames = if prepared.history_is_new {
-            0
-        } else {
-            accumulated_frames
-        };
-        let timing = self.dispatch_frame(
-            &prepared.plan,
-            &prepared.sizes,
-            fill_mode,
-            exposure_ev,
-            true,
-            FrameTail::Live { overlay },
-            &|_| {},
-        )?;
-        self.history_advanced(frame);
-        let stats = prepared.stats(scene, timing);
-        Ok((stats, accumulated_frames))
     }
 
     /// After a frame with temporal reuse: its history and G-buffer become the previous ones.
@@ -661,16 +683,13 @@ impl VulkanContext {
         Ok(())
     }
 
-    /// Records and submits all dispatches of a frame; returns (render ms, whether GPU-timed, submissions).
-    #[allow(clippy::too_many_arguments)]
+    /// Records and submits all dispatches of a frame, pass by pass from core's list; returns what they
+    /// took.
     fn dispatch_frame(
         &mut self,
         plan: &ChunkPlan,
         sizes: &Sizes,
-        fill_mode: u32,
-        exposure_ev: f32,
-        temporal: bool,
-        tail: FrameTail,
+        request: &FrameRequest,
         progress: &dyn Fn(u64),
     ) -> Result<FrameTiming> {
         let layout = self.pipeline_layout;
@@ -701,13 +720,21 @@ impl VulkanContext {
             block_count: 0,
             spp: 0,
             item_count: 0,
-            fill_mode,
-            exposure_ev,
+            fill_mode: request.fill_mode,
+            exposure_ev: request.exposure_ev,
             _pad: [0; 3],
         };
+        let passes: Vec<FramePass> = frame_passes(request.setup()).collect();
+        debug_assert_eq!(passes.first(), Some(&FramePass::Samples));
 
         let wall = Instant::now();
         let mut submissions = 0u32;
+        // The samples pass: one submission per chunk, so that no submission runs long enough to trip a
+        // driver's watchdog and the progress bar moves.
+        let [sample_pipeline, reduce_pipeline] = pass_pipelines(FramePass::Samples) else {
+            unreachable!("the samples pass is two dispatches")
+        };
+        let (sample_pipeline, reduce_pipeline) = (*sample_pipeline, *reduce_pipeline);
         for (i, chunk) in plan.chunks.iter().enumerate() {
             let offset = ChunkPlan::block_offset(chunk) as u32;
             let pc = KernelPushConstants {
@@ -724,7 +751,7 @@ impl VulkanContext {
                 dispatch(
                     device,
                     cb,
-                    pipeline::RENDER_SAMPLES,
+                    sample_pipeline,
                     offset,
                     &pc,
                     c.sample_invocations(),
@@ -733,7 +760,7 @@ impl VulkanContext {
                 dispatch(
                     device,
                     cb,
-                    pipeline::REDUCE_BLOCKS,
+                    reduce_pipeline,
                     offset,
                     &pc,
                     u64::from(c.block_count),
@@ -744,6 +771,7 @@ impl VulkanContext {
             progress(chunk.samples());
         }
 
+        // Every later pass, then the read-back, in one submission.
         let res = self.frame.as_ref().expect("frame resources exist");
         let (ldr, ldr_rb, hdr, hdr_rb) = (
             res.ldr.buffer,
@@ -753,117 +781,117 @@ impl VulkanContext {
         );
         let (pixels, cells) = (sizes.pixels, sizes.cells);
         let no_chunks = plan.chunks.is_empty();
-        self.submit_and_wait("the fill and tone map", CHUNK_TIMEOUT, |device, cb| {
-            let pass_done = |k: u32| {
-                if timed {
-                    write_pass_timestamp(device, cb, query_pool, k);
+        let output = request.output;
+        self.submit_and_wait(
+            "the passes after the samples",
+            CHUNK_TIMEOUT,
+            |device, cb| {
+                if no_chunks && timed {
+                    write_start_timestamp(device, cb, query_pool);
                 }
-            };
-            if no_chunks && timed {
-                write_start_timestamp(device, cb, query_pool);
-            }
-            pass_done(0);
-            if cells > 0 {
-                let pc = KernelPushConstants {
-                    item_count: cells as u32,
-                    ..base
-                };
-                dispatch(device, cb, pipeline::CELL_MEANS, 0, &pc, cells);
-                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
-            }
-            pass_done(1);
-            let pc = KernelPushConstants {
-                item_count: pixels as u32,
-                ..base
-            };
-            dispatch(device, cb, pipeline::FILL, 0, &pc, pixels);
-            barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
-            pass_done(2);
-            for (k, p) in [
-                pipeline::GBUFFER,
-                pipeline::TEMPORAL,
-                pipeline::RESOLVE_HISTORY,
-            ]
-            .into_iter()
-            .enumerate()
-            {
-                if temporal {
-                    dispatch(device, cb, p, 0, &pc, pixels);
-                    barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+                for &pass in &passes {
+                    // Each pass's items: its core function runs once per cell or per pixel.
+                    let items = match pass {
+                        FramePass::Samples => 0, // dispatched chunk by chunk above
+                        FramePass::CellMeans => cells,
+                        _ => pixels,
+                    };
+                    if items > 0 {
+                        let pc = KernelPushConstants {
+                            item_count: items as u32,
+                            ..base
+                        };
+                        for &p in pass_pipelines(pass) {
+                            dispatch(device, cb, p, 0, &pc, items);
+                            barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+                        }
+                    }
+                    if timed {
+                        write_pass_timestamp(device, cb, query_pool, pass_index(pass));
+                    }
                 }
-                pass_done(3 + k as u32);
-            }
-            dispatch(device, cb, pipeline::TONEMAP, 0, &pc, pixels);
-            if matches!(tail, FrameTail::Live { overlay: true, .. }) {
-                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
-                dispatch(device, cb, pipeline::OVERLAY_REGIONS, 0, &pc, pixels);
-            }
-            barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
-            // SAFETY: the readback buffers are as large as the images; the host barrier makes the copies
-            // visible to the mapped reads after the fence.
-            unsafe {
-                if let FrameTail::ReadBack { want_hdr } = tail {
-                    device.cmd_copy_buffer(
-                        cb,
-                        ldr,
-                        ldr_rb,
-                        &[vk::BufferCopy::default().size(pixels * 4)],
-                    );
-                    if want_hdr {
+                barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
+                // SAFETY: the readback buffers are as large as the images; the host barrier makes the copies
+                // visible to the mapped reads after the fence.
+                unsafe {
+                    if let FrameOutput::ReadBack { want_hdr } = output {
                         device.cmd_copy_buffer(
                             cb,
-                            hdr,
-                            hdr_rb,
-                            &[vk::BufferCopy::default().size(pixels * PIXEL)],
+                            ldr,
+                            ldr_rb,
+                            &[vk::BufferCopy::default().size(pixels * 4)],
+                        );
+                        if want_hdr {
+                            device.cmd_copy_buffer(
+                                cb,
+                                hdr,
+                                hdr_rb,
+                                &[vk::BufferCopy::default().size(pixels * PIXEL)],
+                            );
+                        }
+                        host_read_barrier(device, cb);
+                    }
+                    if timed {
+                        device.cmd_write_timestamp(
+                            cb,
+                            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                            query_pool,
+                            1,
                         );
                     }
-                    host_read_barrier(device, cb);
                 }
-                if timed {
-                    device.cmd_write_timestamp(
-                        cb,
-                        vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                        query_pool,
-                        1,
-                    );
-                }
-            }
-        })?;
+            },
+        )?;
         submissions += 1;
         let wall_ms = wall.elapsed().as_secs_f64() * 1e3;
 
         if timed {
             let mut ticks = [0u64; TIMESTAMP_QUERIES as usize];
-            // SAFETY: every query was written by the submissions waited on above.
+            // SAFETY: the queries read are those written by the submissions waited on above (start,
+            // end, and each pass the frame ran); the rest were reset and are not read.
             let r = unsafe {
                 self.shared.device.get_query_pool_results(
                     query_pool,
                     0,
-                    &mut ticks,
+                    &mut ticks[..2],
                     vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
                 )
             };
-            if r.is_ok() {
+            let mut ok = r.is_ok();
+            for &pass in &passes {
+                let k = 2 + pass_index(pass);
+                // SAFETY: as above; query `k` was written after `pass`.
+                let r = unsafe {
+                    self.shared.device.get_query_pool_results(
+                        query_pool,
+                        k,
+                        &mut ticks[k as usize..k as usize + 1],
+                        vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                    )
+                };
+                ok &= r.is_ok();
+            }
+            if ok {
                 let ms = |from: u64, to: u64| {
                     (to.wrapping_sub(from) & self.timestamp_mask) as f64
                         * f64::from(self.timestamp_period)
                         * 1e-6
                 };
-                let mut passes = Vec::new();
+                let mut timings = Vec::new();
                 let mut previous = ticks[0];
-                for (k, name) in PASS_TIMESTAMPS.iter().enumerate() {
-                    let t = ticks[2 + k];
-                    if temporal || k < 3 {
-                        passes.push((*name, ms(previous, t)));
-                    }
+                for &pass in &passes {
+                    let t = ticks[2 + pass_index(pass) as usize];
+                    timings.push((pass.name(), ms(previous, t)));
                     previous = t;
                 }
-                passes.push(("tonemap", ms(previous, ticks[1])));
+                if matches!(output, FrameOutput::ReadBack { .. }) {
+                    timings.push(("read_back", ms(previous, ticks[1])));
+                }
                 return Ok(FrameTiming {
                     render_ms: ms(ticks[0], ticks[1]),
                     gpu_timestamps: true,
                     submissions,
-                    passes,
+                    passes: timings,
                 });
             }
         }
@@ -873,5 +901,24 @@ impl VulkanContext {
             submissions,
             passes: Vec::new(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spirv::ENTRY_POINTS;
+
+    /// The pipelines that run each pass are those of the kernel entries core lists for it: the pass
+    /// list and the kernel cannot drift apart unnoticed.
+    #[test]
+    fn every_pass_dispatches_the_kernel_entries_core_names_for_it() {
+        for pass in FramePass::ALL {
+            let entries: Vec<&str> = pass_pipelines(pass)
+                .iter()
+                .map(|&p| ENTRY_POINTS[p])
+                .collect();
+            assert_eq!(entries, pass.kernel_entries(), "{pass:?}");
+        }
     }
 }

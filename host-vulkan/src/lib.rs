@@ -41,7 +41,7 @@ pub mod traversal;
 pub use ash::vk;
 pub use context::{validation_requested, ContextOptions, VulkanContext};
 pub use error::VulkanError;
-pub use frame::{GpuFrame, GpuRenderStats};
+pub use frame::{FrameOutput, FrameRequest, GpuFrame, GpuRenderStats};
 pub use instance::{list_devices, DeviceInfo};
 pub use present::{HudOverlay, PresentOutcome, PresentSource, WindowHandles};
 pub use scene::GpuScene;

@@ -23,7 +23,7 @@ use fovea_scene::environment::Environment;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::ReportArgs;
-use crate::backend::Renderer;
+use crate::backend::{FrameOutput, FrameRequest, Renderer};
 use crate::error::{FoveaError, Result};
 use crate::output::{regions_overlay, tonemapped_rgb8, write_png};
 use crate::scene_setup::{choose_camera, default_scene_path, prepare_scene, Lighting};
@@ -466,15 +466,14 @@ fn run_scene(
                 "{scene_name}: reference ({} spp)",
                 plan.reference_spp
             ));
-            let rendered = renderer.render(
-                &scene.packed,
-                &reference_frame,
-                plan.fill_mode,
-                args.exposure,
-                true,
-                false,
-                &|n| bar.inc(n),
-            )?;
+            let request = FrameRequest {
+                fill_mode: plan.fill_mode,
+                exposure_ev: args.exposure,
+                history: false,
+                output: FrameOutput::ReadBack { want_hdr: true },
+            };
+            let rendered =
+                renderer.render(&scene.packed, &reference_frame, &request, &|n| bar.inc(n))?;
             let image = rendered
                 .hdr
                 .ok_or_else(|| FoveaError::Backend("the backend returned no HDR image".into()))?;
@@ -639,15 +638,15 @@ impl Measurer<'_> {
                 run + 1,
                 self.plan.runs
             ));
-            let rendered = renderer.render(
-                self.packed,
-                &frame,
-                self.plan.fill_mode,
-                self.args.exposure,
-                first.is_none(),
-                false,
-                &|n| self.bar.inc(n),
-            )?;
+            let request = FrameRequest {
+                fill_mode: self.plan.fill_mode,
+                exposure_ev: self.args.exposure,
+                history: false,
+                output: FrameOutput::ReadBack {
+                    want_hdr: first.is_none(),
+                },
+            };
+            let rendered = renderer.render(self.packed, &frame, &request, &|n| self.bar.inc(n))?;
             runs_ms.push(rendered.stats.render_ms);
             match &first {
                 None => {

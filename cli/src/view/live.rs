@@ -1,42 +1,20 @@
-//! The live view's renderer: a frame on the CPU host or the Vulkan kernel, added to each pixel's
-//! history, tone-mapped, overlaid and presented to the window through the Vulkan context (which owns
-//! the window's surface in both cases). An adapter around the hosts: the history, tone map and overlay
-//! are core functions.
-use rayon::prelude::*;
-
-use fovea_core::foveation::overlay::overlay_rgba8;
+//! The live view's renderer: the one backend type ([`Renderer`]) rendering frames for a window, and
+//! the Vulkan context that presents them (the rendering device itself on the Vulkan backend; a
+//! present-only context when the CPU renders). The passes (samples to history to tone map and overlay)
+//! are core's list, run by the backend.
 use fovea_core::integrator::FrameParams;
-use fovea_core::post::tonemap::tonemap_to_rgba8;
-use fovea_core::scene::FeatureFlags;
-use fovea_cpu::{render_frame_with_history, FrameImage, RenderStats, TemporalHistory};
+use fovea_cpu::{FrameImage, RenderStats};
 use fovea_scene::pack::PackedScene;
-use fovea_vulkan::{
-    ContextOptions, GpuScene, HudOverlay, PresentOutcome, PresentSource, VulkanContext,
-    WindowHandles,
-};
-use glam::Vec3;
+use fovea_vulkan::{HudOverlay, PresentOutcome, PresentSource, VulkanContext, WindowHandles};
 
+use crate::backend::{FrameOutput, FrameRequest, Renderer};
 use crate::error::{FoveaError, Result};
-
-/// Where frames are rendered.
-enum LiveBackend {
-    /// The CPU host; the history, its image and the presented RGBA8 image live on the host.
-    Cpu {
-        pool: rayon::ThreadPool,
-        features: FeatureFlags,
-        history: Box<TemporalHistory>,
-        mean: Option<FrameImage>,
-        rgba: Vec<u32>,
-    },
-    /// The Vulkan kernel; everything stays on the device.
-    Vulkan { scene: Box<GpuScene> },
-}
 
 /// A renderer that presents to one window.
 pub struct LiveRenderer {
-    // Field order: the scene's device buffers go before the context.
-    backend: LiveBackend,
-    ctx: VulkanContext,
+    renderer: Renderer,
+    /// The context that presents the CPU's frames; `None` when the Vulkan backend presents its own.
+    presenter: Option<VulkanContext>,
     /// "cpu" or "vulkan".
     pub backend_name: &'static str,
     /// The rendering device: the CPU model, or the Vulkan device and driver.
@@ -63,62 +41,27 @@ impl LiveRenderer {
         packed: &PackedScene,
         specialize: bool,
     ) -> Result<Self> {
-        let options = ContextOptions {
-            device_index,
-            validation: fovea_vulkan::validation_requested(),
-            window: Some(window),
-            // The CPU backend only presents: no acceleration structures for it.
-            traversal: if use_gpu {
-                traversal.into()
-            } else {
-                fovea_vulkan::Traversal::Software
-            },
-        };
-        let mut ctx = VulkanContext::new(&options).map_err(|e| {
-            FoveaError::View(format!(
-                "cannot present to the window through Vulkan: {e} (the view needs a Vulkan driver even \
-                 with --backend cpu; lavapipe, Debian's mesa-vulkan-drivers, is enough)"
-            ))
-        })?;
-        let present_device = ctx.device_description();
-        if use_gpu {
-            let start = std::time::Instant::now();
-            let mut scene = ctx.upload_scene(packed).map_err(vulkan_error)?;
-            if !specialize {
-                scene.features = FeatureFlags::ALL;
-            }
-            Ok(Self {
-                backend: LiveBackend::Vulkan {
-                    scene: Box::new(scene),
-                },
-                ctx,
-                backend_name: "vulkan",
-                device: present_device.clone(),
-                present_device,
-                upload_ms: start.elapsed().as_secs_f64() * 1e3,
-            })
+        let (mut renderer, mut presenter) =
+            Renderer::for_window(window, device_index, traversal, use_gpu, threads)?;
+        let start = std::time::Instant::now();
+        renderer.set_scene(packed, specialize)?;
+        let upload_ms = if use_gpu {
+            start.elapsed().as_secs_f64() * 1e3
         } else {
-            let pool = crate::backend::cpu_pool(threads)?;
-            let device = crate::stats::cpu_device_name(pool.current_num_threads());
-            Ok(Self {
-                backend: LiveBackend::Cpu {
-                    pool,
-                    features: if specialize {
-                        packed.features()
-                    } else {
-                        FeatureFlags::ALL
-                    },
-                    history: Box::default(),
-                    mean: None,
-                    rgba: Vec::new(),
-                },
-                ctx,
-                backend_name: "cpu",
-                device,
-                present_device,
-                upload_ms: 0.0,
-            })
-        }
+            0.0
+        };
+        let present_device = match (presenter.as_mut(), renderer.vulkan_context()) {
+            (Some(ctx), _) | (None, Some(ctx)) => ctx.device_description(),
+            (None, None) => unreachable!("a live renderer always has a presenting context"),
+        };
+        Ok(Self {
+            backend_name: renderer.name(),
+            device: renderer.device_name(),
+            renderer,
+            presenter,
+            present_device,
+            upload_ms,
+        })
     }
 
     /// Renders `frame`, adds it to each pixel's history (`accumulated_before` frames since the last
@@ -134,58 +77,22 @@ impl LiveRenderer {
         accumulated_before: u32,
         overlay: bool,
     ) -> Result<(RenderStats, u32)> {
-        match &mut self.backend {
-            LiveBackend::Cpu {
-                pool,
-                features,
-                history,
-                mean,
-                rgba,
-            } => {
-                let view = packed.view().with_features(*features);
-                let resized = mean
-                    .as_ref()
-                    .is_none_or(|m| m.width != frame.width || m.height != frame.height);
-                let before = if resized { 0 } else { accumulated_before };
-                if before == 0 {
-                    history.reset();
-                }
-                let (image, stats) = pool.install(|| {
-                    render_frame_with_history(&view, frame, fill_mode, history, &|_| {})
-                });
-                let mean = mean.insert(image);
-                let (w, fov) = (mean.width, frame.foveation);
-                rgba.resize(mean.pixels.len(), 0);
-                pool.install(|| {
-                    rgba.par_iter_mut()
-                        .zip(mean.pixels.par_iter())
-                        .enumerate()
-                        .for_each(|(i, (out, p))| {
-                            let c = tonemap_to_rgba8(Vec3::new(p[0], p[1], p[2]), exposure_ev);
-                            *out = if overlay {
-                                overlay_rgba8(c, i as u32 % w, i as u32 / w, &fov)
-                            } else {
-                                c
-                            };
-                        });
-                });
-                Ok((stats, before))
-            }
-            LiveBackend::Vulkan { scene } => {
-                let (stats, before) = self
-                    .ctx
-                    .render_live_frame(
-                        scene,
-                        frame,
-                        fill_mode,
-                        exposure_ev,
-                        accumulated_before,
-                        overlay,
-                    )
-                    .map_err(vulkan_error)?;
-                Ok((stats.render, before))
-            }
+        if accumulated_before == 0 {
+            self.renderer.reset_history();
         }
+        let request = FrameRequest {
+            fill_mode,
+            exposure_ev,
+            history: true,
+            output: FrameOutput::Present { overlay },
+        };
+        let rendered = self.renderer.render(packed, frame, &request, &|_| {})?;
+        let before = if rendered.history_restarted {
+            0
+        } else {
+            accumulated_before
+        };
+        Ok((rendered.stats, before))
     }
 
     /// Presents the last frame with `hud` over its top-left corner.
@@ -194,39 +101,39 @@ impl LiveRenderer {
         hud: Option<HudOverlay<'_>>,
         window_size: [u32; 2],
     ) -> Result<PresentOutcome> {
-        let source = match &self.backend {
-            LiveBackend::Cpu {
-                mean: Some(m),
-                rgba,
-                ..
-            } => PresentSource::Host {
-                pixels: rgba,
-                width: m.width,
-                height: m.height,
-            },
-            LiveBackend::Cpu { mean: None, .. } => {
-                return Err(FoveaError::View("nothing rendered to present".into()))
-            }
-            LiveBackend::Vulkan { .. } => PresentSource::LastFrame,
+        let outcome = match (self.presenter.as_mut(), self.renderer.presented_rgba8()) {
+            (Some(ctx), Some((pixels, width, height))) => ctx.present(
+                PresentSource::Host {
+                    pixels,
+                    width,
+                    height,
+                },
+                hud,
+                window_size,
+            ),
+            (Some(_), None) => return Err(FoveaError::View("nothing rendered to present".into())),
+            (None, _) => self
+                .renderer
+                .vulkan_context()
+                .expect("without a presenter the Vulkan backend presents")
+                .present(PresentSource::LastFrame, hud, window_size),
         };
-        self.ctx
-            .present(source, hud, window_size)
-            .map_err(vulkan_error)
+        outcome.map_err(vulkan_error)
     }
 
-    /// The running mean (linear HDR) of the last frame, for a screenshot.
+    /// The displayed HDR image (the history's mean) of the last frame, for a screenshot.
     pub fn mean_hdr(&mut self) -> Result<FrameImage> {
-        match &self.backend {
-            LiveBackend::Cpu { mean: Some(m), .. } => Ok(m.clone()),
-            LiveBackend::Cpu { mean: None, .. } => {
-                Err(FoveaError::View("nothing rendered to save".into()))
-            }
-            LiveBackend::Vulkan { .. } => self.ctx.read_back_hdr().map_err(vulkan_error),
-        }
+        self.renderer.last_hdr()
     }
 
     /// Everything the Vulkan validation layer reported (with `FOVEA_VULKAN_VALIDATION=1`).
     pub fn validation_messages(&self) -> Vec<String> {
-        self.ctx.validation_messages()
+        let mut messages = self
+            .presenter
+            .as_ref()
+            .map(VulkanContext::validation_messages)
+            .unwrap_or_default();
+        messages.extend(self.renderer.validation_messages());
+        messages
     }
 }

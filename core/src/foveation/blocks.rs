@@ -133,46 +133,65 @@ pub fn samples_in_block(block: &OwnedBlock, params: &FoveationParams) -> u32 {
     params.spp[block.region as usize]
 }
 
-/// Visits every block of a `width × height` image once, in the order of the nested grids, and adds 1
-/// (`per_block == false`) or the block's samples to `counts[region]`.
-fn accumulate_blocks(
+/// Visits every block of a `width × height` image whose origin lies in rows `first_row..end_row`, once,
+/// in the order the grids nest: each periphery-grid square left to right, then (unless it is one periphery
+/// block) its intermediate-grid squares, then (unless each is one intermediate block) their fovea-grid
+/// squares. `first_row` must be a multiple of the periphery block size (`b_p`), so the rows split into
+/// bands that share no block; `end_row` is clamped to `height`.
+///
+/// This is the one walk over a frame's blocks: the CPU host renders each band's blocks with it, the
+/// Vulkan host lists them for its dispatches, and [`count_blocks`]/[`count_samples`] count them. It
+/// calls [`owning_block`]'s two rules once per candidate square rather than once per pixel.
+/// Host-side (a generic closure); the kernel finds its blocks in the list the host wrote.
+pub fn for_each_block_in_rows(
     width: u32,
     height: u32,
+    first_row: u32,
+    end_row: u32,
     params: &FoveationParams,
-    per_block: bool,
-) -> [u64; 3] {
-    let mut counts = [0u64; 3];
-    let weight = |region: u32| -> u64 {
-        if per_block {
-            1
-        } else {
-            u64::from(params.spp[region as usize])
-        }
-    };
-    let (bf, bi, bp) = (
-        params.block_size[0],
-        params.block_size[1],
-        params.block_size[2],
-    );
-    let mut py = 0;
-    while py < height {
+    mut visit: impl FnMut(OwnedBlock),
+) {
+    let [bf, bi, bp] = [
+        params.block_size[0].max(1),
+        params.block_size[1].max(1),
+        params.block_size[2].max(1),
+    ];
+    let end_row = end_row.min(height);
+    let mut py = first_row;
+    while py < end_row {
         let mut px = 0;
         while px < width {
             if is_periphery_block(px, py, params) {
-                counts[2] += weight(REGION_PERIPHERY);
+                visit(OwnedBlock {
+                    origin: [px, py],
+                    size: bp,
+                    region: REGION_PERIPHERY,
+                });
             } else {
                 let mut iy = py;
                 while iy < (py + bp).min(height) {
                     let mut ix = px;
                     while ix < (px + bp).min(width) {
                         if is_intermediate_block(ix, iy, params) {
-                            counts[1] += weight(REGION_INTERMEDIATE);
+                            visit(OwnedBlock {
+                                origin: [ix, iy],
+                                size: bi,
+                                region: REGION_INTERMEDIATE,
+                            });
                         } else {
-                            // All fovea-size sub-blocks of the clipped intermediate-size square.
-                            let ex = (ix + bi).min(width) - ix;
-                            let ey = (iy + bi).min(height) - iy;
-                            let n = u64::from(ex.div_ceil(bf)) * u64::from(ey.div_ceil(bf));
-                            counts[0] += n * weight(REGION_FOVEA);
+                            let mut fy = iy;
+                            while fy < (iy + bi).min(height) {
+                                let mut fx = ix;
+                                while fx < (ix + bi).min(width) {
+                                    visit(OwnedBlock {
+                                        origin: [fx, fy],
+                                        size: bf,
+                                        region: REGION_FOVEA,
+                                    });
+                                    fx += bf;
+                                }
+                                fy += bf;
+                            }
                         }
                         ix += bi;
                     }
@@ -183,6 +202,34 @@ fn accumulate_blocks(
         }
         py += bp;
     }
+}
+
+/// [`for_each_block_in_rows`] over the whole image.
+pub fn for_each_block(
+    width: u32,
+    height: u32,
+    params: &FoveationParams,
+    visit: impl FnMut(OwnedBlock),
+) {
+    for_each_block_in_rows(width, height, 0, height, params, visit);
+}
+
+/// Adds 1 (`per_block == false`) or the block's samples to `counts[region]` for every block.
+fn accumulate_blocks(
+    width: u32,
+    height: u32,
+    params: &FoveationParams,
+    per_block: bool,
+) -> [u64; 3] {
+    let mut counts = [0u64; 3];
+    for_each_block(width, height, params, |block| {
+        let region = block.region as usize;
+        counts[region] += if per_block {
+            1
+        } else {
+            u64::from(params.spp[region])
+        };
+    });
     counts
 }
 
@@ -277,6 +324,31 @@ mod tests {
                     }
                 }
                 assert!(cover.iter().all(|&c| c == 1), "{w}x{h} {p:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_walk_visits_exactly_the_brute_force_blocks_and_bands_add_up() {
+        for (w, h) in [(97u32, 61u32), (8, 8), (1, 1), (13, 5)] {
+            for p in cases() {
+                let key = |b: &OwnedBlock| (b.origin[1], b.origin[0]);
+                let mut slow = enumerate(w, h, &p);
+                slow.sort_by_key(key);
+                let mut walked = Vec::new();
+                for_each_block(w, h, &p, |b| walked.push(b));
+                walked.sort_by_key(key);
+                assert_eq!(walked, slow, "{w}x{h} {p:?}");
+                // Band by band (as the CPU host renders): the same blocks.
+                let band = p.block_size[2];
+                let mut banded = Vec::new();
+                let mut y = 0;
+                while y < h {
+                    for_each_block_in_rows(w, h, y, y + band, &p, |b| banded.push(b));
+                    y += band;
+                }
+                banded.sort_by_key(key);
+                assert_eq!(banded, slow, "{w}x{h} {p:?} in bands");
             }
         }
     }

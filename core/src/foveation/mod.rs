@@ -9,8 +9,8 @@ pub mod overlay;
 pub mod regions;
 
 pub use blocks::{
-    block_centre, block_extent, block_sample_position, count_blocks, count_samples, owning_block,
-    samples_in_block, OwnedBlock,
+    block_centre, block_extent, block_sample_position, count_blocks, count_samples, for_each_block,
+    for_each_block_in_rows, owning_block, samples_in_block, OwnedBlock,
 };
 pub use display::{
     eccentricity_to_radius_px, paper_params_for_display, pixels_per_degree, radius_for_resolution,

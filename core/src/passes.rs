@@ -1,0 +1,152 @@
+//! The frame as one list of passes, which both hosts run in this order.
+//!
+//! Each pass is a core function over one element (a block, a cell, a pixel). The CPU host runs a pass as
+//! one rayon loop over the core function (`fovea_cpu`); the Vulkan host as dispatches of the kernel
+//! entry points that call it (`fovea_vulkan`). Neither host keeps its own order: both walk
+//! [`frame_passes`] and `match` each [`FramePass`] to their step, and both time the passes under
+//! [`FramePass::name`] (`--stats`' `pass_ms`, the view's HUD). Adding a pass (the denoiser's, for
+//! example) is one variant here, one core function, one CPU step, one kernel entry and a test that the
+//! two backends agree on it; the `match`es in the hosts do not compile until it has both steps.
+//!
+//! Host-side only: the kernel runs one entry point per dispatch and has no use for the list (nor for
+//! its `&str` names), so the module is not built for SPIR-V.
+
+/// One pass of a frame, in the order of [`FramePass::ALL`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FramePass {
+    /// Every block's samples and their mean, written to each pixel of the block (the replicated
+    /// image): [`crate::integrator::block_sample_sum`] and [`crate::foveation::block_mean`].
+    Samples,
+    /// The mean of each cell of the fill's coarse grids: [`crate::foveation::cell_mean_at`].
+    CellMeans,
+    /// Each pixel of a coarse block interpolated between cell means, in place:
+    /// [`crate::foveation::fill_value`].
+    Fill,
+    /// Each pixel's first hit (distance, normal, albedo): [`crate::temporal::first_hit_gbuffer`].
+    GBuffer,
+    /// The frame reprojected into each pixel's history and accumulated:
+    /// [`crate::temporal::temporal_accumulate`].
+    Temporal,
+    /// The history's mean as the frame's HDR image: [`crate::temporal::HistoryTexel::displayed`].
+    ResolveHistory,
+    /// HDR to RGBA8 (exposure, Reinhard, sRGB): [`crate::post::tonemap::tonemap_to_rgba8`].
+    ToneMap,
+    /// The regions' outlines over the RGBA8 image (`fovea view`):
+    /// [`crate::foveation::overlay::overlay_rgba8`].
+    Overlay,
+}
+
+/// What a frame needs beyond the foveated image itself; it decides which passes run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrameSetup {
+    /// Temporal reuse: the G-buffer, temporal and resolve passes (`fovea view`, `render --history`).
+    pub history: bool,
+    /// An 8-bit image for display or a PNG (the tone map).
+    pub tonemap: bool,
+    /// The regions drawn over the 8-bit image (the view's overlay key); needs `tonemap`.
+    pub overlay: bool,
+}
+
+impl FramePass {
+    /// Every pass, in the order a frame runs them.
+    pub const ALL: [FramePass; 8] = [
+        FramePass::Samples,
+        FramePass::CellMeans,
+        FramePass::Fill,
+        FramePass::GBuffer,
+        FramePass::Temporal,
+        FramePass::ResolveHistory,
+        FramePass::ToneMap,
+        FramePass::Overlay,
+    ];
+
+    /// The pass's name in statistics (`pass_ms` in `--stats`, the HUD).
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            FramePass::Samples => "samples",
+            FramePass::CellMeans => "cell_means",
+            FramePass::Fill => "fill",
+            FramePass::GBuffer => "gbuffer",
+            FramePass::Temporal => "temporal",
+            FramePass::ResolveHistory => "resolve_history",
+            FramePass::ToneMap => "tonemap",
+            FramePass::Overlay => "overlay",
+        }
+    }
+
+    /// The kernel entry points that run the pass on the Vulkan host, in dispatch order. The samples
+    /// take two per dispatch chunk: the samples, spread over invocations, then each block's mean.
+    #[must_use]
+    pub const fn kernel_entries(self) -> &'static [&'static str] {
+        match self {
+            FramePass::Samples => &["render_samples", "reduce_blocks"],
+            FramePass::CellMeans => &["cell_means"],
+            FramePass::Fill => &["fill"],
+            FramePass::GBuffer => &["gbuffer"],
+            FramePass::Temporal => &["temporal"],
+            FramePass::ResolveHistory => &["resolve_history"],
+            FramePass::ToneMap => &["tonemap"],
+            FramePass::Overlay => &["overlay_regions"],
+        }
+    }
+
+    /// Whether a frame with `setup` runs this pass.
+    #[must_use]
+    pub const fn runs_in(self, setup: FrameSetup) -> bool {
+        match self {
+            FramePass::Samples | FramePass::CellMeans | FramePass::Fill => true,
+            FramePass::GBuffer | FramePass::Temporal | FramePass::ResolveHistory => setup.history,
+            FramePass::ToneMap => setup.tonemap,
+            FramePass::Overlay => setup.tonemap && setup.overlay,
+        }
+    }
+}
+
+/// The passes a frame with `setup` runs, in order. Both hosts schedule their frames from this list.
+pub fn frame_passes(setup: FrameSetup) -> impl Iterator<Item = FramePass> {
+    FramePass::ALL
+        .into_iter()
+        .filter(move |pass| pass.runs_in(setup))
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use std::vec::Vec;
+
+    use super::*;
+
+    #[test]
+    fn the_foveated_image_is_always_made_and_history_adds_its_three_passes_before_the_tone_map() {
+        let plain: Vec<_> = frame_passes(FrameSetup::default()).collect();
+        assert_eq!(
+            plain,
+            [FramePass::Samples, FramePass::CellMeans, FramePass::Fill]
+        );
+        let live: Vec<_> = frame_passes(FrameSetup {
+            history: true,
+            tonemap: true,
+            overlay: true,
+        })
+        .collect();
+        assert_eq!(live, FramePass::ALL);
+        // The overlay draws on the 8-bit image: no tone map, no overlay.
+        let no_tonemap = FrameSetup {
+            history: false,
+            tonemap: false,
+            overlay: true,
+        };
+        assert!(!FramePass::Overlay.runs_in(no_tonemap));
+    }
+
+    #[test]
+    fn names_are_unique_and_every_pass_has_a_kernel_entry() {
+        for (i, a) in FramePass::ALL.iter().enumerate() {
+            assert!(!a.kernel_entries().is_empty());
+            for b in &FramePass::ALL[i + 1..] {
+                assert_ne!(a.name(), b.name());
+            }
+        }
+    }
+}
