@@ -335,6 +335,27 @@ pub struct ReportArgs {
     /// Render the reference again even when a cached one exists (and replace it).
     #[arg(long)]
     pub no_cache: bool,
+    /// Also judge a sequence: render this gaze trace frame by frame (the files `render` and `view`
+    /// read: `t,x,y` or `frame,x,y`, pixels or --gaze-normalized) for uniform and the paper's
+    /// foveated configurations, with and without history, and pool the error by eccentricity band
+    /// and over time (flicker). The camera stays still.
+    #[arg(long, value_name = "FILE.csv")]
+    pub gaze_trace: Option<PathBuf>,
+    /// Frames per second at which a timed gaze trace (`t,x,y`) is rendered.
+    #[arg(long, default_value_t = 30.0, value_name = "FPS")]
+    pub trace_fps: f64,
+    /// The gaze trace's x,y are 0..1 of the image (origin top-left).
+    #[arg(long)]
+    pub gaze_normalized: bool,
+    /// Render at most this many frames of the gaze trace.
+    #[arg(long, value_name = "N")]
+    pub sequence_frames: Option<u32>,
+    /// Width of the eccentricity bands the sequence's error is pooled in, in degrees.
+    #[arg(long, default_value_t = 1.0, value_name = "DEG")]
+    pub band_deg: f32,
+    /// Do not score the sequence with FovVideoVDP even where scripts/setup-fvvdp.sh has set it up.
+    #[arg(long)]
+    pub no_fovvideovdp: bool,
 
     #[command(flatten)]
     pub display: DisplayArgs,

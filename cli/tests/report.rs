@@ -188,6 +188,102 @@ fn quick_report_on_the_cornell_box() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `--gaze-trace`: a short jittered fixation judged by eccentricity band and over time.
+#[test]
+fn a_gaze_trace_is_judged_by_eccentricity_and_over_time() {
+    let dir = temp_dir("sequence");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    let trace = dir.join("trace.csv");
+    std::fs::write(
+        &trace,
+        "frame,x,y\n0,120,68\n1,122.5,67\n2,118.7,70.2\n3,121,68.4\n4,120.3,66.9\n",
+    )
+    .unwrap();
+    let trace_arg = trace.to_string_lossy().into_owned();
+    report(
+        &out,
+        &cache,
+        &[
+            "--gaze-trace",
+            &trace_arg,
+            "--sweep-max",
+            "2",
+            "--no-fovvideovdp",
+        ],
+    );
+    assert!(out.join("sequence.svg").is_file());
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("### Sequence: 5 frames"), "{md}");
+    let json: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let seq = &json["sequence"];
+    assert_eq!(seq["frames"], 5);
+    let configs = seq["configs"].as_array().unwrap();
+    // Uniform and three foveated, each without and with history, then the sweep's uniform 1 and 2.
+    let slugs: Vec<&str> = configs.iter().map(|c| c["slug"].as_str().unwrap()).collect();
+    assert_eq!(slugs.len(), 10, "{slugs:?}");
+    let by_slug = |slug: &str| {
+        configs
+            .iter()
+            .find(|c| c["slug"] == slug)
+            .unwrap_or_else(|| panic!("no {slug} in {slugs:?}"))
+    };
+    for c in configs {
+        let bands = c["eccentricity_bands"].as_array().unwrap();
+        assert!(bands.len() >= 10, "1-degree bands out to the corners: {bands:?}");
+        assert_eq!(bands[0]["from_deg"], 0.0);
+        assert_eq!(bands[0]["to_deg"], 1.0);
+        assert!(bands[0]["flip"].as_f64().unwrap() >= 0.0);
+        assert!(regions(&c["flicker"])[3] >= 0.0, "{}", c["flicker"]);
+        assert!(c["fovvideovdp"].is_null());
+    }
+    assert!(seq["fovvideovdp_note"]
+        .as_str()
+        .unwrap()
+        .contains("--no-fovvideovdp"));
+    // The region edges as eccentricities: half the paper's 5.2 and 17 degree extents.
+    let bounds = seq["region_bounds_deg"].as_array().unwrap();
+    assert!((bounds[0].as_f64().unwrap() - 2.6).abs() < 0.01, "{bounds:?}");
+    assert!((bounds[1].as_f64().unwrap() - 8.5).abs() < 0.01, "{bounds:?}");
+
+    // History: the periphery flickers much less than without it.
+    let flicker = |slug: &str| regions(&by_slug(slug)["flicker"])[3];
+    let (raw, kept) = (flicker("32-16-8"), flicker("32-16-8-history"));
+    assert!(
+        kept < 0.5 * raw,
+        "periphery flicker {kept} with history, {raw} without"
+    );
+    // The error rises with eccentricity where samples fall (32/2/1) and not under uniform: compare
+    // bands inside the box (the outer bands see only the black outside).
+    let band_flip = |slug: &str, band: usize| {
+        by_slug(slug)["eccentricity_bands"][band]["flip"]
+            .as_f64()
+            .unwrap()
+    };
+    let band_count = by_slug("uniform")["eccentricity_bands"]
+        .as_array()
+        .unwrap()
+        .len();
+    let outer = (0..band_count)
+        .filter(|&b| band_flip("uniform", b) > 0.05)
+        .max()
+        .unwrap();
+    assert!(outer > 9, "the box reaches past the intermediate edge: band {outer}");
+    assert!(
+        band_flip("32-2-1", outer) > 1.2 * band_flip("uniform", outer),
+        "band {outer}: 32/2/1 {} vs uniform {}",
+        band_flip("32-2-1", outer),
+        band_flip("uniform", outer)
+    );
+    assert!(
+        band_flip("32-16-8", 0) < 1.1 * band_flip("uniform", 0),
+        "the fovea's band: 32/16/8 {} vs uniform {}",
+        band_flip("32-16-8", 0),
+        band_flip("uniform", 0)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn bad_options_fail_clearly() {
     let dir = temp_dir("bad");

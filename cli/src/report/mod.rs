@@ -4,9 +4,11 @@
 //! the median render time, the primary samples, the speed-up over uniform and the error against the
 //! reference (mean FLIP and relMSE over the whole image and each foveation region).
 mod configs;
+mod fvvdp;
 mod metrics;
 mod plot;
 mod reference_cache;
+mod sequence;
 mod write;
 
 use std::collections::HashMap;
@@ -84,6 +86,8 @@ pub struct SceneReport {
     pub equal_time_fit: f64,
     pub wall_ms: f64,
     pub configs: Vec<ConfigResult>,
+    /// The gaze-trace sequence (`--gaze-trace`), judged by eccentricity and over time.
+    pub sequence: Option<sequence::SequenceReport>,
 }
 
 /// The options, checked, with `--quick` applied.
@@ -124,6 +128,7 @@ struct Plan {
     target: Option<[f64; 3]>,
     up: [f32; 3],
     cache_dir: PathBuf,
+    sequence: Option<sequence::SequencePlan>,
 }
 
 fn positive(option: &'static str, value: u32, max: u32) -> Result<u32> {
@@ -218,6 +223,17 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
         target,
         up,
         cache_dir: reference_cache::cache_dir(args.cache_dir.as_deref())?,
+        sequence: match &args.gaze_trace {
+            Some(path) => Some(sequence::read_trace(
+                path,
+                args.trace_fps,
+                args.gaze_normalized,
+                resolution,
+                args.sequence_frames,
+                args.band_deg,
+            )?),
+            None => None,
+        },
     })
 }
 
@@ -328,6 +344,12 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         let svg =
             plot::plot_svg(&report).map_err(|e| FoveaError::file(out_dir.join("plot.svg"), e))?;
         write::write_text(&out_dir.join("plot.svg"), &svg)?;
+        if let Some(seq) = &report.sequence {
+            let path = out_dir.join("sequence.svg");
+            let svg = plot::sequence_svg(&report.scene_name, seq)
+                .map_err(|e| FoveaError::file(&path, e))?;
+            write::write_text(&path, &svg)?;
+        }
         markdown.push((out_dir.clone(), md));
     }
     bar.finish_and_clear();
@@ -561,6 +583,48 @@ fn run_scene(
     results.push(equal);
     results.extend(sweep);
 
+    let sequence = match &plan.sequence {
+        Some(seq) => {
+            let metric = if args.no_fovvideovdp {
+                Err("off (--no-fovvideovdp)".to_string())
+            } else {
+                fvvdp::FovVideoVdp::find()
+            };
+            let specs = sequence::sequence_specs(&configs::sweep_spps(plan.sweep_max));
+            let samples: u64 = specs
+                .iter()
+                .map(|s| {
+                    let mut f = if s.foveated {
+                        paper
+                    } else {
+                        FoveationParams::uniform(s.spp[0])
+                    };
+                    f.spp = [s.spp[0], s.spp[1], s.spp[2], 0];
+                    count_samples(w, h, &f).iter().sum::<u64>()
+                })
+                .sum::<u64>()
+                * seq.frames.len() as u64;
+            bar.inc_length(samples);
+            let inputs = sequence::SequenceInputs {
+                packed: &scene.packed,
+                base_frame: frame(paper, args.seed, None),
+                paper,
+                display: plan.display,
+                ppd: plan.ppd,
+                reference: &reference,
+                reference_rgb8: &reference_rgb8,
+                fill_mode: plan.fill_mode,
+                exposure_ev: args.exposure,
+                scene_name: &scene_name,
+                bar,
+                fovvideovdp: metric.as_ref().map_err(Clone::clone),
+                scratch_dir: out_dir,
+            };
+            Some(sequence::run_sequence(renderer, seq, &specs, &inputs)?)
+        }
+        None => None,
+    };
+
     let (base_ms, base_samples) = (results[0].render_ms, results[0].primary_samples);
     for r in &mut results {
         r.speedup = base_ms / r.render_ms;
@@ -591,6 +655,7 @@ fn run_scene(
         equal_time_fit: equal_fit,
         wall_ms: 0.0,
         configs: results,
+        sequence,
     })
 }
 

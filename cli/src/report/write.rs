@@ -5,6 +5,7 @@ use std::path::Path;
 use serde_json::{json, Value};
 
 use super::metrics::RegionMeans;
+use super::sequence::SequenceReport;
 use super::{ConfigResult, SceneReport};
 use crate::error::Result;
 use crate::output::write_atomically;
@@ -96,7 +97,90 @@ pub fn report_json(r: &SceneReport) -> Value {
         "wall_ms": r.wall_ms,
         "fovea_version": env!("CARGO_PKG_VERSION"),
         "configs": r.configs.iter().map(config_json).collect::<Vec<_>>(),
+        "sequence": r.sequence.as_ref().map(sequence_json),
     })
+}
+
+/// The gaze-trace sequence: per configuration its frame time, region means, `eccentricity_bands`
+/// (degrees, FLIP, relMSE and flicker per band), `flicker` (per region) and `fovvideovdp`.
+fn sequence_json(q: &SequenceReport) -> Value {
+    json!({
+        "trace": q.trace,
+        "frames": q.frames,
+        "fps": q.fps,
+        "band_deg": q.band_deg,
+        "region_bounds_deg": q.region_bounds_deg,
+        "flicker_definition": "mean over pixels and consecutive frame pairs of (Y_t - Y_{t-1})^2 / (Y_ref^2 + 0.01)",
+        "configs": q.results.iter().map(|c| json!({
+            "name": c.spec.name,
+            "slug": c.spec.slug,
+            "kind": c.spec.kind.as_str(),
+            "spp": c.spec.spp,
+            "foveated": c.spec.foveated,
+            "history": c.spec.history,
+            "frames": c.frames,
+            "frame_ms": finite_or_null(c.frame_ms),
+            "primary_samples_per_frame": c.primary_samples_per_frame,
+            "flip": region_json(&c.flip),
+            "rel_mse": region_json(&c.rel_mse),
+            "flicker": region_json(&c.flicker),
+            "eccentricity_bands": c.bands.iter().map(|b| json!({
+                "from_deg": b.from_deg,
+                "to_deg": b.to_deg,
+                "pixels": b.pixels,
+                "flip": finite_or_null(b.flip),
+                "rel_mse": finite_or_null(b.rel_mse),
+                "flicker": finite_or_null(b.flicker),
+            })).collect::<Vec<_>>(),
+            "fovvideovdp": c.fovvideovdp.as_ref().map(|v| json!({
+                "jod": finite_or_null(v.jod),
+                "info": v.info,
+            })),
+        })).collect::<Vec<_>>(),
+        "fovvideovdp_note": q.fovvideovdp_note,
+    })
+}
+
+/// The sequence's Markdown: per configuration frame time, FLIP and flicker by region, FovVideoVDP.
+fn sequence_md(s: &mut String, q: &SequenceReport) {
+    let _ = writeln!(
+        s,
+        "### Sequence: {} frames of `{}`
+",
+        q.frames, q.trace
+    );
+    let _ = writeln!(
+        s,
+        "Each frame is scored against the reference and pooled around that frame's gaze: by the \
+         32/16/8 regions at the gaze (their edges at {:.2}° and {:.2}° of eccentricity) and in {}° \
+         bands of eccentricity (`sequence.svg`, `report.json` `sequence.configs[].eccentricity_bands`). \
+         Flicker: mean of (Y_t − Y_t−1)² / (Y_ref² + 0.01) over consecutive frames.\n",
+        q.region_bounds_deg[0], q.region_bounds_deg[1], q.band_deg
+    );
+    s.push_str(
+        "| Configuration | Frame ms | FLIP fovea | FLIP intermediate | FLIP periphery | \
+         Flicker fovea | Flicker periphery | FovVideoVDP JOD |\n",
+    );
+    s.push_str("|---|---:|---:|---:|---:|---:|---:|---:|\n");
+    for c in &q.results {
+        let jod = c
+            .fovvideovdp
+            .as_ref()
+            .map_or("–".to_string(), |v| md_number(v.jod, 3));
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} | {} | {} |",
+            c.spec.name,
+            md_number(c.frame_ms, 1),
+            md_number(c.flip.fovea, 4),
+            md_number(c.flip.intermediate, 4),
+            md_number(c.flip.periphery, 4),
+            md_sci(c.flicker.fovea),
+            md_sci(c.flicker.periphery),
+            jod,
+        );
+    }
+    let _ = writeln!(s, "\n{}\n", q.fovvideovdp_note);
 }
 
 fn csv_number(x: f64) -> String {
@@ -287,9 +371,15 @@ pub fn report_md(r: &SceneReport) -> String {
              at the 32/16/8 render time{fit}.\n"
         );
     }
+    if let Some(q) = &r.sequence {
+        sequence_md(&mut s, q);
+    }
     s.push_str(
         "Files: `reference.png`, `regions.png` (fovea green, intermediate amber, periphery blue), \
          `images/*.png`, `flip/*.png` (FLIP error maps, magma), `plot.svg`, `report.json`, `report.csv`.\n",
     );
+    if r.sequence.is_some() {
+        s.push_str("Sequence: `sequence.svg` (error and flicker against eccentricity, error against frame time).\n");
+    }
     s
 }

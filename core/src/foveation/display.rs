@@ -8,7 +8,7 @@
 //! that reproduces the paper's 4K radii (5.2° gives 147.67 px, the paper's "~147"; 17° gives 486.02 px, the
 //! paper's "~482" being a rounding of its own); `2 d tan(e/2) · res_x / width_cm` would give twice that.
 use super::regions::FoveationParams;
-use crate::math::float::{tan, PI};
+use crate::math::float::{atan2, tan, PI};
 
 /// Eccentricity bound of the fovea in degrees (the paper's `e_f`).
 pub const FOVEA_ECCENTRICITY_DEG: f32 = 5.2;
@@ -55,6 +55,17 @@ pub fn pixels_per_cm(display: &DisplayGeometry) -> f32 {
 pub fn eccentricity_to_radius_px(e_deg: f32, display: &DisplayGeometry) -> f32 {
     let extent_cm = 2.0 * display.distance_cm * tan(0.5 * e_deg * (PI / 180.0));
     0.5 * extent_cm * pixels_per_cm(display)
+}
+
+/// Eccentricity in degrees (the visual angle between the gaze and a point) of a point `distance_px`
+/// display pixels from the gaze on the screen: `atan(distance_cm / d)`, the screen taken as flat and
+/// the eye in front of the gaze. The inverse of [`eccentricity_to_radius_px`] up to that function's
+/// convention: a region bounded by the paper's extent `e` has its edge at eccentricity `e / 2`.
+#[inline]
+#[must_use]
+pub fn radius_px_to_eccentricity_deg(distance_px: f32, display: &DisplayGeometry) -> f32 {
+    let distance_cm = distance_px / pixels_per_cm(display);
+    atan2(distance_cm, display.distance_cm) * (180.0 / PI)
 }
 
 /// Pixels per degree of visual angle near the gaze: `d · res_x / width_cm · π / 180` (56.76 for the paper's
@@ -131,5 +142,16 @@ mod tests {
         assert!((p.radius_fovea - 147.67 / 4.0).abs() < 0.01);
         assert!((p.radius_intermediate - 486.02 / 4.0).abs() < 0.01);
         assert_eq!(p.spp, [32, 16, 8, 0]);
+    }
+
+    #[test]
+    fn eccentricity_of_a_region_edge_is_half_its_extent() {
+        let d = DisplayGeometry::default();
+        for e in [1.0f32, 5.2, 17.0, 60.0] {
+            let r = eccentricity_to_radius_px(e, &d);
+            let back = radius_px_to_eccentricity_deg(r, &d);
+            assert!((back - 0.5 * e).abs() < 1e-3 * e, "{e}: {back}");
+        }
+        assert_eq!(radius_px_to_eccentricity_deg(0.0, &d), 0.0);
     }
 }

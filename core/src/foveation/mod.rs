@@ -14,7 +14,8 @@ pub use blocks::{
 };
 pub use display::{
     eccentricity_to_radius_px, paper_params_for_display, pixels_per_degree, radius_for_resolution,
-    DisplayGeometry, FOVEA_ECCENTRICITY_DEG, INTERMEDIATE_ECCENTRICITY_DEG,
+    radius_px_to_eccentricity_deg, DisplayGeometry, FOVEA_ECCENTRICITY_DEG,
+    INTERMEDIATE_ECCENTRICITY_DEG,
 };
 pub use fill::{
     block_mean, cell_buffer_len, cell_grid_offset, cell_grid_size, cell_mean, cell_mean_at,

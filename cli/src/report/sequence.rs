@@ -1,0 +1,623 @@
+//! `fovea report --gaze-trace FILE`: a sequence judged as an eye would see it.
+//!
+//! The trace (the same files `render` and `view` read) is rendered frame by frame for each
+//! configuration: uniform 32 spp and the paper's three foveated configurations, each without and with
+//! temporal reuse, and a uniform spp sweep for the equal-time comparison. Every frame is scored against
+//! the converged reference (the camera is static, so one reference serves every frame) and pooled two
+//! ways around *that frame's* gaze:
+//! - by region (the paper's 32/16/8 regions at the gaze, for every configuration alike);
+//! - by eccentricity band (`--band-deg`, 1° by default): the visual angle between the gaze and the
+//!   pixel on the display model ([`radius_px_to_eccentricity_deg`]).
+//!
+//! Flicker is the frame-to-frame change of the image where the reference does not change: per pixel
+//! `(Y_t − Y_{t−1})² / (Y_ref² + ε)` (luminance, the relMSE's normalisation), averaged over pixels of
+//! a band or region and over consecutive frame pairs. An unbiased renderer without history has about
+//! twice its per-frame luminance variance here; temporal reuse and a denoiser lower it.
+use std::path::Path;
+
+use fovea_core::foveation::display::{radius_px_to_eccentricity_deg, DisplayGeometry};
+use fovea_core::foveation::regions::FoveationParams;
+use fovea_core::integrator::FrameParams;
+use fovea_cpu::FrameImage;
+use fovea_scene::pack::PackedScene;
+use indicatif::ProgressBar;
+
+use super::configs::{ConfigKind, UNIFORM_SPP};
+use super::fvvdp::{FovVideoVdp, RawFrames};
+use super::median;
+use super::metrics::{self, RegionMap, RegionMeans, REL_MSE_EPSILON};
+use crate::backend::{FrameOutput, FrameRequest, Renderer};
+use crate::error::{FoveaError, Result};
+
+/// The trace's frames and how to pool them.
+#[derive(Clone, Debug)]
+pub struct SequencePlan {
+    /// The trace file, for the report.
+    pub trace: String,
+    /// Frame numbers and gaze in image pixels.
+    pub frames: Vec<(u32, [f32; 2])>,
+    /// Frames per second the trace was sampled at (timed traces).
+    pub fps: f64,
+    /// Width of an eccentricity band in degrees.
+    pub band_deg: f32,
+}
+
+/// One configuration of the sequence.
+#[derive(Clone, Debug)]
+pub struct SequenceSpec {
+    pub name: String,
+    pub slug: String,
+    pub kind: ConfigKind,
+    /// Samples per pixel or block; uniform when the three are equal and `foveated` is false.
+    pub spp: [u32; 3],
+    pub foveated: bool,
+    pub history: bool,
+}
+
+/// One band of eccentricity around each frame's gaze, averaged over the frames where it has pixels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BandResult {
+    pub from_deg: f64,
+    pub to_deg: f64,
+    /// Mean pixels per frame.
+    pub pixels: f64,
+    pub flip: f64,
+    pub rel_mse: f64,
+    /// NaN for a one-frame sequence.
+    pub flicker: f64,
+}
+
+/// One configuration's sequence, measured.
+#[derive(Clone, Debug)]
+pub struct SequenceResult {
+    pub spec: SequenceSpec,
+    pub frames: u32,
+    /// Median frame time, as the backend reports it.
+    pub frame_ms: f64,
+    pub primary_samples_per_frame: f64,
+    /// Means over the frames of the per-frame region means (regions at each frame's gaze).
+    pub flip: RegionMeans,
+    pub rel_mse: RegionMeans,
+    pub flicker: RegionMeans,
+    pub bands: Vec<BandResult>,
+    /// FovVideoVDP's verdict on the sequence, where it is set up.
+    pub fovvideovdp: Option<FovVideoVdpScore>,
+}
+
+/// What FovVideoVDP (Mantiuk et al. 2021) said of a test sequence against its reference.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FovVideoVdpScore {
+    /// Just-objectionable differences: 10 is identical, 1 JOD less is preferred by 75 % of viewers.
+    pub jod: f64,
+    /// The metric's own description of its version and settings.
+    pub info: String,
+    /// Its run time, seconds.
+    pub seconds: f64,
+}
+
+/// The sequence part of a scene's report.
+#[derive(Clone, Debug)]
+pub struct SequenceReport {
+    pub trace: String,
+    pub frames: u32,
+    pub fps: f64,
+    pub band_deg: f32,
+    /// The region bounds of the paper's foveation as eccentricities (degrees from the gaze).
+    pub region_bounds_deg: [f64; 2],
+    pub results: Vec<SequenceResult>,
+    /// Whether FovVideoVDP ran, and if not, how to set it up.
+    pub fovvideovdp_note: String,
+}
+
+/// The configurations of a sequence: uniform 32 and the paper's three foveated ones, each without and
+/// with history, then the uniform sweep (`sweep`, without history) for the equal-time curves.
+#[must_use]
+pub fn sequence_specs(sweep: &[u32]) -> Vec<SequenceSpec> {
+    let mut specs = Vec::new();
+    for history in [false, true] {
+        let suffix = if history { " + history" } else { "" };
+        let slug_suffix = if history { "-history" } else { "" };
+        specs.push(SequenceSpec {
+            name: format!("uniform{suffix}"),
+            slug: format!("uniform{slug_suffix}"),
+            kind: ConfigKind::Uniform,
+            spp: [UNIFORM_SPP; 3],
+            foveated: false,
+            history,
+        });
+        for spp in [[32, 16, 8], [32, 8, 4], [32, 2, 1]] {
+            let base = format!("{}/{}/{}", spp[0], spp[1], spp[2]);
+            specs.push(SequenceSpec {
+                name: format!("{base}{suffix}"),
+                slug: format!("{}{slug_suffix}", base.replace('/', "-")),
+                kind: ConfigKind::Foveated,
+                spp,
+                foveated: true,
+                history,
+            });
+        }
+    }
+    for &spp in sweep.iter().filter(|&&s| s != UNIFORM_SPP) {
+        specs.push(SequenceSpec {
+            name: format!("uniform {spp}"),
+            slug: format!("uniform-{spp}"),
+            kind: ConfigKind::Sweep,
+            spp: [spp; 3],
+            foveated: false,
+            history: false,
+        });
+    }
+    specs
+}
+
+/// Everything a sequence run needs from the scene's report.
+pub struct SequenceInputs<'a> {
+    pub packed: &'a PackedScene,
+    /// The scene's frame at frame 0 (camera, size, integrator, seed); each frame sets its own
+    /// foveation and frame index.
+    pub base_frame: FrameParams,
+    /// The paper's 32/16/8 foveation at the image centre; moved to each frame's gaze.
+    pub paper: FoveationParams,
+    pub display: DisplayGeometry,
+    pub ppd: f32,
+    pub reference: &'a FrameImage,
+    pub reference_rgb8: &'a [u8],
+    pub fill_mode: u32,
+    pub exposure_ev: f32,
+    pub scene_name: &'a str,
+    pub bar: &'a ProgressBar,
+    /// FovVideoVDP where it is set up, else why not; and the folder its frames are written to.
+    pub fovvideovdp: std::result::Result<&'a FovVideoVdp, String>,
+    pub scratch_dir: &'a Path,
+}
+
+/// The eccentricity of each pixel centre around `gaze`, in degrees.
+#[must_use]
+pub fn eccentricity_map(
+    width: u32,
+    height: u32,
+    gaze: [f32; 2],
+    display: &DisplayGeometry,
+) -> Vec<f32> {
+    let mut out = Vec::with_capacity(width as usize * height as usize);
+    for y in 0..height {
+        for x in 0..width {
+            let dx = x as f32 + 0.5 - gaze[0];
+            let dy = y as f32 + 0.5 - gaze[1];
+            out.push(radius_px_to_eccentricity_deg(
+                (dx * dx + dy * dy).sqrt(),
+                display,
+            ));
+        }
+    }
+    out
+}
+
+/// Per-pixel flicker between two consecutive frames: `(Y_t − Y_{t−1})² / (Y_ref² + ε)`.
+#[must_use]
+pub fn flicker_map(
+    current: &FrameImage,
+    previous: &FrameImage,
+    reference: &FrameImage,
+) -> Vec<f32> {
+    let luminance = |p: &[f32; 4]| {
+        0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+    };
+    current
+        .pixels
+        .iter()
+        .zip(&previous.pixels)
+        .zip(&reference.pixels)
+        .map(|((c, p), r)| {
+            let d = luminance(c) - luminance(p);
+            let y = luminance(r);
+            (d * d / (y * y + REL_MSE_EPSILON)) as f32
+        })
+        .collect()
+}
+
+/// Sums of per-frame means, per band or region, for averaging over frames.
+#[derive(Clone, Debug, Default)]
+struct FrameMeans {
+    sum: Vec<f64>,
+    frames: Vec<u32>,
+}
+
+impl FrameMeans {
+    fn new(len: usize) -> Self {
+        Self {
+            sum: vec![0.0; len],
+            frames: vec![0; len],
+        }
+    }
+
+    /// Adds one frame's means (NaN where a band or region has no pixels in that frame).
+    fn add(&mut self, means: &[f64]) {
+        for (i, m) in means.iter().enumerate() {
+            if m.is_finite() {
+                self.sum[i] += m;
+                self.frames[i] += 1;
+            }
+        }
+    }
+
+    fn means(&self) -> Vec<f64> {
+        self.sum
+            .iter()
+            .zip(&self.frames)
+            .map(|(s, &n)| if n == 0 { f64::NAN } else { s / f64::from(n) })
+            .collect()
+    }
+}
+
+/// Means of `values` per band (`band[i]` the band of pixel `i`, `bands` of them); NaN for empty bands.
+fn band_means(values: &[f32], band: &[u16], bands: usize) -> Vec<f64> {
+    let mut sum = vec![0.0f64; bands];
+    let mut count = vec![0u64; bands];
+    for (v, &b) in values.iter().zip(band) {
+        sum[b as usize] += f64::from(*v);
+        count[b as usize] += 1;
+    }
+    sum.iter()
+        .zip(&count)
+        .map(|(s, &n)| if n == 0 { f64::NAN } else { s / n as f64 })
+        .collect()
+}
+
+fn region_array(m: RegionMeans) -> [f64; 4] {
+    m.to_array()
+}
+
+fn region_means(a: &[f64]) -> RegionMeans {
+    RegionMeans {
+        all: a[0],
+        fovea: a[1],
+        intermediate: a[2],
+        periphery: a[3],
+    }
+}
+
+/// Renders and scores every configuration of the sequence.
+pub fn run_sequence(
+    renderer: &mut Renderer,
+    plan: &SequencePlan,
+    specs: &[SequenceSpec],
+    inputs: &SequenceInputs<'_>,
+) -> Result<SequenceReport> {
+    let (w, h) = (inputs.base_frame.width, inputs.base_frame.height);
+    if plan.frames.is_empty() {
+        return Err(FoveaError::option(
+            "--gaze-trace",
+            "the trace has no frame to render",
+        ));
+    }
+    // Bands up to the farthest pixel from any gaze of the trace (gazes may lie off the image).
+    let band_deg = plan.band_deg;
+    let max_ecc = plan
+        .frames
+        .iter()
+        .flat_map(|(_, g)| {
+            [
+                [0.0, 0.0],
+                [w as f32, 0.0],
+                [0.0, h as f32],
+                [w as f32, h as f32],
+            ]
+            .map(|c| ((c[0] - g[0]).hypot(c[1] - g[1]), inputs.display))
+        })
+        .map(|(d, display)| radius_px_to_eccentricity_deg(d, &display))
+        .fold(0.0f32, f32::max);
+    let bands = ((max_ecc / band_deg).floor() as usize + 1).clamp(1, 2048);
+
+    // Per frame: the regions and bands around its gaze (the same for every configuration).
+    let per_frame: Vec<(RegionMap, Vec<u16>, FoveationParams)> = plan
+        .frames
+        .iter()
+        .map(|&(_, gaze)| {
+            let mut paper = inputs.paper;
+            paper.gaze = gaze;
+            let regions = RegionMap::new(w, h, &paper);
+            let band: Vec<u16> = eccentricity_map(w, h, gaze, &inputs.display)
+                .iter()
+                .map(|e| ((e / band_deg) as usize).min(bands - 1) as u16)
+                .collect();
+            (regions, band, paper)
+        })
+        .collect();
+    let band_pixels: Vec<f64> = {
+        let mut count = vec![0u64; bands];
+        for (_, band, _) in &per_frame {
+            for &b in band {
+                count[b as usize] += 1;
+            }
+        }
+        count
+            .iter()
+            .map(|&n| n as f64 / per_frame.len() as f64)
+            .collect()
+    };
+
+    // FovVideoVDP's reference: one frame (the camera is still).
+    let fvvdp_reference = match &inputs.fovvideovdp {
+        Ok(_) => {
+            let mut raw = RawFrames::create(inputs.scratch_dir.join("reference.rgb"))
+                .map_err(FoveaError::Backend)?;
+            raw.push(inputs.reference_rgb8)
+                .map_err(FoveaError::Backend)?;
+            Some(raw.finish().map_err(FoveaError::Backend)?)
+        }
+        Err(_) => None,
+    };
+    let fixations: Vec<[f32; 2]> = plan.frames.iter().map(|(_, g)| *g).collect();
+    let mut fvvdp_failure: Option<String> = None;
+
+    let mut results = Vec::new();
+    for spec in specs {
+        renderer.reset_history();
+        let mut raw = match &fvvdp_reference {
+            Some(_) => Some(
+                RawFrames::create(inputs.scratch_dir.join(format!("{}.rgb", spec.slug)))
+                    .map_err(FoveaError::Backend)?,
+            ),
+            None => None,
+        };
+        let mut flip_regions = FrameMeans::new(4);
+        let mut rel_regions = FrameMeans::new(4);
+        let mut flicker_regions = FrameMeans::new(4);
+        let mut flip_bands = FrameMeans::new(bands);
+        let mut rel_bands = FrameMeans::new(bands);
+        let mut flicker_bands = FrameMeans::new(bands);
+        let mut frame_ms = Vec::new();
+        let mut samples = 0u64;
+        let mut previous: Option<FrameImage> = None;
+        for (i, &(frame_number, _)) in plan.frames.iter().enumerate() {
+            inputs.bar.set_message(format!(
+                "{}: sequence {} (frame {}/{})",
+                inputs.scene_name,
+                spec.name,
+                i + 1,
+                plan.frames.len()
+            ));
+            let (regions, band, paper_at_gaze) = &per_frame[i];
+            let foveation = if spec.foveated {
+                let mut f = *paper_at_gaze;
+                f.spp = [spec.spp[0], spec.spp[1], spec.spp[2], 0];
+                f
+            } else {
+                FoveationParams::uniform(spec.spp[0])
+            };
+            let frame = FrameParams {
+                foveation,
+                frame_index: frame_number,
+                ..inputs.base_frame
+            };
+            let request = FrameRequest {
+                fill_mode: inputs.fill_mode,
+                exposure_ev: inputs.exposure_ev,
+                history: spec.history,
+                output: FrameOutput::ReadBack { want_hdr: true },
+            };
+            let rendered = renderer.render(inputs.packed, &frame, &request, &|n| {
+                inputs.bar.inc(n);
+            })?;
+            frame_ms.push(rendered.stats.render_ms);
+            samples += rendered.stats.primary_samples;
+            let (Some(hdr), Some(rgb8)) = (rendered.hdr, rendered.rgb8) else {
+                return Err(FoveaError::Backend(
+                    "the backend returned no HDR or 8-bit image".into(),
+                ));
+            };
+            if let Some(raw) = raw.as_mut() {
+                raw.push(&rgb8).map_err(FoveaError::Backend)?;
+            }
+            let flip = metrics::flip_map(inputs.reference_rgb8, &rgb8, w, h, inputs.ppd);
+            let rel = metrics::rel_mse_map(&hdr, inputs.reference);
+            flip_regions.add(&region_array(RegionMeans::of(&flip, regions)));
+            rel_regions.add(&region_array(RegionMeans::of(&rel, regions)));
+            flip_bands.add(&band_means(&flip, band, bands));
+            rel_bands.add(&band_means(&rel, band, bands));
+            if let Some(prev) = &previous {
+                let flicker = flicker_map(&hdr, prev, inputs.reference);
+                flicker_regions.add(&region_array(RegionMeans::of(&flicker, regions)));
+                flicker_bands.add(&band_means(&flicker, band, bands));
+            }
+            previous = Some(hdr);
+        }
+        let fovvideovdp = match (raw, &inputs.fovvideovdp, &fvvdp_reference) {
+            (Some(raw), Ok(metric), Some(reference)) => {
+                inputs.bar.set_message(format!(
+                    "{}: sequence {} (FovVideoVDP)",
+                    inputs.scene_name, spec.name
+                ));
+                let test = raw.finish().map_err(FoveaError::Backend)?;
+                let score = metric.score(
+                    inputs.scratch_dir,
+                    &test,
+                    reference,
+                    [w, h],
+                    plan.frames.len() as u32,
+                    plan.fps,
+                    &fixations,
+                    &inputs.display,
+                );
+                let _ = std::fs::remove_file(&test);
+                match score {
+                    Ok(s) => Some(s),
+                    Err(e) => {
+                        fvvdp_failure.get_or_insert(e);
+                        None
+                    }
+                }
+            }
+            _ => None,
+        };
+        let (flip_b, rel_b, flicker_b) =
+            (flip_bands.means(), rel_bands.means(), flicker_bands.means());
+        let band_results = (0..bands)
+            .map(|b| BandResult {
+                from_deg: f64::from(band_deg) * b as f64,
+                to_deg: f64::from(band_deg) * (b + 1) as f64,
+                pixels: band_pixels[b],
+                flip: flip_b[b],
+                rel_mse: rel_b[b],
+                flicker: flicker_b[b],
+            })
+            .collect();
+        results.push(SequenceResult {
+            spec: spec.clone(),
+            frames: plan.frames.len() as u32,
+            frame_ms: median(&frame_ms),
+            primary_samples_per_frame: samples as f64 / plan.frames.len() as f64,
+            flip: region_means(&flip_regions.means()),
+            rel_mse: region_means(&rel_regions.means()),
+            flicker: region_means(&flicker_regions.means()),
+            bands: band_results,
+            fovvideovdp,
+        });
+    }
+    if let Some(reference) = &fvvdp_reference {
+        let _ = std::fs::remove_file(reference);
+    }
+    let bounds = [inputs.paper.radius_fovea, inputs.paper.radius_intermediate]
+        .map(|r| f64::from(radius_px_to_eccentricity_deg(r, &inputs.display)));
+    Ok(SequenceReport {
+        trace: plan.trace.clone(),
+        frames: plan.frames.len() as u32,
+        fps: plan.fps,
+        band_deg,
+        region_bounds_deg: bounds,
+        fovvideovdp_note: fovvideovdp_note(&inputs.fovvideovdp, fvvdp_failure, &results),
+        results,
+    })
+}
+
+/// What the report says of FovVideoVDP: its setting and run time, or why it did not run.
+fn fovvideovdp_note(
+    metric: &std::result::Result<&FovVideoVdp, String>,
+    failure: Option<String>,
+    results: &[SequenceResult],
+) -> String {
+    match (metric, failure) {
+        (Err(why), _) => format!("FovVideoVDP: {why}."),
+        (Ok(_), Some(e)) => format!("FovVideoVDP: {e}."),
+        (Ok(_), None) => {
+            let scored: Vec<&FovVideoVdpScore> = results
+                .iter()
+                .filter_map(|r| r.fovvideovdp.as_ref())
+                .collect();
+            let seconds: f64 = scored.iter().map(|s| s.seconds).sum();
+            let info = scored.first().map_or("", |s| s.info.as_str());
+            format!(
+                "FovVideoVDP (pyfvvdp, foveated, the gaze of each frame; display {} cd/m² peak, \
+                 {}:1, sRGB): {info}. JOD 10 = no visible difference; 1 JOD less = 75 % of viewers \
+                 prefer the other. {:.1} s for {} sequences.",
+                super::fvvdp::PEAK_CD_M2,
+                super::fvvdp::CONTRAST,
+                seconds,
+                scored.len()
+            )
+        }
+    }
+}
+
+/// Reads `--gaze-trace` for a report: the frames and their gaze in pixels of a `width × height`
+/// image, at most `max_frames` of them.
+pub fn read_trace(
+    path: &Path,
+    fps: f64,
+    normalized: bool,
+    image: [u32; 2],
+    max_frames: Option<u32>,
+    band_deg: f32,
+) -> Result<SequencePlan> {
+    use crate::gaze::{GazeConvention, GazeTrace, TraceTiming};
+    if !(fps > 0.0 && fps <= 10_000.0) {
+        return Err(FoveaError::option(
+            "--trace-fps",
+            format!("{fps} is not in (0, 10000] frames per second"),
+        ));
+    }
+    if !(band_deg.is_finite() && (0.05..=90.0).contains(&band_deg)) {
+        return Err(FoveaError::option(
+            "--band-deg",
+            format!("{band_deg} is not a band width in [0.05, 90] degrees"),
+        ));
+    }
+    let convention = if normalized {
+        GazeConvention::Normalized
+    } else {
+        GazeConvention::PixelsTopLeft
+    };
+    let trace = GazeTrace::read(path, convention, TraceTiming::Frames)
+        .map_err(|e| FoveaError::option("--gaze-trace", e))?;
+    let mut frames = trace.frames(fps, image);
+    if let Some(n) = max_frames {
+        frames.truncate(n as usize);
+    }
+    Ok(SequencePlan {
+        trace: path.display().to_string(),
+        frames,
+        fps,
+        band_deg,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(w: u32, h: u32, value: f32) -> FrameImage {
+        FrameImage {
+            width: w,
+            height: h,
+            pixels: vec![[value, value, value, 1.0]; (w * h) as usize],
+        }
+    }
+
+    #[test]
+    fn eccentricity_grows_from_the_gaze_and_matches_the_display_model() {
+        let d = DisplayGeometry {
+            resolution: [64, 36],
+            ..DisplayGeometry::default()
+        };
+        let e = eccentricity_map(64, 36, [32.0, 18.0], &d);
+        // The four pixels around the gaze are nearest; a corner is farthest.
+        let centre = e[(18 * 64 + 32) as usize];
+        assert!(centre < 1.0);
+        assert!(e[0] > 10.0 * centre);
+        // 64 px span the display's 70.848 cm, seen from 60 cm: about 34 degrees to the corner.
+        let corner_cm = 31.5f32.hypot(17.5) * 70.848 / 64.0;
+        let expect = (corner_cm / 60.0).atan().to_degrees();
+        assert!((e[0] - expect).abs() < 1e-3, "{} vs {expect}", e[0]);
+    }
+
+    #[test]
+    fn a_still_image_does_not_flicker_and_a_change_does_by_its_relative_size() {
+        let r = image(4, 2, 1.0);
+        assert!(flicker_map(&r, &r, &r).iter().all(|&f| f == 0.0));
+        let brighter = image(4, 2, 1.5);
+        let f = flicker_map(&brighter, &r, &r);
+        let expect = (0.25 / (1.0 + REL_MSE_EPSILON)) as f32;
+        assert!(f.iter().all(|&v| (v - expect).abs() < 1e-6));
+    }
+
+    #[test]
+    fn means_over_frames_skip_empty_bands() {
+        let mut m = FrameMeans::new(2);
+        m.add(&[1.0, f64::NAN]);
+        m.add(&[3.0, f64::NAN]);
+        let means = m.means();
+        assert_eq!(means[0], 2.0);
+        assert!(means[1].is_nan());
+        assert_eq!(band_means(&[1.0, 2.0, 4.0], &[0, 0, 2], 3)[0], 1.5);
+    }
+
+    #[test]
+    fn specs_pair_each_configuration_with_and_without_history_then_sweep() {
+        let specs = sequence_specs(&[1, 2, 32]);
+        assert_eq!(specs.len(), 8 + 2);
+        assert_eq!(specs.iter().filter(|s| s.history).count(), 4);
+        assert!(specs.iter().any(|s| s.slug == "32-16-8-history"));
+        assert_eq!(specs.last().map(|s| s.spp), Some([2, 2, 2]));
+    }
+}
