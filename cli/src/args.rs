@@ -136,6 +136,9 @@ pub struct ViewArgs {
     /// Start with the region overlay on (toggle with O).
     #[arg(long)]
     pub overlay: bool,
+    /// Start with the denoiser on (toggle with N; `fovea_core::denoise`).
+    #[arg(long)]
+    pub denoise: bool,
     /// Replay timed input events from FILE (see docs/view.md, "Scripted runs").
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
@@ -245,6 +248,11 @@ pub struct RenderArgs {
     /// the history's mean, not the frame alone.
     #[arg(long)]
     pub history: bool,
+    /// Denoise each frame (after the history, if any): an SVGF-like filter whose strength follows the
+    /// samples behind each pixel, so the fovea keeps its detail and the periphery is smoothed
+    /// (`fovea_core::denoise`).
+    #[arg(long)]
+    pub denoise: bool,
     /// CSV camera path with lines `frame,eye_x,eye_y,eye_z,target_x,target_y,target_z` (world
     /// coordinates): each frame's camera. With a --gaze-trace it must give every frame the trace gives;
     /// without, it numbers the frames itself (the gaze stays at --gaze or the centre).

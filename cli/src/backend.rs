@@ -40,6 +40,8 @@ pub struct FrameRequest {
     /// Temporal reuse: the frame joins each pixel's history, kept by the backend from one frame to
     /// the next ([`Renderer::reset_history`] forgets it), and the image is the history's mean.
     pub history: bool,
+    /// The denoiser's passes after the history (or the fill).
+    pub denoise: bool,
     pub output: FrameOutput,
 }
 
@@ -353,6 +355,7 @@ impl Renderer {
                         history: request.history,
                         tonemap: true,
                         overlay: request.output == FrameOutput::Present { overlay: true },
+                        denoise: request.denoise,
                     },
                 };
                 let (image, stats) = cpu.pool.install(|| {
@@ -401,6 +404,7 @@ impl Renderer {
                     fill_mode: request.fill_mode,
                     exposure_ev: request.exposure_ev,
                     history: request.history,
+                    denoise: request.denoise,
                     output,
                 };
                 let (image, stats) = v

@@ -368,6 +368,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             fill_mode: plan.fill_mode,
             exposure_ev: args.image.exposure,
             history: args.history,
+            denoise: args.denoise,
             output: FrameOutput::ReadBack { want_hdr },
         };
         let rendered = renderer.render(&scene.packed, &frame, &request, &|n| bar.inc(n))?;

@@ -219,9 +219,13 @@ fn a_gaze_trace_is_judged_by_eccentricity_and_over_time() {
     let seq = &json["sequence"];
     assert_eq!(seq["frames"], 5);
     let configs = seq["configs"].as_array().unwrap();
-    // Uniform and three foveated, each without and with history, then the sweep's uniform 1 and 2.
-    let slugs: Vec<&str> = configs.iter().map(|c| c["slug"].as_str().unwrap()).collect();
-    assert_eq!(slugs.len(), 10, "{slugs:?}");
+    // Uniform and three foveated, each without and with history, the sweep's uniform 1 and 2, then
+    // the denoiser on 32/16/8 alone, after 32/16/8's history and after 32/2/1's.
+    let slugs: Vec<&str> = configs
+        .iter()
+        .map(|c| c["slug"].as_str().unwrap())
+        .collect();
+    assert_eq!(slugs.len(), 13, "{slugs:?}");
     let by_slug = |slug: &str| {
         configs
             .iter()
@@ -230,7 +234,10 @@ fn a_gaze_trace_is_judged_by_eccentricity_and_over_time() {
     };
     for c in configs {
         let bands = c["eccentricity_bands"].as_array().unwrap();
-        assert!(bands.len() >= 10, "1-degree bands out to the corners: {bands:?}");
+        assert!(
+            bands.len() >= 10,
+            "1-degree bands out to the corners: {bands:?}"
+        );
         assert_eq!(bands[0]["from_deg"], 0.0);
         assert_eq!(bands[0]["to_deg"], 1.0);
         assert!(bands[0]["flip"].as_f64().unwrap() >= 0.0);
@@ -243,8 +250,14 @@ fn a_gaze_trace_is_judged_by_eccentricity_and_over_time() {
         .contains("--no-fovvideovdp"));
     // The region edges as eccentricities: half the paper's 5.2 and 17 degree extents.
     let bounds = seq["region_bounds_deg"].as_array().unwrap();
-    assert!((bounds[0].as_f64().unwrap() - 2.6).abs() < 0.01, "{bounds:?}");
-    assert!((bounds[1].as_f64().unwrap() - 8.5).abs() < 0.01, "{bounds:?}");
+    assert!(
+        (bounds[0].as_f64().unwrap() - 2.6).abs() < 0.01,
+        "{bounds:?}"
+    );
+    assert!(
+        (bounds[1].as_f64().unwrap() - 8.5).abs() < 0.01,
+        "{bounds:?}"
+    );
 
     // History: the periphery flickers much less than without it.
     let flicker = |slug: &str| regions(&by_slug(slug)["flicker"])[3];
@@ -268,7 +281,10 @@ fn a_gaze_trace_is_judged_by_eccentricity_and_over_time() {
         .filter(|&b| band_flip("uniform", b) > 0.05)
         .max()
         .unwrap();
-    assert!(outer > 9, "the box reaches past the intermediate edge: band {outer}");
+    assert!(
+        outer > 9,
+        "the box reaches past the intermediate edge: band {outer}"
+    );
     assert!(
         band_flip("32-2-1", outer) > 1.2 * band_flip("uniform", outer),
         "band {outer}: 32/2/1 {} vs uniform {}",

@@ -73,8 +73,11 @@ pub const BINDING_GBUFFER: u32 = 27;
 pub const BINDING_PREVIOUS_GBUFFER: u32 = 28;
 /// The temporal pass's [`crate::temporal::TemporalParams`] (one element).
 pub const BINDING_TEMPORAL: u32 = 29;
+/// The denoiser's texels ([`crate::denoise::DenoiseTexel`]): two halves of one per pixel each, used in
+/// turn by its passes (step `k` reads half `k % 2` and writes the other; `denoise_input` writes half 0).
+pub const BINDING_DENOISE: u32 = 30;
 /// Number of bindings.
-pub const BINDING_COUNT: u32 = 30;
+pub const BINDING_COUNT: u32 = 31;
 
 /// Specialization constant id of `render_samples`' feature mask (`FEATURE_*` bits; default every
 /// feature). The host sets it per scene when it creates the pipeline.
@@ -101,7 +104,12 @@ pub struct KernelPushConstants {
     pub fill_mode: u32,
     /// Exposure compensation in EV for `tonemap`.
     pub exposure_ev: f32,
-    pub _pad: [u32; 3],
+    /// The denoiser's à-trous step (`denoise_atrous`; `denoise_output` reads the half the last step
+    /// wrote, `pass % 2` after [`crate::denoise::DENOISE_MAX_PASSES`] steps).
+    pub pass: u32,
+    /// `denoise_input`'s flags ([`crate::denoise::DENOISE_WITH_HISTORY`]).
+    pub flags: u32,
+    pub _pad: u32,
 }
 
 /// Workgroup size of every entry point.

@@ -27,6 +27,7 @@
 pub mod bsdf;
 pub mod bvh;
 pub mod camera;
+pub mod denoise;
 pub mod foveation;
 pub mod geometry;
 pub mod integrator;

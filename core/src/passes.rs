@@ -29,6 +29,13 @@ pub enum FramePass {
     Temporal,
     /// The history's mean as the frame's HDR image: [`crate::temporal::HistoryTexel::displayed`].
     ResolveHistory,
+    /// The denoiser's input: the HDR image demodulated, with a variance and a strength per pixel:
+    /// [`crate::denoise::denoise_input`].
+    DenoiseInput,
+    /// The denoiser's à-trous steps, [`FramePass::repeats`] times: [`crate::denoise::denoise_atrous`].
+    DenoiseAtrous,
+    /// The denoised HDR image, remodulated: [`crate::denoise::denoise_output`].
+    DenoiseOutput,
     /// HDR to RGBA8 (exposure, Reinhard, sRGB): [`crate::post::tonemap::tonemap_to_rgba8`].
     ToneMap,
     /// The regions' outlines over the RGBA8 image (`fovea view`):
@@ -45,17 +52,22 @@ pub struct FrameSetup {
     pub tonemap: bool,
     /// The regions drawn over the 8-bit image (the view's overlay key); needs `tonemap`.
     pub overlay: bool,
+    /// The denoiser's passes (and the G-buffer they read).
+    pub denoise: bool,
 }
 
 impl FramePass {
     /// Every pass, in the order a frame runs them.
-    pub const ALL: [FramePass; 8] = [
+    pub const ALL: [FramePass; 11] = [
         FramePass::Samples,
         FramePass::CellMeans,
         FramePass::Fill,
         FramePass::GBuffer,
         FramePass::Temporal,
         FramePass::ResolveHistory,
+        FramePass::DenoiseInput,
+        FramePass::DenoiseAtrous,
+        FramePass::DenoiseOutput,
         FramePass::ToneMap,
         FramePass::Overlay,
     ];
@@ -70,6 +82,9 @@ impl FramePass {
             FramePass::GBuffer => "gbuffer",
             FramePass::Temporal => "temporal",
             FramePass::ResolveHistory => "resolve_history",
+            FramePass::DenoiseInput => "denoise_input",
+            FramePass::DenoiseAtrous => "denoise_atrous",
+            FramePass::DenoiseOutput => "denoise_output",
             FramePass::ToneMap => "tonemap",
             FramePass::Overlay => "overlay",
         }
@@ -86,8 +101,21 @@ impl FramePass {
             FramePass::GBuffer => &["gbuffer"],
             FramePass::Temporal => &["temporal"],
             FramePass::ResolveHistory => &["resolve_history"],
+            FramePass::DenoiseInput => &["denoise_input"],
+            FramePass::DenoiseAtrous => &["denoise_atrous"],
+            FramePass::DenoiseOutput => &["denoise_output"],
             FramePass::ToneMap => &["tonemap"],
             FramePass::Overlay => &["overlay_regions"],
+        }
+    }
+
+    /// How many times a frame runs the pass in a row (the k-th run is step `k`): the denoiser's
+    /// [`crate::denoise::DENOISE_MAX_PASSES`] à-trous steps, every other pass once.
+    #[must_use]
+    pub const fn repeats(self) -> u32 {
+        match self {
+            FramePass::DenoiseAtrous => crate::denoise::DENOISE_MAX_PASSES,
+            _ => 1,
         }
     }
 
@@ -96,7 +124,11 @@ impl FramePass {
     pub const fn runs_in(self, setup: FrameSetup) -> bool {
         match self {
             FramePass::Samples | FramePass::CellMeans | FramePass::Fill => true,
-            FramePass::GBuffer | FramePass::Temporal | FramePass::ResolveHistory => setup.history,
+            FramePass::GBuffer => setup.history || setup.denoise,
+            FramePass::Temporal | FramePass::ResolveHistory => setup.history,
+            FramePass::DenoiseInput | FramePass::DenoiseAtrous | FramePass::DenoiseOutput => {
+                setup.denoise
+            }
             FramePass::ToneMap => setup.tonemap,
             FramePass::Overlay => setup.tonemap && setup.overlay,
         }
@@ -128,14 +160,32 @@ mod tests {
             history: true,
             tonemap: true,
             overlay: true,
+            denoise: true,
         })
         .collect();
         assert_eq!(live, FramePass::ALL);
+        // The denoiser alone still needs the G-buffer.
+        let denoised: Vec<_> = frame_passes(FrameSetup {
+            denoise: true,
+            ..FrameSetup::default()
+        })
+        .collect();
+        assert_eq!(
+            denoised,
+            [
+                FramePass::Samples,
+                FramePass::CellMeans,
+                FramePass::Fill,
+                FramePass::GBuffer,
+                FramePass::DenoiseInput,
+                FramePass::DenoiseAtrous,
+                FramePass::DenoiseOutput
+            ]
+        );
         // The overlay draws on the 8-bit image: no tone map, no overlay.
         let no_tonemap = FrameSetup {
-            history: false,
-            tonemap: false,
             overlay: true,
+            ..FrameSetup::default()
         };
         assert!(!FramePass::Overlay.runs_in(no_tonemap));
     }

@@ -22,6 +22,7 @@
 // Entry points take one argument per binding.
 #![allow(clippy::too_many_arguments)]
 
+use fovea_core::denoise::{self as denoiser, DenoiseTexel};
 use fovea_core::foveation::overlay::overlay_rgba8;
 use fovea_core::foveation::OwnedBlock;
 use fovea_core::foveation::{block_extent, block_mean, cell_mean_at, fill_value};
@@ -78,6 +79,7 @@ const _: () = {
     assert!(kernel_abi::BINDING_GBUFFER == 27);
     assert!(kernel_abi::BINDING_PREVIOUS_GBUFFER == 28);
     assert!(kernel_abi::BINDING_TEMPORAL == 29);
+    assert!(kernel_abi::BINDING_DENOISE == 30);
     assert!(kernel_abi::BINDING_PROBE_INPUT == 15);
     assert!(kernel_abi::BINDING_PROBE_OUTPUT == 16);
     assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
@@ -374,6 +376,92 @@ pub fn resolve_history(
         return;
     }
     hdr[p as usize] = history[p as usize].displayed();
+}
+
+/// Denoiser, after the fill or `resolve_history`: invocation `p < item_count` writes pixel `p`'s
+/// demodulated value, variance and strength (core's [`denoiser::denoise_input`], with `pc.flags`) to half 0 of
+/// the denoiser's texels.
+#[spirv(compute(threads(64)))]
+pub fn denoise_input(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 24)] history: &[HistoryTexel],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 27)] gbuffer: &[GBufferTexel],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 30)] denoise: &mut [DenoiseTexel],
+) {
+    let p = invocation_index(id, num_workgroups);
+    if p >= pc.item_count || frame.width == 0 {
+        return;
+    }
+    denoise[p as usize] = denoiser::denoise_input(
+        frame,
+        hdr,
+        gbuffer,
+        history,
+        pc.flags,
+        p % frame.width,
+        p / frame.width,
+    );
+}
+
+/// Denoiser: invocation `p < item_count` runs à-trous step `pc.pass` at pixel `p` (core's
+/// [`denoiser::denoise_atrous`]), reading half `pass % 2` of the denoiser's texels and writing the other.
+#[spirv(compute(threads(64)))]
+pub fn denoise_atrous(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 27)] gbuffer: &[GBufferTexel],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 30)] denoise: &mut [DenoiseTexel],
+) {
+    let p = invocation_index(id, num_workgroups);
+    let n = pc.item_count;
+    if p >= n || frame.width == 0 {
+        return;
+    }
+    let (read, write) = if pc.pass % 2 == 0 { (0, n) } else { (n, 0) };
+    let texel = denoiser::denoise_atrous(
+        frame,
+        denoise,
+        read as usize,
+        gbuffer,
+        pc.pass,
+        p % frame.width,
+        p / frame.width,
+    );
+    denoise[(write + p) as usize] = texel;
+}
+
+/// Denoiser, last: invocation `p < item_count` writes pixel `p` of the HDR image from the half the
+/// last step wrote (`pc.pass % 2`), remodulated (core's [`denoiser::denoise_output`]).
+#[spirv(compute(threads(64)))]
+pub fn denoise_output(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &mut [[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 27)] gbuffer: &[GBufferTexel],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 30)] denoise: &[DenoiseTexel],
+) {
+    let p = invocation_index(id, num_workgroups);
+    let n = pc.item_count;
+    if p >= n || frame.width == 0 {
+        return;
+    }
+    let base = if pc.pass % 2 == 0 { 0 } else { n };
+    hdr[p as usize] = denoiser::denoise_output(
+        frame,
+        denoise,
+        base as usize,
+        gbuffer,
+        p % frame.width,
+        p / frame.width,
+    );
 }
 
 /// Live view, after `tonemap`: invocation `p < item_count` draws the region overlay over pixel `p` of

@@ -3,6 +3,9 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
+use fovea_core::denoise::{
+    denoise_atrous, denoise_input, denoise_output, DenoiseTexel, DENOISE_WITH_HISTORY,
+};
 use fovea_core::foveation::blocks::{for_each_block_in_rows, samples_in_block};
 use fovea_core::foveation::fill::{block_mean, cell_buffer_len, cell_mean_at, fill_value};
 use fovea_core::foveation::overlay::overlay_rgba8;
@@ -72,6 +75,8 @@ pub fn render_frame_passes(
     let mut pixels = vec![[0.0f32; 4]; width as usize * height as usize];
     let mut cell_means: Vec<[f32; 4]> = Vec::new();
     let mut rgba8: Option<Vec<u32>> = None;
+    // The denoiser's two halves, used in turn by its steps.
+    let mut denoise: [Vec<DenoiseTexel>; 2] = Default::default();
     let temporal = history.params_for(frame);
     let counters: [AtomicU64; 6] = Default::default();
     let mut passes = Vec::new();
@@ -113,6 +118,35 @@ pub fn render_frame_passes(
             FramePass::GBuffer => history.gbuffer_pass(scene, frame),
             FramePass::Temporal => history.temporal_pass(frame, &temporal, &pixels),
             FramePass::ResolveHistory => history.resolve_pass(&mut pixels),
+            FramePass::DenoiseInput => {
+                let flags = if options.setup.history {
+                    DENOISE_WITH_HISTORY
+                } else {
+                    0
+                };
+                let (gbuffer, texels) = (history.gbuffer(), history.texels());
+                denoise[0] = per_pixel(width, height, |x, y| {
+                    denoise_input(frame, &pixels, gbuffer, texels, flags, x, y)
+                });
+            }
+            FramePass::DenoiseAtrous => {
+                for step in 0..pass.repeats() {
+                    let (read, write) = (step as usize % 2, 1 - step as usize % 2);
+                    let input = std::mem::take(&mut denoise[read]);
+                    let gbuffer = history.gbuffer();
+                    denoise[write] = per_pixel(width, height, |x, y| {
+                        denoise_atrous(frame, &input, 0, gbuffer, step, x, y)
+                    });
+                    denoise[read] = input;
+                }
+            }
+            FramePass::DenoiseOutput => {
+                let filtered = &denoise[FramePass::DenoiseAtrous.repeats() as usize % 2];
+                let gbuffer = history.gbuffer();
+                for_each_pixel(&mut pixels, width, |x, y, pixel| {
+                    *pixel = denoise_output(frame, filtered, 0, gbuffer, x, y);
+                });
+            }
             FramePass::ToneMap => {
                 let exposure = options.exposure_ev;
                 rgba8 = Some(
@@ -148,6 +182,14 @@ pub fn render_frame_passes(
         pixels,
     };
     (CpuFrame { hdr, rgba8 }, stats)
+}
+
+/// `f(x, y)` for every pixel of a `width × height` image, row-major, rows in parallel.
+fn per_pixel<T: Send>(width: u32, height: u32, f: impl Fn(u32, u32) -> T + Sync) -> Vec<T> {
+    (0..width * height)
+        .into_par_iter()
+        .map(|i| f(i % width, i / width))
+        .collect()
 }
 
 /// Runs `f(x, y, element)` over a row-major image `width` wide, rows in parallel.

@@ -16,12 +16,14 @@ use crate::render::FrameImage;
 #[derive(Default)]
 pub struct TemporalHistory {
     history: Vec<HistoryTexel>,
+    /// This frame's G-buffer (after the G-buffer pass; the last frame's before it).
     gbuffer: Vec<GBufferTexel>,
+    /// The previous frame's G-buffer, which the temporal pass reprojects against.
+    previous_gbuffer: Vec<GBufferTexel>,
     /// The previous frame's camera and size; `None` before the first frame and after a reset.
     previous: Option<(Camera, [u32; 2])>,
-    /// Scratch: this frame's history and G-buffer before they become the previous ones.
+    /// Scratch: this frame's history before it becomes the previous one.
     next_history: Vec<HistoryTexel>,
-    next_gbuffer: Vec<GBufferTexel>,
 }
 
 impl TemporalHistory {
@@ -50,7 +52,7 @@ impl TemporalHistory {
         &self.history
     }
 
-    /// The G-buffer of the last frame.
+    /// The G-buffer of the last frame (this frame's after its G-buffer pass).
     #[must_use]
     pub fn gbuffer(&self) -> &[GBufferTexel] {
         &self.gbuffer
@@ -66,12 +68,14 @@ impl TemporalHistory {
         TemporalParams::after(previous, frame)
     }
 
-    /// The G-buffer pass: each pixel's first hit ([`first_hit_gbuffer`]) into this frame's G-buffer.
+    /// The G-buffer pass: each pixel's first hit ([`first_hit_gbuffer`]) into this frame's G-buffer;
+    /// the last frame's becomes the previous one.
     pub fn gbuffer_pass(&mut self, scene: &SceneView, frame: &FrameParams) {
         let (w, h) = (frame.width, frame.height);
-        self.next_gbuffer
+        std::mem::swap(&mut self.gbuffer, &mut self.previous_gbuffer);
+        self.gbuffer
             .resize(w as usize * h as usize, GBufferTexel::SKY);
-        self.next_gbuffer
+        self.gbuffer
             .par_chunks_mut(w as usize)
             .enumerate()
             .for_each(|(y, row)| {
@@ -83,7 +87,7 @@ impl TemporalHistory {
 
     /// The temporal pass: `filled` (the frame's filled HDR image) reprojected into each pixel's history
     /// ([`temporal_accumulate`], with `temporal`, usually [`Self::params_for`]), after
-    /// [`Self::gbuffer_pass`]. This frame's history and G-buffer then become the previous ones.
+    /// [`Self::gbuffer_pass`]. This frame's history then becomes the previous one.
     pub fn temporal_pass(
         &mut self,
         frame: &FrameParams,
@@ -94,7 +98,7 @@ impl TemporalHistory {
         self.next_history
             .resize(w as usize * h as usize, HistoryTexel::EMPTY);
         let (gbuffer, previous_gbuffer, previous_history) =
-            (&self.next_gbuffer, &self.gbuffer, &self.history);
+            (&self.gbuffer, &self.previous_gbuffer, &self.history);
         self.next_history
             .par_chunks_mut(w as usize)
             .enumerate()
@@ -113,7 +117,6 @@ impl TemporalHistory {
                 }
             });
         std::mem::swap(&mut self.history, &mut self.next_history);
-        std::mem::swap(&mut self.gbuffer, &mut self.next_gbuffer);
         self.previous = Some((frame.camera, [w, h]));
     }
 

@@ -71,6 +71,12 @@ pub(crate) mod pipeline {
     pub const OVERLAY_REGIONS: usize = 6;
     pub const TEMPORAL: usize = 7;
     pub const RESOLVE_HISTORY: usize = 8;
+    /// The denoiser's three passes (`--denoise`).
+    pub const DENOISE_INPUT: usize = 9;
+    pub const DENOISE_ATROUS: usize = 10;
+    pub const DENOISE_OUTPUT: usize = 11;
+    /// The denoiser's pipelines, and the G-buffer's it reads, in their order in a frame.
+    pub const DENOISE_PASSES: [usize; 4] = [GBUFFER, DENOISE_INPUT, DENOISE_ATROUS, DENOISE_OUTPUT];
     /// Temporal reuse's pipelines, in their order in a frame.
     pub const TEMPORAL_PASSES: [usize; 3] = [GBUFFER, TEMPORAL, RESOLVE_HISTORY];
     /// Every frame's pipelines.
@@ -103,7 +109,7 @@ pub struct VulkanContext {
     pub(crate) fence: vk::Fence,
     pub(crate) set_layout: vk::DescriptorSetLayout,
     pub(crate) pipeline_layout: vk::PipelineLayout,
-    pub(crate) pipelines: [vk::Pipeline; 9],
+    pub(crate) pipelines: [vk::Pipeline; ENTRY_POINTS.len()],
     /// The kernel module, kept for re-specialising `render_samples` per scene.
     pub(crate) module: vk::ShaderModule,
     /// The feature mask `pipelines[RENDER_SAMPLES]` was specialised for.
@@ -139,6 +145,8 @@ pub struct VulkanContext {
     /// Whether temporal reuse's pipelines ([`pipeline::TEMPORAL_PASSES`]) have been dispatched once
     /// (by the first frame with temporal reuse; other frames never compile them).
     pub(crate) temporal_warmed_up: bool,
+    /// Whether the denoiser's pipelines ([`pipeline::DENOISE_PASSES`]) have been dispatched once.
+    pub(crate) denoise_warmed_up: bool,
     /// Whether the kernel is the ray-query module (scenes get acceleration structures).
     pub(crate) hardware_traversal: bool,
     /// Why `Traversal::Auto` chose software, if it did.
@@ -383,7 +391,7 @@ impl VulkanContext {
             fence: vk::Fence::null(),
             set_layout: vk::DescriptorSetLayout::null(),
             pipeline_layout: vk::PipelineLayout::null(),
-            pipelines: [vk::Pipeline::null(); 9],
+            pipelines: [vk::Pipeline::null(); ENTRY_POINTS.len()],
             module: vk::ShaderModule::null(),
             render_features: FEATURES_ALL,
             probe_pipelines: [vk::Pipeline::null(); 2],
@@ -409,6 +417,7 @@ impl VulkanContext {
             pipeline_create_ms: 0.0,
             warmed_up: false,
             temporal_warmed_up: false,
+            denoise_warmed_up: false,
             hardware_traversal: hardware,
             traversal_note,
             hardware_scratch_alignment,

@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use ash::vk;
 
+use fovea_core::denoise::{DenoiseTexel, DENOISE_WITH_HISTORY};
 use fovea_core::foveation::fill::cell_buffer_len;
 use fovea_core::foveation::regions::FOVEATION_OK;
 use fovea_core::integrator::FrameParams;
@@ -143,6 +144,8 @@ pub struct FrameRequest {
     /// Temporal reuse: the frame joins each pixel's history (kept on the device from one frame to the
     /// next; [`VulkanContext::reset_history`] forgets it), and the image is the history's mean.
     pub history: bool,
+    /// The denoiser's passes ([`fovea_core::denoise`]) after the history's (or the fill's) image.
+    pub denoise: bool,
     pub output: FrameOutput,
 }
 
@@ -154,6 +157,7 @@ impl FrameRequest {
             history: self.history,
             tonemap: true,
             overlay: matches!(self.output, FrameOutput::Present { overlay: true }),
+            denoise: self.denoise,
         }
     }
 }
@@ -169,6 +173,9 @@ pub(crate) const fn pass_pipelines(pass: FramePass) -> &'static [usize] {
         FramePass::GBuffer => &[pipeline::GBUFFER],
         FramePass::Temporal => &[pipeline::TEMPORAL],
         FramePass::ResolveHistory => &[pipeline::RESOLVE_HISTORY],
+        FramePass::DenoiseInput => &[pipeline::DENOISE_INPUT],
+        FramePass::DenoiseAtrous => &[pipeline::DENOISE_ATROUS],
+        FramePass::DenoiseOutput => &[pipeline::DENOISE_OUTPUT],
         FramePass::ToneMap => &[pipeline::TONEMAP],
         FramePass::Overlay => &[pipeline::OVERLAY_REGIONS],
     }
@@ -362,6 +369,7 @@ impl VulkanContext {
             fill_mode,
             exposure_ev,
             history,
+            denoise: false,
             output: FrameOutput::ReadBack { want_hdr },
         };
         self.render(scene, frame, &request, progress)
@@ -382,7 +390,7 @@ impl VulkanContext {
         request: &FrameRequest,
         progress: &dyn Fn(u64),
     ) -> Result<(GpuFrame, GpuRenderStats)> {
-        let prepared = self.prepare_frame(scene, frame, request.history)?;
+        let prepared = self.prepare_frame(scene, frame, request.history, request.denoise)?;
         let timing = self.dispatch_frame(&prepared.plan, &prepared.sizes, request, progress)?;
         if request.history {
             self.history_advanced(frame);
@@ -472,6 +480,7 @@ impl VulkanContext {
         scene: &GpuScene,
         frame: &FrameParams,
         temporal: bool,
+        denoise: bool,
     ) -> Result<PreparedFrame> {
         self.check_usable()?;
         scene.check_uploaded_to(&self.shared)?;
@@ -529,10 +538,10 @@ impl VulkanContext {
                 .frame
                 .as_mut()
                 .expect("frame resources were just created");
+            if (temporal || denoise) && res.temporal.is_none() {
+                res.temporal = Some(TemporalBuffers::new(&self.shared, &self.limits, pixels)?);
+            }
             if temporal {
-                if res.temporal.is_none() {
-                    res.temporal = Some(TemporalBuffers::new(&self.shared, &self.limits, pixels)?);
-                }
                 let t = res.temporal.as_mut().expect("just created");
                 history_is_new = t.previous.is_none();
                 t.params
@@ -551,6 +560,10 @@ impl VulkanContext {
         if temporal && !self.temporal_warmed_up {
             self.warm_up(&pipeline::TEMPORAL_PASSES)?;
             self.temporal_warmed_up = true;
+        }
+        if denoise && !self.denoise_warmed_up {
+            self.warm_up(&pipeline::DENOISE_PASSES)?;
+            self.denoise_warmed_up = true;
         }
         let warmup_ms = start.elapsed().as_secs_f64() * 1e3;
 
@@ -597,7 +610,8 @@ impl VulkanContext {
         let placeholder = (&res.cell_means, sizes.cells.max(1) * PIXEL);
         let history_bytes = sizes.pixels * std::mem::size_of::<HistoryTexel>() as u64;
         let gbuffer_bytes = sizes.pixels * std::mem::size_of::<GBufferTexel>() as u64;
-        let temporal_buffers: [(u32, (&GpuBuffer, u64)); 5] = match &res.temporal {
+        let denoise_bytes = 2 * sizes.pixels * std::mem::size_of::<DenoiseTexel>() as u64;
+        let temporal_buffers: [(u32, (&GpuBuffer, u64)); 6] = match &res.temporal {
             Some(t) => {
                 let (now, before) = (t.current, 1 - t.current);
                 [
@@ -615,6 +629,7 @@ impl VulkanContext {
                         BINDING_TEMPORAL,
                         (&t.params, std::mem::size_of::<TemporalParams>() as u64),
                     ),
+                    (BINDING_DENOISE, (&t.denoise, denoise_bytes)),
                 ]
             }
             None => [
@@ -623,6 +638,7 @@ impl VulkanContext {
                 (BINDING_GBUFFER, placeholder),
                 (BINDING_PREVIOUS_GBUFFER, placeholder),
                 (BINDING_TEMPORAL, placeholder),
+                (BINDING_DENOISE, placeholder),
             ],
         };
         let frame_buffers = frame_buffers
@@ -669,7 +685,9 @@ impl VulkanContext {
             item_count: 0,
             fill_mode: 0,
             exposure_ev: 0.0,
-            _pad: [0; 3],
+            pass: 0,
+            flags: 0,
+            _pad: 0,
         };
         let max_x = self.limits.max_workgroup_count_x;
         for &p in which {
@@ -722,9 +740,16 @@ impl VulkanContext {
             item_count: 0,
             fill_mode: request.fill_mode,
             exposure_ev: request.exposure_ev,
-            _pad: [0; 3],
+            pass: 0,
+            flags: 0,
+            _pad: 0,
         };
         let passes: Vec<FramePass> = frame_passes(request.setup()).collect();
+        let denoise_flags = if request.history {
+            DENOISE_WITH_HISTORY
+        } else {
+            0
+        };
         debug_assert_eq!(passes.first(), Some(&FramePass::Samples));
 
         let wall = Instant::now();
@@ -797,13 +822,24 @@ impl VulkanContext {
                         _ => pixels,
                     };
                     if items > 0 {
-                        let pc = KernelPushConstants {
-                            item_count: items as u32,
-                            ..base
+                        // Step `k` of a repeated pass sees `pass: k`; the denoiser's output reads the
+                        // half its last step wrote.
+                        let first_pass = if pass == FramePass::DenoiseOutput {
+                            FramePass::DenoiseAtrous.repeats()
+                        } else {
+                            0
                         };
-                        for &p in pass_pipelines(pass) {
-                            dispatch(device, cb, p, 0, &pc, items);
-                            barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+                        for step in 0..pass.repeats() {
+                            let pc = KernelPushConstants {
+                                item_count: items as u32,
+                                pass: first_pass + step,
+                                flags: denoise_flags,
+                                ..base
+                            };
+                            for &p in pass_pipelines(pass) {
+                                dispatch(device, cb, p, 0, &pc, items);
+                                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+                            }
                         }
                     }
                     if timed {

@@ -189,7 +189,9 @@ impl VulkanContext {
             item_count,
             fill_mode: 0,
             exposure_ev: 0.0,
-            _pad: [0; 3],
+            pass: 0,
+            flags: 0,
+            _pad: 0,
         };
         let layout = self.pipeline_layout;
         let max_x = self.limits.max_workgroup_count_x;

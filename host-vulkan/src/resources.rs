@@ -6,6 +6,7 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use fovea_core::camera::Camera;
+use fovea_core::denoise::DenoiseTexel;
 use fovea_core::integrator::FrameParams;
 use fovea_core::temporal::{GBufferTexel, HistoryTexel, TemporalParams};
 
@@ -53,13 +54,16 @@ pub(crate) struct FrameResources {
     pub temporal: Option<TemporalBuffers>,
 }
 
-/// The buffers temporal reuse keeps from frame to frame: two histories and two G-buffers, used in
-/// turn (this frame writes `[current]`, the previous frame's is `[1 - current]`).
+/// The buffers temporal reuse keeps from frame to frame, which the denoiser uses too: two histories
+/// and two G-buffers, used in turn (this frame writes `[current]`, the previous frame's is
+/// `[1 - current]`), and the denoiser's texels.
 pub(crate) struct TemporalBuffers {
     pub history: [GpuBuffer; 2],
     pub gbuffer: [GpuBuffer; 2],
     /// The frame's [`TemporalParams`] (`BINDING_TEMPORAL`).
     pub params: GpuBuffer,
+    /// The denoiser's two halves of texels (`BINDING_DENOISE`).
+    pub denoise: GpuBuffer,
     /// Which of each pair the next frame writes.
     pub current: usize,
     /// The previous frame's camera and size; `None` when the buffers hold no frame yet (or a reset).
@@ -72,6 +76,8 @@ impl TemporalBuffers {
         let gbuffer_bytes = pixels * std::mem::size_of::<GBufferTexel>() as u64;
         limits.check_size("the history", history_bytes)?;
         limits.check_size("the G-buffer", gbuffer_bytes)?;
+        let denoise_bytes = 2 * pixels * std::mem::size_of::<DenoiseTexel>() as u64;
+        limits.check_size("the denoiser's texels", denoise_bytes)?;
         let buffer = |what: &str, bytes: u64| {
             GpuBuffer::new(
                 shared,
@@ -97,6 +103,7 @@ impl TemporalBuffers {
                 vk::BufferUsageFlags::STORAGE_BUFFER,
                 MemoryLocation::CpuToGpu,
             )?,
+            denoise: buffer("denoiser texels", denoise_bytes)?,
             current: 0,
             previous: None,
         })

@@ -8,7 +8,7 @@ pub static EMBEDDED_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_SPV"));
 pub static EMBEDDED_RAY_QUERY_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_RQ_SPV"));
 
 /// Entry points the host creates a pipeline for, in [`crate::context`]'s pipeline order.
-pub const ENTRY_POINTS: [&str; 9] = [
+pub const ENTRY_POINTS: [&str; 12] = [
     "render_samples",
     "reduce_blocks",
     "cell_means",
@@ -18,6 +18,9 @@ pub const ENTRY_POINTS: [&str; 9] = [
     "overlay_regions",
     "temporal",
     "resolve_history",
+    "denoise_input",
+    "denoise_atrous",
+    "denoise_output",
 ];
 
 /// The probe entry points (cross-backend tests), whose pipelines are created on first use.

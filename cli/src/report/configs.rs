@@ -1,7 +1,8 @@
 //! The configurations a report measures (the paper's Tables 1 and 2 and more): uniform 32 spp, foveated
 //! 32/16/8, 32/8/4, 32/2/1, 32/16/8 with both radii halved, 32/16/8 with the other texture rule (the
 //! block-footprint mip levels if the report reads level 0, level 0 if it reads the block's levels), the
-//! user's own (`--spp/--blocks/--radii/--eccentricity`), uniform at equal time, and a uniform sweep.
+//! user's own (`--spp/--blocks/--radii/--eccentricity`), 32/16/8 denoised, 4/2/1 raw and denoised,
+//! uniform at equal time, and a uniform sweep.
 use fovea_core::foveation::regions::FoveationParams;
 use fovea_core::integrator::path::{TEXTURE_LOD_BLOCK, TEXTURE_LOD_OFF};
 
@@ -42,6 +43,8 @@ pub struct ConfigSpec {
     pub foveation: FoveationParams,
     /// The `TEXTURE_LOD_*` rule this configuration renders with; `None`: the report's (`--texture-lod`).
     pub texture_lod: Option<u32>,
+    /// Denoised (`fovea_core::denoise`) after the fill.
+    pub denoise: bool,
 }
 
 /// The uniform baseline's samples per pixel (the paper's 32).
@@ -64,6 +67,7 @@ pub fn uniform(spp: u32, kind: ConfigKind) -> ConfigSpec {
         kind,
         foveation: FoveationParams::uniform(spp),
         texture_lod: None,
+        denoise: false,
     }
 }
 
@@ -82,6 +86,7 @@ pub fn user_config(foveation: FoveationParams) -> ConfigSpec {
         kind: ConfigKind::Foveated,
         foveation,
         texture_lod: None,
+        denoise: false,
     }
 }
 
@@ -118,6 +123,7 @@ pub fn table_configs(
             kind: ConfigKind::Foveated,
             foveation: f,
             texture_lod: None,
+            denoise: false,
         }
     };
     let mut configs = vec![
@@ -139,6 +145,18 @@ pub fn table_configs(
         },
     ];
     configs.extend(user.map(|f| user_config(*f)));
+    // The denoiser: on the paper's budget, and on an eighth of it raw and denoised.
+    configs.extend([
+        ConfigSpec {
+            denoise: true,
+            ..foveated([32, 16, 8], 1.0, "denoised")
+        },
+        foveated([4, 2, 1], 1.0, ""),
+        ConfigSpec {
+            denoise: true,
+            ..foveated([4, 2, 1], 1.0, "denoised")
+        },
+    ]);
     configs
 }
 

@@ -492,6 +492,7 @@ fn run_scene(
                 fill_mode: plan.fill_mode,
                 exposure_ev: args.exposure,
                 history: false,
+                denoise: false,
                 output: FrameOutput::ReadBack { want_hdr: true },
             };
             let rendered =
@@ -707,6 +708,7 @@ impl Measurer<'_> {
                 fill_mode: self.plan.fill_mode,
                 exposure_ev: self.args.exposure,
                 history: false,
+                denoise: spec.denoise,
                 output: FrameOutput::ReadBack {
                     want_hdr: first.is_none(),
                 },

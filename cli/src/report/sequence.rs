@@ -52,6 +52,7 @@ pub struct SequenceSpec {
     pub spp: [u32; 3],
     pub foveated: bool,
     pub history: bool,
+    pub denoise: bool,
 }
 
 /// One band of eccentricity around each frame's gaze, averaged over the frames where it has pixels.
@@ -110,7 +111,8 @@ pub struct SequenceReport {
 }
 
 /// The configurations of a sequence: uniform 32 and the paper's three foveated ones, each without and
-/// with history, then the uniform sweep (`sweep`, without history) for the equal-time curves.
+/// with history, the uniform sweep (`sweep`, without history) for the equal-time curves, then the
+/// denoiser on 32/16/8 alone, after 32/16/8's history and after 32/2/1's.
 #[must_use]
 pub fn sequence_specs(sweep: &[u32]) -> Vec<SequenceSpec> {
     let mut specs = Vec::new();
@@ -124,6 +126,7 @@ pub fn sequence_specs(sweep: &[u32]) -> Vec<SequenceSpec> {
             spp: [UNIFORM_SPP; 3],
             foveated: false,
             history,
+            denoise: false,
         });
         for spp in [[32, 16, 8], [32, 8, 4], [32, 2, 1]] {
             let base = format!("{}/{}/{}", spp[0], spp[1], spp[2]);
@@ -134,6 +137,7 @@ pub fn sequence_specs(sweep: &[u32]) -> Vec<SequenceSpec> {
                 spp,
                 foveated: true,
                 history,
+                denoise: false,
             });
         }
     }
@@ -145,6 +149,35 @@ pub fn sequence_specs(sweep: &[u32]) -> Vec<SequenceSpec> {
             spp: [spp; 3],
             foveated: false,
             history: false,
+            denoise: false,
+        });
+    }
+    // The denoiser: on the frame alone and after the history.
+    for (spp, history) in [
+        ([32, 16, 8], false),
+        ([32, 16, 8], true),
+        ([32, 2, 1], true),
+    ] {
+        let base = format!("{}/{}/{}", spp[0], spp[1], spp[2]);
+        let (name, slug) = if history {
+            (
+                format!("{base} + history + denoiser"),
+                format!("{}-history-denoised", base.replace('/', "-")),
+            )
+        } else {
+            (
+                format!("{base} + denoiser"),
+                format!("{}-denoised", base.replace('/', "-")),
+            )
+        };
+        specs.push(SequenceSpec {
+            name,
+            slug,
+            kind: ConfigKind::Foveated,
+            spp,
+            foveated: true,
+            history,
+            denoise: true,
         });
     }
     specs
@@ -395,6 +428,7 @@ pub fn run_sequence(
                 fill_mode: inputs.fill_mode,
                 exposure_ev: inputs.exposure_ev,
                 history: spec.history,
+                denoise: spec.denoise,
                 output: FrameOutput::ReadBack { want_hdr: true },
             };
             let rendered = renderer.render(inputs.packed, &frame, &request, &|n| {
@@ -615,9 +649,10 @@ mod tests {
     #[test]
     fn specs_pair_each_configuration_with_and_without_history_then_sweep() {
         let specs = sequence_specs(&[1, 2, 32]);
-        assert_eq!(specs.len(), 8 + 2);
-        assert_eq!(specs.iter().filter(|s| s.history).count(), 4);
+        assert_eq!(specs.len(), 8 + 2 + 3);
+        assert_eq!(specs.iter().filter(|s| s.history).count(), 6);
         assert!(specs.iter().any(|s| s.slug == "32-16-8-history"));
-        assert_eq!(specs.last().map(|s| s.spp), Some([2, 2, 2]));
+        assert!(specs.iter().any(|s| s.slug == "32-16-8-history-denoised"));
+        assert_eq!(specs[9].spp, [2, 2, 2]);
     }
 }

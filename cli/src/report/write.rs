@@ -41,6 +41,7 @@ fn config_json(c: &ConfigResult) -> Value {
     json!({
         "config": c.spec.name,
         "kind": c.spec.kind.as_str(),
+        "denoised": c.spec.denoise,
         "spp": &c.spec.foveation.spp[..3],
         "blocks": &c.spec.foveation.block_size[..3],
         "radii_px": if c.spec.foveation.radius_fovea == f32::MAX {

@@ -25,6 +25,7 @@ use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::{Window, WindowId};
 
 use crate::args::Backend;
+use crate::backend::{FrameOutput, FrameRequest};
 use crate::error::{FoveaError, Result};
 use crate::fixation::FixationFilter;
 use crate::gaze::GazeConvention;
@@ -134,6 +135,8 @@ struct Viewer {
     config_index: usize,
     uniform: bool,
     overlay: bool,
+    /// The denoiser's passes on (toggle with N).
+    denoise: bool,
     hud_on: bool,
     paused: bool,
     budget: BudgetController,
@@ -165,6 +168,8 @@ struct MeanKey {
     config_index: usize,
     uniform: bool,
     gaze: [f32; 2],
+    /// Not part of the history: toggling it redraws without restarting anything.
+    denoise: bool,
 }
 
 impl Viewer {
@@ -189,6 +194,7 @@ impl Viewer {
         Ok(Self {
             uniform: options.uniform,
             overlay: options.overlay,
+            denoise: options.denoise,
             budget: BudgetController::new(options.budget_ms),
             window_size: options.window_size,
             gaze: [0.5 * w as f32, 0.5 * h as f32],
@@ -276,6 +282,7 @@ impl Viewer {
             config_index: self.config_index,
             uniform: self.uniform,
             gaze: self.gaze,
+            denoise: self.denoise,
         }
     }
 
@@ -314,6 +321,7 @@ impl Viewer {
                 self.budget.reset();
             }
             ViewKey::O => self.overlay = !self.overlay,
+            ViewKey::N => self.denoise = !self.denoise,
             ViewKey::C => {
                 self.config_index = (self.config_index + 1) % self.options.configs.len();
                 self.budget.reset();
@@ -578,14 +586,17 @@ impl Viewer {
 
         let renderer = self.renderer.as_mut().expect("the window is open");
         let render_start = Instant::now();
-        let (stats, before) = renderer.render(
-            &self.scene.packed,
-            &frame,
-            self.options.fill_mode,
-            self.options.exposure,
-            accumulated_before,
-            self.overlay,
-        )?;
+        let request = FrameRequest {
+            fill_mode: self.options.fill_mode,
+            exposure_ev: self.options.exposure,
+            history: true,
+            denoise: self.denoise,
+            output: FrameOutput::Present {
+                overlay: self.overlay,
+            },
+        };
+        let (stats, before) =
+            renderer.render(&self.scene.packed, &frame, &request, accumulated_before)?;
         let render_ms = render_start.elapsed().as_secs_f64() * 1e3;
         self.accumulated = before + 1;
         self.mean_key = Some(key);
@@ -730,8 +741,12 @@ impl Viewer {
                 stats.primary_samples as f64 * 1e-6
             ),
             format!(
-                "history {} frames since reset  effective spp {}/{}/{}",
-                self.accumulated, eff[0], eff[1], eff[2]
+                "history {} frames since reset  effective spp {}/{}/{}  denoiser {}",
+                self.accumulated,
+                eff[0],
+                eff[1],
+                eff[2],
+                if self.denoise { "on" } else { "off" }
             ),
             pass_line(stats),
             format!(
@@ -741,7 +756,8 @@ impl Viewer {
                 self.options.gaze.describe(),
                 self.fly.speed()
             ),
-            "U uniform  O overlay  C config  Space pause  P shot  R reset  H hide".to_string(),
+            "U uniform  O overlay  N denoise  C config  Space pause  P shot  R reset  H hide"
+                .to_string(),
         ];
         let budget = self.options.budget_ms;
         if budget > 0.0 && frame_spp == [1, 1, 1] && frame_ms > 1.2 * budget {
@@ -896,6 +912,7 @@ fn view_key(code: KeyCode) -> Option<ViewKey> {
         KeyCode::ShiftLeft | KeyCode::ShiftRight => ViewKey::Shift,
         KeyCode::KeyU => ViewKey::U,
         KeyCode::KeyO => ViewKey::O,
+        KeyCode::KeyN => ViewKey::N,
         KeyCode::KeyC => ViewKey::C,
         KeyCode::Space => ViewKey::Space,
         KeyCode::KeyP => ViewKey::P,

@@ -7,7 +7,7 @@ use fovea_cpu::{FrameImage, RenderStats};
 use fovea_scene::pack::PackedScene;
 use fovea_vulkan::{HudOverlay, PresentOutcome, PresentSource, VulkanContext, WindowHandles};
 
-use crate::backend::{FrameOutput, FrameRequest, Renderer};
+use crate::backend::{FrameRequest, Renderer};
 use crate::error::{FoveaError, Result};
 
 /// A renderer that presents to one window.
@@ -64,29 +64,21 @@ impl LiveRenderer {
         })
     }
 
-    /// Renders `frame`, adds it to each pixel's history (`accumulated_before` frames since the last
-    /// reset; 0 resets it), tone-maps the history's mean with `exposure_ev` and draws the region overlay
-    /// if asked. Returns the frame's statistics and the number of earlier frames actually in the
-    /// history (0 where it had to restart, e.g. after a resize).
+    /// Renders `frame` as `request` says (with history: the live view keeps one; its output goes to
+    /// the window), after `accumulated_before` frames of history since the last reset (0 resets it).
+    /// Returns the frame's statistics and the number of earlier frames actually in the history (0
+    /// where it had to restart, e.g. after a resize).
     pub fn render(
         &mut self,
         packed: &PackedScene,
         frame: &FrameParams,
-        fill_mode: u32,
-        exposure_ev: f32,
+        request: &FrameRequest,
         accumulated_before: u32,
-        overlay: bool,
     ) -> Result<(RenderStats, u32)> {
         if accumulated_before == 0 {
             self.renderer.reset_history();
         }
-        let request = FrameRequest {
-            fill_mode,
-            exposure_ev,
-            history: true,
-            output: FrameOutput::Present { overlay },
-        };
-        let rendered = self.renderer.render(packed, frame, &request, &|_| {})?;
+        let rendered = self.renderer.render(packed, frame, request, &|_| {})?;
         let before = if rendered.history_restarted {
             0
         } else {

@@ -20,7 +20,7 @@
 //!
 //! Fields are separated by spaces or tabs. Event names and key names are case-insensitive. The key
 //! names are `W`, `A`, `S`, `D`, `Q`, `E` (fly), `Shift` (fast), `U` (uniform toggle), `O` (region
-//! overlay), `C` (cycle sampling configuration), `Space` (pause), `P` (screenshot), `R` (reset),
+//! overlay), `N` (denoiser), `C` (cycle sampling configuration), `Space` (pause), `P` (screenshot), `R` (reset),
 //! `H` (hide/show the on-screen figures) and `Escape` (or `Esc`, quit).
 //!
 //! Lines need not be in frame order: events are sorted by frame, and events on the same frame keep
@@ -59,6 +59,8 @@ pub enum ViewKey {
     U,
     /// Toggle the region overlay.
     O,
+    /// Toggle the denoiser.
+    N,
     /// Cycle the sampling configuration.
     C,
     /// Pause / resume.
@@ -75,7 +77,7 @@ pub enum ViewKey {
 
 impl ViewKey {
     /// Every key, in the order error messages list them.
-    pub const ALL: [ViewKey; 15] = [
+    pub const ALL: [ViewKey; 16] = [
         ViewKey::W,
         ViewKey::A,
         ViewKey::S,
@@ -85,6 +87,7 @@ impl ViewKey {
         ViewKey::Shift,
         ViewKey::U,
         ViewKey::O,
+        ViewKey::N,
         ViewKey::C,
         ViewKey::Space,
         ViewKey::P,
@@ -126,6 +129,7 @@ impl ViewKey {
             ViewKey::Shift => "Shift",
             ViewKey::U => "U",
             ViewKey::O => "O",
+            ViewKey::N => "N",
             ViewKey::C => "C",
             ViewKey::Space => "Space",
             ViewKey::P => "P",
