@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# What temporal reuse costs, pass by pass (a benchmark, not a test): `fovea render --history` over a
+# What temporal reuse and the denoiser cost, pass by pass (a benchmark, not a test): `fovea render
+# --history --denoise` over a
 # simulated eye-tracker gaze and a slow pan of the bundled Lost Empire, on each backend; prints one
 # Markdown row per backend with the median milliseconds of each pass per megapixel (frames after the
 # first two; CPU timers on the CPU, GPU timestamps on Vulkan), read from --stats.
@@ -33,10 +34,10 @@ with open(f"{out}/gaze.csv", "w") as g, open(f"{out}/camera.csv", "w") as c:
         c.write(f"{f},{-20 + d},30,60,{5 + d},15,20\n")
 PY
 
-echo "| backend | size | frames | samples | cell_means | fill | gbuffer | temporal | resolve_history | tonemap |"
-echo "|---|---|---|---|---|---|---|---|---|---|"
+echo "| backend | size | frames | samples | cell_means | fill | gbuffer | temporal | resolve_history | denoise_input | denoise_atrous | denoise_output | tonemap |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for backend in $BACKENDS; do
-  "$BIN" render --backend "$backend" --resolution "$SIZE" --fov 60 --history -q \
+  "$BIN" render --backend "$backend" --resolution "$SIZE" --fov 60 --history --denoise -q \
     --gaze-trace "$out/gaze.csv" --camera-path "$out/camera.csv" \
     -o "$out/f_$backend.png" --stats "$out/$backend.json"
   python3 - "$out/$backend.json" "$backend" "$SIZE" <<'PY'
@@ -45,7 +46,8 @@ doc, backend, size = json.load(open(sys.argv[1])), sys.argv[2], sys.argv[3]
 w, h = map(int, size.split("x"))
 mp = w * h / 1e6
 frames = doc["frames"][2:] or doc["frames"]
-names = ["samples", "cell_means", "fill", "gbuffer", "temporal", "resolve_history", "tonemap"]
+names = ["samples", "cell_means", "fill", "gbuffer", "temporal", "resolve_history",
+         "denoise_input", "denoise_atrous", "denoise_output", "tonemap"]
 cells = []
 for n in names:
     values = [f["pass_ms"][n] for f in frames if n in f["pass_ms"]]

@@ -219,13 +219,13 @@ fn a_gaze_trace_is_judged_by_eccentricity_and_over_time() {
     let seq = &json["sequence"];
     assert_eq!(seq["frames"], 5);
     let configs = seq["configs"].as_array().unwrap();
-    // Uniform and three foveated, each without and with history, the sweep's uniform 1 and 2, then
-    // the denoiser on 32/16/8 alone, after 32/16/8's history and after 32/2/1's.
+    // Uniform and three foveated, each without and with history, the sweep's uniform 1 and 2 without
+    // and with history, then the denoiser on 32/16/8 alone, after 32/16/8's history and after 32/2/1's.
     let slugs: Vec<&str> = configs
         .iter()
         .map(|c| c["slug"].as_str().unwrap())
         .collect();
-    assert_eq!(slugs.len(), 13, "{slugs:?}");
+    assert_eq!(slugs.len(), 15, "{slugs:?}");
     let by_slug = |slug: &str| {
         configs
             .iter()

@@ -236,10 +236,14 @@ mod tests {
                 "32/8/4",
                 "32/2/1",
                 "32/16/8 half radii",
-                "32/16/8 block texture LOD"
+                "32/16/8 block texture LOD",
+                "32/16/8 denoised",
+                "4/2/1",
+                "4/2/1 denoised"
             ]
         );
         assert_eq!(c[5].texture_lod, Some(TEXTURE_LOD_BLOCK));
+        assert!(c[6].denoise && !c[7].denoise && c[8].denoise);
         assert!(c[..5].iter().all(|c| c.texture_lod.is_none()));
         // A report that reads the block's levels compares with level 0.
         let c = table_configs(&paper, None, TEXTURE_LOD_BLOCK);

@@ -148,7 +148,7 @@ fn sequence_colour(c: &SequenceResult, index: usize) -> RGBColor {
             RGBColor(140, 60, 170),
         ][index % 3],
     };
-    if c.spec.history || c.spec.kind == ConfigKind::Sweep {
+    if c.spec.history {
         base
     } else {
         let lighten = |v: u8| v + (255 - v) / 2;
@@ -316,15 +316,21 @@ fn draw_sequence(
             .y_label_formatter(&|v| format!("{v:.3}"))
             .x_label_formatter(&|v| format!("{v:.0}"))
             .draw()?;
-        let sweep: Vec<&&SequenceResult> = points
-            .iter()
-            .filter(|c| c.spec.kind == ConfigKind::Sweep)
-            .collect();
-        let blue = RGBColor(40, 90, 200);
-        chart.draw_series(LineSeries::new(
-            sweep.iter().map(|c| (c.frame_ms, get(c))),
-            blue.stroke_width(2),
-        ))?;
+        for history in [false, true] {
+            let sweep: Vec<&&SequenceResult> = points
+                .iter()
+                .filter(|c| c.spec.kind == ConfigKind::Sweep && c.spec.history == history)
+                .collect();
+            let blue = if history {
+                RGBColor(40, 90, 200)
+            } else {
+                RGBColor(150, 175, 230)
+            };
+            chart.draw_series(LineSeries::new(
+                sweep.iter().map(|c| (c.frame_ms, get(c))),
+                blue.stroke_width(2),
+            ))?;
+        }
         for (i, c) in points.iter().enumerate() {
             let colour = sequence_colour(c, i);
             let dy = if i % 2 == 0 { -14 } else { 6 };

@@ -111,7 +111,7 @@ pub struct SequenceReport {
 }
 
 /// The configurations of a sequence: uniform 32 and the paper's three foveated ones, each without and
-/// with history, the uniform sweep (`sweep`, without history) for the equal-time curves, then the
+/// with history, the uniform sweep (`sweep`) without and with history for the equal-time curves, then the
 /// denoiser on 32/16/8 alone, after 32/16/8's history and after 32/2/1's.
 #[must_use]
 pub fn sequence_specs(sweep: &[u32]) -> Vec<SequenceSpec> {
@@ -141,16 +141,23 @@ pub fn sequence_specs(sweep: &[u32]) -> Vec<SequenceSpec> {
             });
         }
     }
-    for &spp in sweep.iter().filter(|&&s| s != UNIFORM_SPP) {
-        specs.push(SequenceSpec {
-            name: format!("uniform {spp}"),
-            slug: format!("uniform-{spp}"),
-            kind: ConfigKind::Sweep,
-            spp: [spp; 3],
-            foveated: false,
-            history: false,
-            denoise: false,
-        });
+    for history in [false, true] {
+        for &spp in sweep.iter().filter(|&&s| s != UNIFORM_SPP) {
+            let (suffix, slug_suffix) = if history {
+                (" + history", "-history")
+            } else {
+                ("", "")
+            };
+            specs.push(SequenceSpec {
+                name: format!("uniform {spp}{suffix}"),
+                slug: format!("uniform-{spp}{slug_suffix}"),
+                kind: ConfigKind::Sweep,
+                spp: [spp; 3],
+                foveated: false,
+                history,
+                denoise: false,
+            });
+        }
     }
     // The denoiser: on the frame alone and after the history.
     for (spp, history) in [
@@ -649,10 +656,11 @@ mod tests {
     #[test]
     fn specs_pair_each_configuration_with_and_without_history_then_sweep() {
         let specs = sequence_specs(&[1, 2, 32]);
-        assert_eq!(specs.len(), 8 + 2 + 3);
-        assert_eq!(specs.iter().filter(|s| s.history).count(), 6);
+        assert_eq!(specs.len(), 8 + 4 + 3);
+        assert_eq!(specs.iter().filter(|s| s.history).count(), 8);
         assert!(specs.iter().any(|s| s.slug == "32-16-8-history"));
         assert!(specs.iter().any(|s| s.slug == "32-16-8-history-denoised"));
         assert_eq!(specs[9].spp, [2, 2, 2]);
+        assert!(specs[11].history && specs[11].spp == [2, 2, 2]);
     }
 }

@@ -678,7 +678,7 @@ mod tests {
         assert!(message.starts_with("script line 7: "), "{message}");
         assert!(message.contains("unknown key 'X'"), "{message}");
         assert!(
-            message.contains("W, A, S, D, Q, E, Shift, U, O, C, Space, P, R, H, Escape"),
+            message.contains("W, A, S, D, Q, E, Shift, U, O, N, C, Space, P, R, H, Escape"),
             "{message}"
         );
         assert!(err("0 down Ctrl").contains("'Ctrl'"));
