@@ -97,7 +97,10 @@ passes_file = os.path.join(out, "passes.json")
 if os.path.exists(passes_file):
     d = json.load(open(passes_file))
     frames = (d.get("frames") or [d])[1:] or (d.get("frames") or [d])
-    names = []
+    # The frame's order (core's FramePass::ALL), then anything else the stats name.
+    names = [n for n in ["samples", "cell_means", "fill", "gbuffer", "temporal", "resolve_history",
+                         "denoise_input", "denoise_atrous", "denoise_output", "tonemap", "read_back"]
+             if any(n in f.get("pass_ms", {}) for f in frames)]
     for f in frames:
         for n in f.get("pass_ms", {}):
             if n not in names:
