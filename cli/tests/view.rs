@@ -217,7 +217,7 @@ fn the_uniform_toggle_changes_the_samples_per_frame_by_the_sample_ratio() {
         return;
     };
     let dir = temp_dir("uniform");
-    let script = write(&dir, "s.txt", "2 press U\n");
+    let script = write(&dir, "s.txt", "2 press U\n3 press N\n");
     let stats = dir.join("stats.json");
     // The CPU backend: its frames are uploaded and presented through the same swapchain.
     c.arg(cornell())
@@ -229,7 +229,7 @@ fn the_uniform_toggle_changes_the_samples_per_frame_by_the_sample_ratio() {
             "--budget-ms",
             "0",
             "--exit-after-frames",
-            "4",
+            "5",
             "-q",
         ])
         .arg("--script")
@@ -260,6 +260,15 @@ fn the_uniform_toggle_changes_the_samples_per_frame_by_the_sample_ratio() {
     );
     let ratio = samples(2) as f64 / samples(0) as f64;
     assert!(ratio > 5.0, "uniform / foveated = {ratio}");
+    // N turns the denoiser on: its passes run after the history's, which it does not reset.
+    let ran = |i: usize, pass: &str| f[i]["pass_ms"][pass].as_f64().is_some();
+    assert!(!ran(2, "denoise_atrous"), "{}", f[2]["pass_ms"]);
+    assert!(
+        ran(3, "denoise_atrous") && ran(3, "denoise_output"),
+        "{}",
+        f[3]["pass_ms"]
+    );
+    assert_eq!(f[3]["accumulated_frames"], 4);
 }
 
 #[test]
