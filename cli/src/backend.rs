@@ -21,29 +21,11 @@ pub struct Rendered {
     pub extra: Option<serde_json::Value>,
 }
 
-/// Where a frame goes once it is rendered.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FrameOutput {
-    /// Back to the host (`render`, `report`): the RGB bytes and, with `want_hdr`, the HDR image.
-    ReadBack { want_hdr: bool },
-    /// To the window (`view`), with the regions drawn over it if `overlay`; kept by the backend for
-    /// [`Renderer::present_source`] and [`Renderer::last_hdr`].
-    Present { overlay: bool },
-}
-
-/// How to render a frame beyond its [`FrameParams`]: the same on every backend.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FrameRequest {
-    /// `FILL_BILINEAR` or `FILL_REPLICATE`.
-    pub fill_mode: u32,
-    pub exposure_ev: f32,
-    /// Temporal reuse: the frame joins each pixel's history, kept by the backend from one frame to
-    /// the next ([`Renderer::reset_history`] forgets it), and the image is the history's mean.
-    pub history: bool,
-    /// The denoiser's passes after the history (or the fill).
-    pub denoise: bool,
-    pub output: FrameOutput,
-}
+/// How to render a frame and where it goes: core's one request, the same on every backend. With
+/// [`FrameOutput::Present`] the backend keeps the frame for [`Renderer::presented_rgba8`] and
+/// [`Renderer::last_hdr`]; with history it keeps each pixel's history ([`Renderer::reset_history`]
+/// forgets it).
+pub use fovea_core::passes::{FrameOutput, FrameRequest};
 
 /// A ready backend: the one type `render`, `report` and `view` drive.
 pub enum Renderer {
@@ -348,27 +330,17 @@ impl Renderer {
             Self::Cpu(cpu) => {
                 let view = packed.view().with_features(cpu.features);
                 let history_restarted = request.history && !cpu.history.continues(frame);
-                let options = fovea_cpu::CpuFrameOptions {
-                    fill_mode: request.fill_mode,
-                    exposure_ev: request.exposure_ev,
-                    setup: fovea_core::passes::FrameSetup {
-                        history: request.history,
-                        tonemap: true,
-                        overlay: request.output == FrameOutput::Present { overlay: true },
-                        denoise: request.denoise,
-                    },
-                };
                 let (image, stats) = cpu.pool.install(|| {
                     fovea_cpu::render_frame_passes(
                         &view,
                         frame,
-                        &options,
+                        request,
                         &mut cpu.history,
                         progress,
                     )
                 });
                 let (hdr, rgb8) = match request.output {
-                    FrameOutput::ReadBack { .. } => {
+                    FrameOutput::Hdr | FrameOutput::ReadBack { .. } => {
                         cpu.presented = None;
                         let rgb8 = image.rgb8();
                         (Some(image.hdr), rgb8)
@@ -392,29 +364,14 @@ impl Renderer {
                     .scene
                     .as_ref()
                     .ok_or_else(|| FoveaError::Backend("no scene uploaded".into()))?;
-                let output = match request.output {
-                    FrameOutput::ReadBack { want_hdr } => {
-                        fovea_vulkan::FrameOutput::ReadBack { want_hdr }
-                    }
-                    FrameOutput::Present { overlay } => {
-                        fovea_vulkan::FrameOutput::Present { overlay }
-                    }
-                };
-                let vulkan_request = fovea_vulkan::FrameRequest {
-                    fill_mode: request.fill_mode,
-                    exposure_ev: request.exposure_ev,
-                    history: request.history,
-                    denoise: request.denoise,
-                    output,
-                };
                 let (image, stats) = v
                     .ctx
-                    .render(scene, frame, &vulkan_request, &|n| progress(n))
+                    .render(scene, frame, request, &|n| progress(n))
                     .map_err(|e| FoveaError::Backend(format!("Vulkan backend: {e}")))?;
                 let messages = v.ctx.validation_messages();
                 let rgb8 = match request.output {
                     FrameOutput::ReadBack { .. } => Some(image.rgb8()),
-                    FrameOutput::Present { .. } => None,
+                    FrameOutput::Hdr | FrameOutput::Present { .. } => None,
                 };
                 Ok(Rendered {
                     rgb8,

@@ -395,6 +395,32 @@ impl TraceTiming {
     }
 }
 
+/// `--gaze-trace FILE` for `render` and `report`: its frames and their gaze in pixels of an `image`
+/// (a per-frame trace's lines, or a timed trace sampled at `fps`), with `--gaze-normalized` read as
+/// 0..1 of the image. The errors name the option.
+pub fn read_trace_frames(
+    path: &std::path::Path,
+    fps: f64,
+    normalized: bool,
+    image: [u32; 2],
+) -> crate::error::Result<Vec<(u32, [f32; 2])>> {
+    use crate::error::FoveaError;
+    if !(fps > 0.0 && fps <= 10_000.0) {
+        return Err(FoveaError::option(
+            "--trace-fps",
+            format!("{fps} is not in (0, 10000] frames per second"),
+        ));
+    }
+    let convention = if normalized {
+        GazeConvention::Normalized
+    } else {
+        GazeConvention::PixelsTopLeft
+    };
+    let trace = GazeTrace::read(path, convention, TraceTiming::Frames)
+        .map_err(|e| FoveaError::option("--gaze-trace", e))?;
+    Ok(trace.frames(fps, image))
+}
+
 /// A recorded gaze trace (`--gaze-trace FILE`; see the [module documentation](self)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GazeTrace {

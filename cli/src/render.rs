@@ -12,7 +12,6 @@ use crate::args::RenderArgs;
 use crate::backend::{FrameOutput, FrameRequest, Renderer};
 use crate::camera_path::{read_camera_path, CameraKey};
 use crate::error::{FoveaError, Result};
-use crate::gaze::{GazeConvention, GazeTrace, TraceTiming};
 use crate::output::{
     check_json_path, check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png,
     ImageFormat,
@@ -216,24 +215,12 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
 /// The frames of `--gaze-trace` (see [`crate::gaze`]): per-frame lines, or a timed trace sampled at
 /// `--trace-fps`, in image pixels.
 fn read_gaze_frames(args: &RenderArgs, path: &Path, image: [u32; 2]) -> Result<Vec<GazeSample>> {
-    if !(args.trace_fps > 0.0 && args.trace_fps <= 10_000.0) {
-        return Err(FoveaError::option(
-            "--trace-fps",
-            format!("{} is not in (0, 10000] frames per second", args.trace_fps),
-        ));
-    }
-    let convention = if args.gaze_normalized {
-        GazeConvention::Normalized
-    } else {
-        GazeConvention::PixelsTopLeft
-    };
-    let trace = GazeTrace::read(path, convention, TraceTiming::Frames)
-        .map_err(|e| FoveaError::option("--gaze-trace", e))?;
-    Ok(trace
-        .frames(args.trace_fps, image)
-        .into_iter()
-        .map(|(frame, gaze)| GazeSample { frame, gaze })
-        .collect())
+    Ok(
+        crate::gaze::read_trace_frames(path, args.trace_fps, args.gaze_normalized, image)?
+            .into_iter()
+            .map(|(frame, gaze)| GazeSample { frame, gaze })
+            .collect(),
+    )
 }
 
 /// `out.png` → `out_00012.png` for frame 12 of a gaze trace.

@@ -56,6 +56,57 @@ pub struct FrameSetup {
     pub denoise: bool,
 }
 
+/// Where a frame's image goes once its passes have run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameOutput {
+    /// The linear HDR image only, no 8-bit one (references, tests, benchmarks).
+    Hdr,
+    /// Back to the host (`render`, `report`): the 8-bit image and, with `want_hdr`, the HDR one.
+    ReadBack { want_hdr: bool },
+    /// To the window (`view`): the 8-bit image, with the regions drawn over it if `overlay`; it stays
+    /// with the host that rendered it.
+    Present { overlay: bool },
+}
+
+/// How to render a frame beyond its [`crate::integrator::FrameParams`]: the one request every host
+/// and the command line use.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameRequest {
+    /// `FILL_BILINEAR` or `FILL_REPLICATE`.
+    pub fill_mode: u32,
+    /// The tone map's exposure (stops).
+    pub exposure_ev: f32,
+    /// Temporal reuse: the frame joins each pixel's history, which the host keeps from one frame to
+    /// the next, and the image is the history's mean.
+    pub history: bool,
+    /// The denoiser's passes after the history's (or the fill's) image.
+    pub denoise: bool,
+    pub output: FrameOutput,
+}
+
+impl FrameRequest {
+    /// The passes this request needs.
+    #[must_use]
+    pub const fn setup(&self) -> FrameSetup {
+        FrameSetup {
+            history: self.history,
+            tonemap: !matches!(self.output, FrameOutput::Hdr),
+            overlay: matches!(self.output, FrameOutput::Present { overlay: true }),
+            denoise: self.denoise,
+        }
+    }
+
+    /// [`crate::denoise::denoise_input`]'s flags for this request.
+    #[must_use]
+    pub const fn denoise_flags(&self) -> u32 {
+        if self.history {
+            crate::denoise::DENOISE_WITH_HISTORY
+        } else {
+            0
+        }
+    }
+}
+
 impl FramePass {
     /// Every pass, in the order a frame runs them.
     pub const ALL: [FramePass; 11] = [

@@ -29,3 +29,13 @@ pub struct RenderStats {
     /// with temporal reuse `gbuffer` and `temporal`), where the host timed them one by one.
     pub passes: Vec<(&'static str, f64)>,
 }
+
+/// The 8-bit sRGB RGB bytes (what a PNG stores) of packed RGBA8 pixels, R in the low byte (core's
+/// `tonemap_to_rgba8` layout, which both hosts' tone map writes).
+#[must_use]
+pub fn rgba8_to_rgb8(pixels: &[u32]) -> Vec<u8> {
+    pixels
+        .iter()
+        .flat_map(|p| [*p as u8, (*p >> 8) as u8, (*p >> 16) as u8])
+        .collect()
+}

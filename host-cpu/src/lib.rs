@@ -25,7 +25,6 @@ pub mod specialize;
 pub mod temporal;
 
 pub use render::{
-    render_frame, render_frame_passes, render_frame_with_history, CpuFrame, CpuFrameOptions,
-    FrameImage, RenderStats,
+    render_frame, render_frame_passes, render_frame_with_history, CpuFrame, FrameImage, RenderStats,
 };
 pub use temporal::TemporalHistory;

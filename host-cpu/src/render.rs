@@ -3,15 +3,13 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use fovea_core::denoise::{
-    denoise_atrous, denoise_input, denoise_output, DenoiseTexel, DENOISE_WITH_HISTORY,
-};
+use fovea_core::denoise::{denoise_atrous, denoise_input, denoise_output, DenoiseTexel};
 use fovea_core::foveation::blocks::{for_each_block_in_rows, samples_in_block};
 use fovea_core::foveation::fill::{block_mean, cell_buffer_len, cell_mean_at, fill_value};
 use fovea_core::foveation::overlay::overlay_rgba8;
 use fovea_core::foveation::regions::REGION_COUNT;
 use fovea_core::integrator::{block_sample_sum, FrameParams};
-use fovea_core::passes::{frame_passes, FramePass, FrameSetup};
+use fovea_core::passes::{frame_passes, FrameOutput, FramePass, FrameRequest};
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::{Features, SceneView};
 
@@ -23,7 +21,7 @@ use rayon::prelude::*;
 pub use fovea_frame::{FrameImage, RenderStats};
 
 /// What the CPU host made of a frame: the HDR image (filled, or with history its mean) and, where the
-/// frame's [`FrameSetup`] asked for the tone map, the RGBA8 image (R in the low byte, as the kernel's).
+/// frame's [`FrameRequest`] asked for an 8-bit image, the RGBA8 image (R in the low byte, as the kernel's).
 #[derive(Clone, Debug)]
 pub struct CpuFrame {
     pub hdr: FrameImage,
@@ -34,28 +32,12 @@ impl CpuFrame {
     /// The RGBA8 image as 8-bit sRGB RGB bytes (what a PNG stores), if the frame was tone-mapped.
     #[must_use]
     pub fn rgb8(&self) -> Option<Vec<u8>> {
-        self.rgba8.as_ref().map(|pixels| {
-            pixels
-                .iter()
-                .flat_map(|p| [*p as u8, (*p >> 8) as u8, (*p >> 16) as u8])
-                .collect()
-        })
+        self.rgba8.as_deref().map(fovea_frame::rgba8_to_rgb8)
     }
 }
 
-/// How the CPU runs a frame beyond its [`FrameParams`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CpuFrameOptions {
-    /// `FILL_BILINEAR` or `FILL_REPLICATE`.
-    pub fill_mode: u32,
-    /// The tone map's exposure (stops).
-    pub exposure_ev: f32,
-    /// Which passes run ([`fovea_core::passes::frame_passes`]).
-    pub setup: FrameSetup,
-}
-
 /// Renders one frame of `scene` by walking core's pass list ([`frame_passes`]) and running each pass's
-/// CPU step: one rayon loop over its core function. With `setup.history` the frame joins `history`
+/// CPU step: one rayon loop over its core function. With `request.history` the frame joins `history`
 /// (kept from one call to the next; a frame of another size starts afresh) and the HDR image is the
 /// history's mean. `progress` is called from worker threads with the camera samples just finished.
 ///
@@ -65,7 +47,7 @@ pub struct CpuFrameOptions {
 pub fn render_frame_passes(
     scene: &SceneView,
     frame: &FrameParams,
-    options: &CpuFrameOptions,
+    request: &FrameRequest,
     history: &mut TemporalHistory,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (CpuFrame, RenderStats) {
@@ -81,7 +63,7 @@ pub fn render_frame_passes(
     let counters: [AtomicU64; 6] = Default::default();
     let mut passes = Vec::new();
 
-    for pass in frame_passes(options.setup) {
+    for pass in frame_passes(request.setup()) {
         let pass_start = Instant::now();
         match pass {
             FramePass::Samples => dispatch(
@@ -111,7 +93,7 @@ pub fn render_frame_passes(
                     foveation,
                     x,
                     y,
-                    options.fill_mode,
+                    request.fill_mode,
                 );
                 *pixel = [v.x, v.y, v.z, 1.0];
             }),
@@ -119,11 +101,7 @@ pub fn render_frame_passes(
             FramePass::Temporal => history.temporal_pass(frame, &temporal, &pixels),
             FramePass::ResolveHistory => history.resolve_pass(&mut pixels),
             FramePass::DenoiseInput => {
-                let flags = if options.setup.history {
-                    DENOISE_WITH_HISTORY
-                } else {
-                    0
-                };
+                let flags = request.denoise_flags();
                 let (gbuffer, texels) = (history.gbuffer(), history.texels());
                 denoise[0] = per_pixel(width, height, |x, y| {
                     denoise_input(frame, &pixels, gbuffer, texels, flags, x, y)
@@ -148,7 +126,7 @@ pub fn render_frame_passes(
                 });
             }
             FramePass::ToneMap => {
-                let exposure = options.exposure_ev;
+                let exposure = request.exposure_ev;
                 rgba8 = Some(
                     pixels
                         .par_iter()
@@ -212,15 +190,11 @@ pub fn render_frame(
     fill_mode: u32,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (FrameImage, RenderStats) {
-    let options = CpuFrameOptions {
-        fill_mode,
-        exposure_ev: 0.0,
-        setup: FrameSetup::default(),
-    };
+    let request = hdr_request(fill_mode, false);
     let (out, stats) = render_frame_passes(
         scene,
         frame,
-        &options,
+        &request,
         &mut TemporalHistory::new(),
         progress,
     );
@@ -236,16 +210,20 @@ pub fn render_frame_with_history(
     history: &mut TemporalHistory,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (FrameImage, RenderStats) {
-    let options = CpuFrameOptions {
+    let request = hdr_request(fill_mode, true);
+    let (out, stats) = render_frame_passes(scene, frame, &request, history, progress);
+    (out.hdr, stats)
+}
+
+/// A request for the HDR image alone, with or without history.
+fn hdr_request(fill_mode: u32, history: bool) -> FrameRequest {
+    FrameRequest {
         fill_mode,
         exposure_ev: 0.0,
-        setup: FrameSetup {
-            history: true,
-            ..FrameSetup::default()
-        },
-    };
-    let (out, stats) = render_frame_passes(scene, frame, &options, history, progress);
-    (out.hdr, stats)
+        history,
+        denoise: false,
+        output: FrameOutput::Hdr,
+    }
 }
 
 /// The samples pass of [`render_frame_passes`]: every block's samples, band by band (core's walk over

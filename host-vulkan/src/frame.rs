@@ -5,12 +5,13 @@ use std::time::Instant;
 
 use ash::vk;
 
-use fovea_core::denoise::{DenoiseTexel, DENOISE_WITH_HISTORY};
+use fovea_core::denoise::DenoiseTexel;
 use fovea_core::foveation::fill::cell_buffer_len;
 use fovea_core::foveation::regions::FOVEATION_OK;
 use fovea_core::integrator::FrameParams;
 use fovea_core::kernel_abi::*;
-use fovea_core::passes::{frame_passes, FramePass, FrameSetup};
+use fovea_core::passes::{frame_passes, FramePass};
+pub use fovea_core::passes::{FrameOutput, FrameRequest};
 use fovea_core::temporal::{GBufferTexel, HistoryTexel, TemporalParams};
 use fovea_frame::{FrameImage, RenderStats};
 
@@ -39,11 +40,7 @@ impl GpuFrame {
     /// The LDR image as 8-bit sRGB RGB bytes (what a PNG stores).
     #[must_use]
     pub fn rgb8(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(self.ldr.len() * 3);
-        for p in &self.ldr {
-            out.extend_from_slice(&[*p as u8, (*p >> 8) as u8, (*p >> 16) as u8]);
-        }
-        out
+        fovea_frame::rgba8_to_rgb8(&self.ldr)
     }
 }
 
@@ -124,44 +121,6 @@ struct FrameTiming {
     passes: Vec<(&'static str, f64)>,
 }
 
-/// Where a frame's image goes after the tone map.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FrameOutput {
-    /// `fovea render`: copy the LDR (and, with `want_hdr`, the HDR) image to the host.
-    ReadBack { want_hdr: bool },
-    /// `fovea view`: draw the region overlay if asked; the image stays on the device for the swapchain
-    /// ([`VulkanContext::present`]).
-    Present { overlay: bool },
-}
-
-/// How to render a frame beyond its [`FrameParams`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FrameRequest {
-    /// `FILL_BILINEAR` or `FILL_REPLICATE`.
-    pub fill_mode: u32,
-    /// The tone map's exposure (stops).
-    pub exposure_ev: f32,
-    /// Temporal reuse: the frame joins each pixel's history (kept on the device from one frame to the
-    /// next; [`VulkanContext::reset_history`] forgets it), and the image is the history's mean.
-    pub history: bool,
-    /// The denoiser's passes ([`fovea_core::denoise`]) after the history's (or the fill's) image.
-    pub denoise: bool,
-    pub output: FrameOutput,
-}
-
-impl FrameRequest {
-    /// The passes this frame runs: the device always tone-maps.
-    #[must_use]
-    pub fn setup(&self) -> FrameSetup {
-        FrameSetup {
-            history: self.history,
-            tonemap: true,
-            overlay: matches!(self.output, FrameOutput::Present { overlay: true }),
-            denoise: self.denoise,
-        }
-    }
-}
-
 /// The pipelines (indices into [`VulkanContext::pipelines`]) that run `pass`, in dispatch order: those
 /// of its [`FramePass::kernel_entries`] (checked by a test against [`crate::spirv::ENTRY_POINTS`]).
 #[must_use]
@@ -178,6 +137,15 @@ pub(crate) const fn pass_pipelines(pass: FramePass) -> &'static [usize] {
         FramePass::DenoiseOutput => &[pipeline::DENOISE_OUTPUT],
         FramePass::ToneMap => &[pipeline::TONEMAP],
         FramePass::Overlay => &[pipeline::OVERLAY_REGIONS],
+    }
+}
+
+/// Which images a frame copies back to the host: (the 8-bit one, the HDR one).
+fn read_back(output: FrameOutput) -> (bool, bool) {
+    match output {
+        FrameOutput::Hdr => (false, true),
+        FrameOutput::ReadBack { want_hdr } => (true, want_hdr),
+        FrameOutput::Present { .. } => (false, false),
     }
 }
 
@@ -381,7 +349,8 @@ impl VulkanContext {
     /// on with a timeout), then one submission for every later pass and the read-back.
     /// `progress` receives the samples of each finished chunk.
     ///
-    /// With [`FrameOutput::Present`] nothing is read back (`ldr` is empty): [`Self::present`] shows the
+    /// With [`FrameOutput::Hdr`] only the HDR image is read back (`ldr` is empty); with
+    /// [`FrameOutput::Present`] nothing is (`ldr` is empty): [`Self::present`] shows the
     /// image and [`Self::read_back_hdr`] fetches its HDR for a screenshot.
     pub fn render(
         &mut self,
@@ -401,21 +370,20 @@ impl VulkanContext {
         let pixels = prepared.sizes.pixels as usize;
         let (w, h) = (frame.width, frame.height);
         let res = self.frame.as_mut().expect("frame resources exist");
-        let (ldr, hdr) = match request.output {
-            FrameOutput::Present { .. } => (Vec::new(), None),
-            FrameOutput::ReadBack { want_hdr } => {
-                let ldr = res.ldr_readback.read::<u32>(pixels)?;
-                let hdr = if want_hdr {
-                    Some(FrameImage {
-                        width: w,
-                        height: h,
-                        pixels: res.hdr_readback.read::<[f32; 4]>(pixels)?,
-                    })
-                } else {
-                    None
-                };
-                (ldr, hdr)
-            }
+        let (want_ldr, want_hdr) = read_back(request.output);
+        let ldr = if want_ldr {
+            res.ldr_readback.read::<u32>(pixels)?
+        } else {
+            Vec::new()
+        };
+        let hdr = if want_hdr {
+            Some(FrameImage {
+                width: w,
+                height: h,
+                pixels: res.hdr_readback.read::<[f32; 4]>(pixels)?,
+            })
+        } else {
+            None
         };
         Ok((
             GpuFrame {
@@ -745,11 +713,7 @@ impl VulkanContext {
             _pad: 0,
         };
         let passes: Vec<FramePass> = frame_passes(request.setup()).collect();
-        let denoise_flags = if request.history {
-            DENOISE_WITH_HISTORY
-        } else {
-            0
-        };
+        let denoise_flags = request.denoise_flags();
         debug_assert_eq!(passes.first(), Some(&FramePass::Samples));
 
         let wall = Instant::now();
@@ -850,21 +814,24 @@ impl VulkanContext {
                 // SAFETY: the readback buffers are as large as the images; the host barrier makes the copies
                 // visible to the mapped reads after the fence.
                 unsafe {
-                    if let FrameOutput::ReadBack { want_hdr } = output {
+                    let (want_ldr, want_hdr) = read_back(output);
+                    if want_ldr {
                         device.cmd_copy_buffer(
                             cb,
                             ldr,
                             ldr_rb,
                             &[vk::BufferCopy::default().size(pixels * 4)],
                         );
-                        if want_hdr {
-                            device.cmd_copy_buffer(
-                                cb,
-                                hdr,
-                                hdr_rb,
-                                &[vk::BufferCopy::default().size(pixels * PIXEL)],
-                            );
-                        }
+                    }
+                    if want_hdr {
+                        device.cmd_copy_buffer(
+                            cb,
+                            hdr,
+                            hdr_rb,
+                            &[vk::BufferCopy::default().size(pixels * PIXEL)],
+                        );
+                    }
+                    if want_ldr || want_hdr {
                         host_read_barrier(device, cb);
                     }
                     if timed {
@@ -920,7 +887,7 @@ impl VulkanContext {
                     timings.push((pass.name(), ms(previous, t)));
                     previous = t;
                 }
-                if matches!(output, FrameOutput::ReadBack { .. }) {
+                if read_back(output) != (false, false) {
                     timings.push(("read_back", ms(previous, ticks[1])));
                 }
                 return Ok(FrameTiming {

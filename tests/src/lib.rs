@@ -173,12 +173,62 @@ pub fn scene_camera(
     Camera::look_at(centre + dir * distance, centre, Vec3::Y, fov, aspect)
 }
 
-/// The 8-bit sRGB RGB bytes of packed RGBA8 pixels (core's `tonemap_to_rgba8` layout).
-pub fn rgba8_to_rgb8(pixels: &[u32]) -> Vec<u8> {
-    pixels
-        .iter()
-        .flat_map(|p| [*p as u8, (*p >> 8) as u8, (*p >> 16) as u8])
-        .collect()
+pub use fovea_frame::rgba8_to_rgb8;
+
+/// Whether two HDR pixels agree to the cross-backend tolerance (every channel within 1e-3 relative or
+/// 1e-4 absolute), and their largest absolute channel difference.
+pub fn pixels_agree(a: &[f32; 4], b: &[f32; 4]) -> (bool, f32) {
+    let mut ok = true;
+    let mut max_abs = 0f32;
+    for c in 0..3 {
+        let d = (a[c] - b[c]).abs();
+        max_abs = max_abs.max(d);
+        if !(d <= 1e-4 || d / a[c].abs().max(b[c].abs()) <= 1e-3) {
+            ok = false;
+        }
+    }
+    (ok, max_abs)
+}
+
+/// The fraction of pixels of two HDR images that agree ([`pixels_agree`]) and the largest absolute
+/// channel difference.
+pub fn agreement(a: &FrameImage, b: &FrameImage) -> (f64, f32) {
+    let mut within = 0usize;
+    let mut max_abs = 0f32;
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        let (ok, d) = pixels_agree(p, q);
+        within += usize::from(ok);
+        max_abs = max_abs.max(d);
+    }
+    (within as f64 / a.pixels.len().max(1) as f64, max_abs)
+}
+
+/// relMSE (per channel: squared error over the reference squared plus 0.01) over the pixels `keep`
+/// selects.
+pub fn rel_mse_where(
+    image: &FrameImage,
+    reference: &FrameImage,
+    keep: impl Fn(u32, u32) -> bool,
+) -> f64 {
+    let mut sum = 0.0f64;
+    let mut n = 0u64;
+    for y in 0..image.height {
+        for x in 0..image.width {
+            if !keep(x, y) {
+                continue;
+            }
+            let i = (y * image.width + x) as usize;
+            for c in 0..3 {
+                let (a, r) = (
+                    f64::from(image.pixels[i][c]),
+                    f64::from(reference.pixels[i][c]),
+                );
+                sum += (a - r) * (a - r) / (r * r + 0.01);
+                n += 1;
+            }
+        }
+    }
+    sum / n.max(1) as f64
 }
 
 /// A validating Vulkan context on the default device, or `None` (the caller skips its test with a message)

@@ -89,27 +89,6 @@ impl Tracker {
     }
 }
 
-/// relMSE (per-channel squared error over the reference squared plus 0.01) over pixels `keep` selects.
-fn rel_mse(image: &FrameImage, reference: &FrameImage, keep: impl Fn(u32, u32) -> bool) -> f64 {
-    let mut sum = 0.0f64;
-    let mut n = 0u64;
-    let (w, h) = (image.width, image.height);
-    for y in 0..h {
-        for x in 0..w {
-            if !keep(x, y) {
-                continue;
-            }
-            let i = (y * w + x) as usize;
-            for c in 0..3 {
-                let (a, r) = (image.pixels[i][c] as f64, reference.pixels[i][c] as f64);
-                sum += (a - r) * (a - r) / (r * r + 0.01);
-                n += 1;
-            }
-        }
-    }
-    sum / n.max(1) as f64
-}
-
 fn distance_to_centre(x: u32, y: u32) -> f32 {
     ((x as f32 + 0.5 - CENTRE[0]).powi(2) + (y as f32 + 0.5 - CENTRE[1]).powi(2)).sqrt()
 }
@@ -176,14 +155,14 @@ fn a_jittering_gaze_converges_like_a_still_one() {
         .collect();
     let last = (FRAMES - 1) as usize;
     let (still_f, tracked_f, single_f) = (
-        rel_mse(&still[last], &reference, fovea),
-        rel_mse(&tracked[last], &reference, fovea),
-        rel_mse(&single[7], &reference, fovea),
+        rel_mse_where(&still[last], &reference, fovea),
+        rel_mse_where(&tracked[last], &reference, fovea),
+        rel_mse_where(&single[7], &reference, fovea),
     );
     let (still_p, tracked_p, single_p) = (
-        rel_mse(&still[last], &reference, periphery),
-        rel_mse(&tracked[last], &reference, periphery),
-        rel_mse(&single[7], &reference, periphery),
+        rel_mse_where(&still[last], &reference, periphery),
+        rel_mse_where(&tracked[last], &reference, periphery),
+        rel_mse_where(&single[7], &reference, periphery),
     );
     let flicker_history = flicker(&tracked[last - 7..], periphery);
     let flicker_single = flicker(&single, periphery);
@@ -225,13 +204,13 @@ fn the_fovea_leaves_no_blur_trail_and_keeps_its_detail_when_it_moves_on() {
             ((x as f32 + 0.5 - g[0]).powi(2) + (y as f32 + 0.5 - g[1]).powi(2)).sqrt() < 6.0
         }
     };
-    let left_before = rel_mse(&images[11], &reference, near(left));
-    let left_after = rel_mse(&images[23], &reference, near(left));
-    let right_first = rel_mse(&images[12], &reference, near(right));
+    let left_before = rel_mse_where(&images[11], &reference, near(left));
+    let left_after = rel_mse_where(&images[23], &reference, near(left));
+    let right_first = rel_mse_where(&images[12], &reference, near(right));
     // One fovea frame alone, for comparison.
     let camera = cornell_camera(W, H);
     let one = render(&scene, &frame(camera, right, [32, 16, 8], 12)).0;
-    let right_one = rel_mse(&one, &reference, near(right));
+    let right_one = rel_mse_where(&one, &reference, near(right));
     eprintln!(
         "left fovea: {left_before:.3e} when left, {left_after:.3e} after 12 periphery frames; right: \
          first fovea frame {right_first:.3e}, the same frame without history {right_one:.3e}"
@@ -275,13 +254,13 @@ fn history_follows_a_panning_camera() {
     // The periphery's blocks blur the box's edges against the black outside, an error both share;
     // the fovea (full resolution) shows the noise that reuse removes.
     let (e_reuse, e_without) = (
-        rel_mse(&with_reuse, &reference, fovea),
-        rel_mse(&without, &reference, fovea),
+        rel_mse_where(&with_reuse, &reference, fovea),
+        rel_mse_where(&without, &reference, fovea),
     );
     let all = |_: u32, _: u32| true;
     let (a_reuse, a_without) = (
-        rel_mse(&with_reuse, &reference, all),
-        rel_mse(&without, &reference, all),
+        rel_mse_where(&with_reuse, &reference, all),
+        rel_mse_where(&without, &reference, all),
     );
     let frames: Vec<f32> = history.texels().iter().map(HistoryTexel::frames).collect();
     let followed = frames.iter().filter(|&&n| n >= 8.0).count() as f64 / frames.len() as f64;
@@ -364,20 +343,7 @@ fn cpu_and_lavapipe_histories_agree_after_16_frames() {
     }
     let (cpu, gpu) = (cpu.unwrap(), gpu.unwrap());
     let hdr = gpu.hdr.as_ref().expect("HDR was asked for");
-    let mut within = 0usize;
-    let mut max_abs = 0f32;
-    for (a, b) in cpu.pixels.iter().zip(&hdr.pixels) {
-        let mut ok = true;
-        for c in 0..3 {
-            let d = (a[c] - b[c]).abs();
-            max_abs = max_abs.max(d);
-            if !(d <= 1e-4 || d / a[c].abs().max(b[c].abs()) <= 1e-3) {
-                ok = false;
-            }
-        }
-        within += usize::from(ok);
-    }
-    let fraction = within as f64 / cpu.pixels.len() as f64;
+    let (fraction, max_abs) = agreement(&cpu, hdr);
     let messages = ctx.validation_messages();
     eprintln!(
         "CPU against lavapipe after 16 frames with history: {:.3} % of pixels within 1e-3, max abs {max_abs:.2e}; {} validation messages",
@@ -480,8 +446,8 @@ fn lost_empire_eye_tracker_benchmark() {
     ] {
         eprintln!(
             "| {name} | {:.4e} | {:.4e} |",
-            rel_mse(image, &reference, fovea),
-            rel_mse(image, &reference, periphery)
+            rel_mse_where(image, &reference, fovea),
+            rel_mse_where(image, &reference, periphery)
         );
     }
     eprintln!(
@@ -531,12 +497,12 @@ fn lost_empire_eye_tracker_benchmark() {
             eprintln!(
                 "pan, frame {i} ({when}): fovea relMSE with reuse {:.4e}, without {:.4e}; periphery \
                  {:.4e} vs {:.4e}; whole image {:.4e} vs {:.4e}; {:.1} % of pixels with 4+ frames",
-                rel_mse(&image, &end_reference, in_fovea),
-                rel_mse(&without, &end_reference, in_fovea),
-                rel_mse(&image, &end_reference, in_periphery),
-                rel_mse(&without, &end_reference, in_periphery),
-                rel_mse(&image, &end_reference, all),
-                rel_mse(&without, &end_reference, all),
+                rel_mse_where(&image, &end_reference, in_fovea),
+                rel_mse_where(&without, &end_reference, in_fovea),
+                rel_mse_where(&image, &end_reference, in_periphery),
+                rel_mse_where(&without, &end_reference, in_periphery),
+                rel_mse_where(&image, &end_reference, all),
+                rel_mse_where(&without, &end_reference, all),
                 valid.iter().filter(|&&v| v).count() as f64 * 100.0 / valid.len() as f64
             );
         }

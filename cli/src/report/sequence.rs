@@ -571,27 +571,13 @@ pub fn read_trace(
     max_frames: Option<u32>,
     band_deg: f32,
 ) -> Result<SequencePlan> {
-    use crate::gaze::{GazeConvention, GazeTrace, TraceTiming};
-    if !(fps > 0.0 && fps <= 10_000.0) {
-        return Err(FoveaError::option(
-            "--trace-fps",
-            format!("{fps} is not in (0, 10000] frames per second"),
-        ));
-    }
     if !(band_deg.is_finite() && (0.05..=90.0).contains(&band_deg)) {
         return Err(FoveaError::option(
             "--band-deg",
             format!("{band_deg} is not a band width in [0.05, 90] degrees"),
         ));
     }
-    let convention = if normalized {
-        GazeConvention::Normalized
-    } else {
-        GazeConvention::PixelsTopLeft
-    };
-    let trace = GazeTrace::read(path, convention, TraceTiming::Frames)
-        .map_err(|e| FoveaError::option("--gaze-trace", e))?;
-    let mut frames = trace.frames(fps, image);
+    let mut frames = crate::gaze::read_trace_frames(path, fps, normalized, image)?;
     if let Some(n) = max_frames {
         frames.truncate(n as usize);
     }
