@@ -33,6 +33,19 @@ const SETUP_HINT: &str = "install them with `bash scripts/setup.sh`";
 /// Lines of the nested build's output repeated as warnings when it fails.
 const FAILURE_TAIL_LINES: usize = 40;
 
+/// Asks cargo to rerun this script when `path` changes: the path itself (a folder's entries added or
+/// removed) and, for a folder, every file under it. Cargo's own check of a folder named in
+/// `rerun-if-changed` missed edits to files in its subfolders here (an edit to
+/// `core/src/temporal/*.rs` left a stale kernel), so each file is named.
+fn rerun_if_changed(path: &Path) {
+    println!("cargo:rerun-if-changed={}", path.display());
+    if let Ok(entries) = std::fs::read_dir(path) {
+        for entry in entries.flatten() {
+            rerun_if_changed(&entry.path());
+        }
+    }
+}
+
 fn main() {
     let manifest_dir = PathBuf::from(env("CARGO_MANIFEST_DIR"));
     let repo = manifest_dir
@@ -53,7 +66,7 @@ fn main() {
         "gpu-builder/Cargo.lock",
         "gpu-builder/rust-toolchain.toml",
     ] {
-        println!("cargo:rerun-if-changed={}", repo.join(dir).display());
+        rerun_if_changed(&repo.join(dir));
     }
     println!("cargo:rerun-if-env-changed=FOVEA_KERNEL_SPV_PREBUILT");
     println!("cargo:rerun-if-env-changed=FOVEA_KERNEL_RQ_SPV_PREBUILT");
