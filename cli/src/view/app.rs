@@ -251,6 +251,13 @@ impl Viewer {
         self.options.script.is_some()
     }
 
+    /// Whether frames are counted while none renders (converged, paused, minimised): a script's
+    /// clock must reach its next event, and `--exit-after-frames` must end the run even when the
+    /// image has converged and nothing moves.
+    fn counts_idle_frames(&self) -> bool {
+        self.scripted() || self.options.exit_after_frames.is_some()
+    }
+
     /// Whether the next tick renders (else the view waits for input).
     fn wants_frame(&self) -> bool {
         !self.exit
@@ -933,10 +940,10 @@ impl ApplicationHandler for Viewer {
     }
 
     fn new_events(&mut self, event_loop: &ActiveEventLoop, cause: StartCause) {
-        // A minimised or paused scripted run still advances its clock, so that its `restore` or
-        // `press Space` comes.
+        // A minimised, paused or converged scripted run still advances its clock, so that its
+        // `restore` or `press Space` comes, and a run with `--exit-after-frames` still ends.
         if matches!(cause, StartCause::ResumeTimeReached { .. })
-            && self.scripted()
+            && self.counts_idle_frames()
             && self.window.is_some()
             && !self.wants_frame()
             && !self.exit
@@ -1015,7 +1022,7 @@ impl ApplicationHandler for Viewer {
         if self.wants_frame() {
             self.request_redraw();
             event_loop.set_control_flow(ControlFlow::Wait);
-        } else if self.scripted() {
+        } else if self.counts_idle_frames() {
             event_loop.set_control_flow(ControlFlow::WaitUntil(
                 self.next_idle_tick
                     .max(Instant::now() + Duration::from_millis(1)),
