@@ -253,6 +253,10 @@ pub struct RenderArgs {
     /// (`fovea_core::denoise`).
     #[arg(long)]
     pub denoise: bool,
+    /// With --denoise, also write the image as the denoiser found it (the frame, or the history's
+    /// mean), .png or .exr; numbered like --output over a sequence.
+    #[arg(long, value_name = "FILE")]
+    pub keep_raw: Option<PathBuf>,
     /// CSV camera path with lines `frame,eye_x,eye_y,eye_z,target_x,target_y,target_z` (world
     /// coordinates): each frame's camera. With a --gaze-trace it must give every frame the trace gives;
     /// without, it numbers the frames itself (the gaze stays at --gaze or the centre).

@@ -13,6 +13,8 @@ pub struct Rendered {
     pub hdr: Option<FrameImage>,
     /// Tone-mapped 8-bit sRGB RGB bytes (with [`FrameOutput::ReadBack`]).
     pub rgb8: Option<Vec<u8>>,
+    /// The HDR image before the denoiser ([`FrameOutput::ReadBack`]'s `want_raw`, with the denoiser).
+    pub raw_hdr: Option<FrameImage>,
     pub stats: RenderStats,
     /// With history: this frame started every pixel's history afresh (the first frame, a reset, a
     /// new size).
@@ -330,7 +332,7 @@ impl Renderer {
             Self::Cpu(cpu) => {
                 let view = packed.view().with_features(cpu.features);
                 let history_restarted = request.history && !cpu.history.continues(frame);
-                let (image, stats) = cpu.pool.install(|| {
+                let (mut image, stats) = cpu.pool.install(|| {
                     fovea_cpu::render_frame_passes(
                         &view,
                         frame,
@@ -339,6 +341,7 @@ impl Renderer {
                         progress,
                     )
                 });
+                let raw_hdr = image.raw_hdr.take();
                 let (hdr, rgb8) = match request.output {
                     FrameOutput::Hdr | FrameOutput::ReadBack { .. } => {
                         cpu.presented = None;
@@ -353,6 +356,7 @@ impl Renderer {
                 Ok(Rendered {
                     hdr,
                     rgb8,
+                    raw_hdr,
                     stats,
                     history_restarted,
                     extra: None,
@@ -376,6 +380,7 @@ impl Renderer {
                 Ok(Rendered {
                     rgb8,
                     hdr: image.hdr,
+                    raw_hdr: image.raw_hdr,
                     history_restarted: stats.history_restarted,
                     extra: Some(serde_json::json!({
                         "chunks": stats.chunks,

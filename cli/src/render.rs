@@ -37,6 +37,8 @@ struct Plan {
     cameras: Option<std::collections::HashMap<u32, CameraKey>>,
     output: PathBuf,
     output_format: ImageFormat,
+    /// `--keep-raw`: where the image before the denoiser goes.
+    keep_raw: Option<(PathBuf, ImageFormat)>,
     per_frame_outputs: bool,
     fill_mode: u32,
     lighting: Lighting,
@@ -170,8 +172,30 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
             ));
         }
     }
+    let keep_raw = match &args.keep_raw {
+        None => None,
+        Some(_) if !args.denoise => {
+            return Err(FoveaError::option(
+                "--keep-raw",
+                "keeps the image the denoiser starts from; add --denoise",
+            ))
+        }
+        Some(p) => {
+            let format = check_output_path(p, "--keep-raw", true)?;
+            if p == &args.output || Some(p) == args.regions_overlay.as_ref() {
+                return Err(FoveaError::option(
+                    "--keep-raw",
+                    format!("'{}' is also an output image", p.display()),
+                ));
+            }
+            Some((p.clone(), format))
+        }
+    };
     if let Some(p) = &args.stats {
-        if p == &args.output || Some(p) == args.regions_overlay.as_ref() {
+        if p == &args.output
+            || Some(p) == args.regions_overlay.as_ref()
+            || Some(p) == args.keep_raw.as_ref()
+        {
             return Err(FoveaError::option(
                 "--stats",
                 format!("'{}' is also an output image", p.display()),
@@ -206,6 +230,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         cameras,
         output: args.output.clone(),
         output_format,
+        keep_raw,
         fill_mode: args.path.fill_mode(),
         lighting,
         warnings,
@@ -356,7 +381,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             exposure_ev: args.image.exposure,
             history: args.history,
             denoise: args.denoise,
-            output: FrameOutput::ReadBack { want_hdr },
+            output: FrameOutput::ReadBack {
+                want_hdr,
+                want_raw: plan.keep_raw.is_some(),
+            },
         };
         let rendered = renderer.render(&scene.packed, &frame, &request, &|n| bar.inc(n))?;
         bar.finish_and_clear();
@@ -377,6 +405,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             }
             (ImageFormat::Exr, None) => unreachable!("HDR is requested for EXR output"),
             (ImageFormat::Png, _) => write_png(&output, w, h, &rgb8)?,
+        }
+        if let Some((path, format)) = &plan.keep_raw {
+            let raw = rendered.raw_hdr.as_ref().ok_or_else(|| {
+                FoveaError::Backend("the backend kept no image from before the denoiser".into())
+            })?;
+            let path = if plan.per_frame_outputs {
+                frame_path(path, g.frame)
+            } else {
+                path.clone()
+            };
+            write_image(&path, *format, raw, args.image.exposure)?;
         }
         if let Some(p) = &args.regions_overlay {
             let p = if plan.per_frame_outputs {
@@ -460,6 +499,7 @@ fn refuse_overwriting_inputs(args: &RenderArgs) -> Result<()> {
         ("--output", Some(args.output.as_path())),
         ("--regions-overlay", args.regions_overlay.as_deref()),
         ("--stats", args.stats.as_deref()),
+        ("--keep-raw", args.keep_raw.as_deref()),
     ];
     for (option, output) in outputs {
         let Some(output) = output else { continue };

@@ -272,6 +272,43 @@ fn history_renders_a_camera_path_and_a_timed_trace() {
             "{pass}: {json}"
         );
     }
+    // The denoiser after the history, keeping each frame's image as the denoiser found it (EXR):
+    // numbered like the output, and different from the denoised image.
+    let out = run(
+        &[
+            "--camera-path",
+            path.to_str().unwrap(),
+            "--denoise",
+            "--keep-raw",
+            dir.join("raw.exr").to_str().unwrap(),
+        ],
+        "d.exr",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let read = |name: &str| {
+        image::open(dir.join(name))
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+            .to_rgb32f()
+            .into_raw()
+    };
+    for f in 0..3 {
+        let (denoised, raw) = (
+            read(&format!("d_{f:05}.exr")),
+            read(&format!("raw_{f:05}.exr")),
+        );
+        assert_eq!(denoised.len(), raw.len());
+        assert_ne!(denoised, raw, "frame {f}: the denoiser changed nothing");
+    }
+    let scene = cornell();
+    expect_failure(
+        &[scene.to_str().unwrap(), "--keep-raw", "r.png"],
+        "add --denoise",
+        &dir.join("never.png"),
+    );
     // A timed trace (0..1 of the image) at 40 frames per second: frames 0, 1, 2 (t = 0, 0.025, 0.05).
     let out = run(
         &[

@@ -2,8 +2,9 @@
 //! Filtering"): three passes of the frame pipeline after the history's resolve, each a function of one
 //! pixel that both hosts run.
 //!
-//! 1. [`denoise_input`]: the HDR pixel *demodulated* by the albedo its samples saw (the G-buffer's
-//!    mean over the pixel's block), so the filter blurs lighting, not texture, and a luminance
+//! 1. [`denoise_input`]: the pixel's *lighting*, so the filter blurs lighting, not texture: the history's
+//!    where there is one (it is kept demodulated, [`crate::temporal::albedo`]), else the HDR pixel
+//!    divided by the albedo its samples saw (the G-buffer's mean over its block); and a luminance
 //!    variance: the history's (its second moment
 //!    over its frames) where it holds at least [`DENOISE_TEMPORAL_FRAMES`] frames, else a spatial one
 //!    from the pixel's block and its eight neighbouring blocks.
@@ -29,10 +30,12 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use crate::foveation::{owning_block, samples_in_block};
+use crate::foveation::{FILL_BILINEAR, FILL_REPLICATE};
 use crate::integrator::FrameParams;
 use crate::math::color::{is_finite3, luminance};
 use crate::math::float::{exp, sqrt};
 use crate::math::vec3_from;
+use crate::temporal::albedo::{demodulation_albedo, filled_albedo};
 use crate::temporal::history::HISTORY_SAMPLE_MAX;
 use crate::temporal::{GBufferTexel, HistoryTexel};
 
@@ -40,6 +43,9 @@ use crate::temporal::{GBufferTexel, HistoryTexel};
 pub const DENOISE_MAX_PASSES: u32 = 5;
 /// [`denoise_input`]'s `flags`: the frame has a history (temporal variance where it is long enough).
 pub const DENOISE_WITH_HISTORY: u32 = 1;
+/// [`denoise_input`]'s `flags`: the frame was filled with [`crate::foveation::FILL_REPLICATE`] (which
+/// albedo a filled value's samples saw, [`filled_albedo`]).
+pub const DENOISE_FILL_REPLICATE: u32 = 2;
 /// Frames of history from which its variance replaces the spatial estimate (SVGF uses 4).
 pub const DENOISE_TEMPORAL_FRAMES: f32 = 4.0;
 /// The luminance edge stop `σ_l`: neighbours within a few standard deviations of noise blend.
@@ -47,8 +53,6 @@ pub const DENOISE_SIGMA_LUMINANCE: f32 = 4.0;
 /// The depth edge stop: relative depth change per pixel of offset still taken as one surface (a
 /// surface at 80° from the view at about a milliradian per pixel).
 pub const DENOISE_DEPTH_SLOPE: f32 = 0.01;
-/// Albedo channels below this are not divided by (black surfaces would amplify noise).
-pub const DENOISE_ALBEDO_MIN: f32 = 0.01;
 
 /// The B3-spline kernel's taps at offsets 0, ±1, ±2.
 const KERNEL: [f32; 3] = [3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
@@ -128,17 +132,6 @@ pub fn denoise_passes(samples: f32) -> u32 {
     }
 }
 
-/// The albedo a pixel is demodulated by: the G-buffer's base colour, each channel at least
-/// [`DENOISE_ALBEDO_MIN`]; 1 for the sky.
-#[inline]
-#[must_use]
-pub fn demodulation_albedo(g: &GBufferTexel) -> Vec3 {
-    if g.is_sky() {
-        return Vec3::ONE;
-    }
-    vec3_from(g.albedo).max(Vec3::splat(DENOISE_ALBEDO_MIN))
-}
-
 /// The HDR value at `p`, finite and clamped to `[0, HISTORY_SAMPLE_MAX]`, or `None` if not finite.
 #[inline]
 fn clean(hdr: &[[f32; 4]], p: usize) -> (Vec3, bool) {
@@ -164,28 +157,41 @@ pub fn denoise_input(
 ) -> DenoiseTexel {
     let (w, h) = (frame.width, frame.height);
     let p = (y * w + x) as usize;
-    let (c, valid) = clean(hdr, p);
-    if !valid {
-        return DenoiseTexel::INVALID;
-    }
     let block = owning_block(x, y, &frame.foveation);
     let b = block.size.max(1);
-    // The samples behind a filled value saw the whole block: divide by the block's mean albedo, and
-    // remodulate by the pixel's own (`denoise_output`), which puts back texture the block blurred.
-    let albedo = block_albedo(frame, gbuffer, block.origin, b);
-    let demodulated = c / albedo;
     let mut samples = samples_in_block(&block, &frame.foveation) as f32 / (b * b) as f32;
+    let with_history = flags & DENOISE_WITH_HISTORY != 0;
+    // The value to filter, demodulated. A history already holds lighting (the radiance over the
+    // albedo its samples saw, `crate::temporal::albedo`). A filled value's samples saw their blocks:
+    // divide by the albedo the fill blended from them. `denoise_output` remodulates by the pixel's
+    // own, which puts back texture the blocks blurred.
+    let (demodulated, albedo) = if with_history {
+        let t = &history[p];
+        if !(t.weight() > 0.0) {
+            return DenoiseTexel::INVALID;
+        }
+        (t.lighting(), Vec3::ONE)
+    } else {
+        let (c, valid) = clean(hdr, p);
+        if !valid {
+            return DenoiseTexel::INVALID;
+        }
+        let mode = if flags & DENOISE_FILL_REPLICATE != 0 {
+            FILL_REPLICATE
+        } else {
+            FILL_BILINEAR
+        };
+        let albedo = filled_albedo(frame, gbuffer, mode, x, y);
+        (c / albedo, albedo)
+    };
 
-    let albedo_luminance = luminance(albedo).max(DENOISE_ALBEDO_MIN);
     let mut variance = -1.0;
-    if flags & DENOISE_WITH_HISTORY != 0 {
+    if with_history {
         let t = &history[p];
         samples = samples.max(t.weight());
         if t.frames() >= DENOISE_TEMPORAL_FRAMES {
             // The variance of the history's mean: its frames' variance over their count.
-            variance = t.luminance_variance()
-                / t.frames().max(1.0)
-                / (albedo_luminance * albedo_luminance);
+            variance = t.luminance_variance() / t.frames().max(1.0);
         }
     }
     if variance < 0.0 {
@@ -200,7 +206,12 @@ pub fn denoise_input(
                 let qy = y as i32 + dy * b as i32;
                 if qx >= 0 && qy >= 0 && (qx as u32) < w && (qy as u32) < h {
                     let q = (qy as u32 * w + qx as u32) as usize;
-                    let (cq, ok) = clean(hdr, q);
+                    let (cq, ok) = if with_history {
+                        let t = &history[q];
+                        (t.lighting(), t.weight() > 0.0)
+                    } else {
+                        clean(hdr, q)
+                    };
                     if ok {
                         let l = luminance(cq / albedo);
                         sum += l;
@@ -218,35 +229,6 @@ pub fn denoise_input(
     DenoiseTexel {
         color: [demodulated.x, demodulated.y, demodulated.z, variance],
         info: [denoise_passes(samples) as f32, 1.0, b as f32, 0.0],
-    }
-}
-
-/// The mean [`demodulation_albedo`] over the `b × b` block at `origin` (clipped to the image).
-#[must_use]
-pub fn block_albedo(
-    frame: &FrameParams,
-    gbuffer: &[GBufferTexel],
-    origin: [u32; 2],
-    b: u32,
-) -> Vec3 {
-    let x_end = (origin[0] + b).min(frame.width);
-    let y_end = (origin[1] + b).min(frame.height);
-    let mut sum = Vec3::ZERO;
-    let mut n = 0.0f32;
-    let mut y = origin[1];
-    while y < y_end {
-        let mut x = origin[0];
-        while x < x_end {
-            sum += demodulation_albedo(&gbuffer[(y * frame.width + x) as usize]);
-            n += 1.0;
-            x += 1;
-        }
-        y += 1;
-    }
-    if n > 0.0 {
-        sum / n
-    } else {
-        Vec3::ONE
     }
 }
 

@@ -61,11 +61,21 @@ pub struct FrameSetup {
 pub enum FrameOutput {
     /// The linear HDR image only, no 8-bit one (references, tests, benchmarks).
     Hdr,
-    /// Back to the host (`render`, `report`): the 8-bit image and, with `want_hdr`, the HDR one.
-    ReadBack { want_hdr: bool },
+    /// Back to the host (`render`, `report`): the 8-bit image and, with `want_hdr`, the HDR one;
+    /// with `want_raw` also the HDR image as it was before the denoiser's passes (`render
+    /// --keep-raw`).
+    ReadBack { want_hdr: bool, want_raw: bool },
     /// To the window (`view`): the 8-bit image, with the regions drawn over it if `overlay`; it stays
     /// with the host that rendered it.
     Present { overlay: bool },
+}
+
+impl FrameOutput {
+    /// Whether the HDR image before the denoiser is read back too (only where the denoiser runs).
+    #[must_use]
+    pub const fn wants_raw(&self) -> bool {
+        matches!(self, Self::ReadBack { want_raw: true, .. })
+    }
 }
 
 /// How to render a frame beyond its [`crate::integrator::FrameParams`]: the one request every host
@@ -99,11 +109,17 @@ impl FrameRequest {
     /// [`crate::denoise::denoise_input`]'s flags for this request.
     #[must_use]
     pub const fn denoise_flags(&self) -> u32 {
-        if self.history {
+        let history = if self.history {
             crate::denoise::DENOISE_WITH_HISTORY
         } else {
             0
-        }
+        };
+        let replicate = if self.fill_mode == crate::foveation::FILL_REPLICATE {
+            crate::denoise::DENOISE_FILL_REPLICATE
+        } else {
+            0
+        };
+        history | replicate
     }
 }
 

@@ -361,8 +361,9 @@ pub fn temporal(
     history[p as usize] = texel;
 }
 
-/// Temporal reuse, after `temporal`: invocation `p < item_count` writes pixel `p`'s history mean over
-/// the HDR pixel (core's [`HistoryTexel::displayed`]), so that `tonemap` and a read-back see it.
+/// Temporal reuse, after `temporal`: invocation `p < item_count` writes pixel `p`'s history lighting
+/// under its own albedo over the HDR pixel (core's [`HistoryTexel::displayed`]), so that `tonemap`
+/// and a read-back see it.
 #[spirv(compute(threads(64)))]
 pub fn resolve_history(
     #[spirv(global_invocation_id)] id: UVec3,
@@ -370,12 +371,13 @@ pub fn resolve_history(
     #[spirv(push_constant)] pc: &KernelPushConstants,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &mut [[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 24)] history: &[HistoryTexel],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 27)] gbuffer: &[GBufferTexel],
 ) {
     let p = invocation_index(id, num_workgroups);
     if p >= pc.item_count {
         return;
     }
-    hdr[p as usize] = history[p as usize].displayed();
+    hdr[p as usize] = history[p as usize].displayed(&gbuffer[p as usize]);
 }
 
 /// Denoiser, after the fill or `resolve_history`: invocation `p < item_count` writes pixel `p`'s

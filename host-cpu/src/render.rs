@@ -26,6 +26,8 @@ pub use fovea_frame::{FrameImage, RenderStats};
 pub struct CpuFrame {
     pub hdr: FrameImage,
     pub rgba8: Option<Vec<u32>>,
+    /// The HDR image before the denoiser's passes, when the request asked for it and they ran.
+    pub raw_hdr: Option<FrameImage>,
 }
 
 impl CpuFrame {
@@ -57,9 +59,10 @@ pub fn render_frame_passes(
     let mut pixels = vec![[0.0f32; 4]; width as usize * height as usize];
     let mut cell_means: Vec<[f32; 4]> = Vec::new();
     let mut rgba8: Option<Vec<u32>> = None;
+    let mut raw_hdr: Option<FrameImage> = None;
     // The denoiser's two halves, used in turn by its steps.
     let mut denoise: [Vec<DenoiseTexel>; 2] = Default::default();
-    let temporal = history.params_for(frame);
+    let temporal = history.params_for(frame, request.fill_mode);
     let counters: [AtomicU64; 6] = Default::default();
     let mut passes = Vec::new();
 
@@ -101,6 +104,13 @@ pub fn render_frame_passes(
             FramePass::Temporal => history.temporal_pass(frame, &temporal, &pixels),
             FramePass::ResolveHistory => history.resolve_pass(&mut pixels),
             FramePass::DenoiseInput => {
+                if request.output.wants_raw() {
+                    raw_hdr = Some(FrameImage {
+                        width,
+                        height,
+                        pixels: pixels.clone(),
+                    });
+                }
                 let flags = request.denoise_flags();
                 let (gbuffer, texels) = (history.gbuffer(), history.texels());
                 denoise[0] = per_pixel(width, height, |x, y| {
@@ -159,7 +169,14 @@ pub fn render_frame_passes(
         height,
         pixels,
     };
-    (CpuFrame { hdr, rgba8 }, stats)
+    (
+        CpuFrame {
+            hdr,
+            rgba8,
+            raw_hdr,
+        },
+        stats,
+    )
 }
 
 /// `f(x, y)` for every pixel of a `width × height` image, row-major, rows in parallel.

@@ -58,14 +58,14 @@ impl TemporalHistory {
         &self.gbuffer
     }
 
-    /// The parameters the next `frame` would be accumulated with. A frame of another size starts
-    /// afresh (its pixels are not the previous frame's).
+    /// The parameters the next `frame`, filled in `fill_mode`, would be accumulated with. A frame of
+    /// another size starts afresh (its pixels are not the previous frame's).
     #[must_use]
-    pub fn params_for(&self, frame: &FrameParams) -> TemporalParams {
+    pub fn params_for(&self, frame: &FrameParams, fill_mode: u32) -> TemporalParams {
         let previous = self
             .previous
             .filter(|(_, size)| *size == [frame.width, frame.height]);
-        TemporalParams::after(previous, frame)
+        TemporalParams::after(previous, frame, fill_mode)
     }
 
     /// The G-buffer pass: each pixel's first hit ([`first_hit_gbuffer`]) into this frame's G-buffer;
@@ -120,11 +120,12 @@ impl TemporalHistory {
         self.previous = Some((frame.camera, [w, h]));
     }
 
-    /// The resolve pass: each pixel's history mean ([`HistoryTexel::displayed`]) into `hdr`.
+    /// The resolve pass: each pixel's history lighting under its own albedo
+    /// ([`HistoryTexel::displayed`]) into `hdr`.
     pub fn resolve_pass(&self, hdr: &mut [[f32; 4]]) {
         hdr.par_iter_mut()
-            .zip(self.history.par_iter())
-            .for_each(|(out, texel)| *out = texel.displayed());
+            .zip(self.history.par_iter().zip(self.gbuffer.par_iter()))
+            .for_each(|(out, (texel, g))| *out = texel.displayed(g));
     }
 
     /// Adds `filled` to the history outside a frame (the G-buffer and temporal passes with `temporal`):

@@ -34,6 +34,8 @@ pub struct GpuFrame {
     pub ldr: Vec<u32>,
     /// The filled linear HDR image, when asked for.
     pub hdr: Option<FrameImage>,
+    /// The HDR image before the denoiser's passes, when asked for and they ran.
+    pub raw_hdr: Option<FrameImage>,
 }
 
 impl GpuFrame {
@@ -144,7 +146,7 @@ pub(crate) const fn pass_pipelines(pass: FramePass) -> &'static [usize] {
 fn read_back(output: FrameOutput) -> (bool, bool) {
     match output {
         FrameOutput::Hdr => (false, true),
-        FrameOutput::ReadBack { want_hdr } => (true, want_hdr),
+        FrameOutput::ReadBack { want_hdr, .. } => (true, want_hdr),
         FrameOutput::Present { .. } => (false, false),
     }
 }
@@ -338,7 +340,10 @@ impl VulkanContext {
             exposure_ev,
             history,
             denoise: false,
-            output: FrameOutput::ReadBack { want_hdr },
+            output: FrameOutput::ReadBack {
+                want_hdr,
+                want_raw: false,
+            },
         };
         self.render(scene, frame, &request, progress)
     }
@@ -359,7 +364,7 @@ impl VulkanContext {
         request: &FrameRequest,
         progress: &dyn Fn(u64),
     ) -> Result<(GpuFrame, GpuRenderStats)> {
-        let prepared = self.prepare_frame(scene, frame, request.history, request.denoise)?;
+        let prepared = self.prepare_frame(scene, frame, request)?;
         let timing = self.dispatch_frame(&prepared.plan, &prepared.sizes, request, progress)?;
         if request.history {
             self.history_advanced(frame);
@@ -385,12 +390,24 @@ impl VulkanContext {
         } else {
             None
         };
+        let raw_hdr = match (
+            &mut res.raw_readback,
+            request.denoise && request.output.wants_raw(),
+        ) {
+            (Some(raw), true) => Some(FrameImage {
+                width: w,
+                height: h,
+                pixels: raw.read::<[f32; 4]>(pixels)?,
+            }),
+            _ => None,
+        };
         Ok((
             GpuFrame {
                 width: w,
                 height: h,
                 ldr,
                 hdr,
+                raw_hdr,
             },
             stats,
         ))
@@ -447,9 +464,9 @@ impl VulkanContext {
         &mut self,
         scene: &GpuScene,
         frame: &FrameParams,
-        temporal: bool,
-        denoise: bool,
+        request: &FrameRequest,
     ) -> Result<PreparedFrame> {
+        let (temporal, denoise) = (request.history, request.denoise);
         self.check_usable()?;
         scene.check_uploaded_to(&self.shared)?;
         let (w, h) = (frame.width, frame.height);
@@ -509,11 +526,20 @@ impl VulkanContext {
             if (temporal || denoise) && res.temporal.is_none() {
                 res.temporal = Some(TemporalBuffers::new(&self.shared, &self.limits, pixels)?);
             }
+            if denoise && request.output.wants_raw() && res.raw_readback.is_none() {
+                res.raw_readback = Some(GpuBuffer::new(
+                    &self.shared,
+                    "raw HDR readback",
+                    pixels * PIXEL,
+                    vk::BufferUsageFlags::TRANSFER_DST,
+                    gpu_allocator::MemoryLocation::GpuToCpu,
+                )?);
+            }
             if temporal {
                 let t = res.temporal.as_mut().expect("just created");
                 history_is_new = t.previous.is_none();
                 t.params
-                    .write(&[TemporalParams::after(t.previous, frame)])?;
+                    .write(&[TemporalParams::after(t.previous, frame, request.fill_mode)])?;
             }
             res.frame.write(&[*frame])?;
             res.blocks.write(&block_data)?;
@@ -768,6 +794,11 @@ impl VulkanContext {
             res.replicated.buffer,
             res.hdr_readback.buffer,
         );
+        let raw_rb = res
+            .raw_readback
+            .as_ref()
+            .filter(|_| request.output.wants_raw())
+            .map(|b| b.buffer);
         let (pixels, cells) = (sizes.pixels, sizes.cells);
         let no_chunks = plan.chunks.is_empty();
         let output = request.output;
@@ -779,6 +810,34 @@ impl VulkanContext {
                     write_start_timestamp(device, cb, query_pool);
                 }
                 for &pass in &passes {
+                    if let (FramePass::DenoiseInput, Some(raw_rb)) = (pass, raw_rb) {
+                        // The image as the denoiser finds it, copied aside before its output pass
+                        // overwrites it.
+                        barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
+                        // SAFETY: both buffers hold `pixels` HDR pixels; the barriers order the copy
+                        // after the passes that wrote the image and before the denoiser's output
+                        // pass writes it again.
+                        unsafe {
+                            device.cmd_copy_buffer(
+                                cb,
+                                hdr,
+                                raw_rb,
+                                &[vk::BufferCopy::default().size(pixels * PIXEL)],
+                            );
+                        }
+                        memory_barrier(
+                            device,
+                            cb,
+                            (
+                                vk::PipelineStageFlags::TRANSFER,
+                                vk::AccessFlags::TRANSFER_READ,
+                            ),
+                            (
+                                vk::PipelineStageFlags::COMPUTE_SHADER,
+                                vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
+                            ),
+                        );
+                    }
                     // Each pass's items: its core function runs once per cell or per pixel.
                     let items = match pass {
                         FramePass::Samples => 0, // dispatched chunk by chunk above

@@ -50,6 +50,9 @@ pub(crate) struct FrameResources {
     pub ldr: GpuBuffer,
     pub ldr_readback: GpuBuffer,
     pub hdr_readback: GpuBuffer,
+    /// The HDR image before the denoiser, copied back (`render --keep-raw`); created by the first
+    /// frame that asks for it.
+    pub raw_readback: Option<GpuBuffer>,
     /// Temporal reuse's history and G-buffers, created by the first frame that asks for them.
     pub temporal: Option<TemporalBuffers>,
 }
@@ -182,6 +185,7 @@ impl FrameResources {
                 dst,
                 MemoryLocation::GpuToCpu,
             )?,
+            raw_readback: None,
             temporal: None,
         })
     }

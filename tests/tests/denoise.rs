@@ -119,31 +119,60 @@ fn cpu_and_lavapipe_denoise_alike() {
             W as f32 / H as f32,
         )
     };
-    // The frame alone, then six frames of history with a jittered gaze and a moving camera.
+    // The frame alone, then six frames of history with a jittered gaze and a moving camera. Both
+    // backends also hand back the image as the denoiser found it (`render --keep-raw`).
     for history_frames in [0u32, 6] {
         let history = history_frames > 0;
-        let request = FrameRequest { history, ..DENOISE };
+        let request = FrameRequest {
+            history,
+            output: FrameOutput::ReadBack {
+                want_hdr: true,
+                want_raw: true,
+            },
+            ..DENOISE
+        };
         let mut cpu_history = TemporalHistory::new();
         ctx.reset_history();
         let (mut cpu, mut gpu) = (None, None);
         for i in 0..history_frames.max(1) {
             let gaze = [CENTRE[0] + (i % 3) as f32 * 1.7, CENTRE[1] - (i % 2) as f32];
             let f = frame(camera_at(i.min(4)), gaze, [4, 2, 1], i);
-            cpu = Some(cpu_frame(&scene, &f, &mut cpu_history, request));
+            let image =
+                render_frame_passes(&scene.view(), &f, &request, &mut cpu_history, &|_| {}).0;
+            if !history {
+                // Without history the raw image is exactly the frame rendered without the denoiser.
+                let plain = cpu_frame(&scene, &f, &mut TemporalHistory::new(), RAW);
+                assert_eq!(
+                    image.raw_hdr.as_ref().expect("raw kept").pixels,
+                    plain.pixels
+                );
+            }
+            cpu = Some((image.hdr, image.raw_hdr.expect("raw kept")));
             let (image, _) = ctx
                 .render(&gpu_scene, &f, &request, &|_| {})
                 .expect("the device renders");
-            gpu = Some(image.hdr.expect("HDR was asked for"));
+            gpu = Some((
+                image.hdr.expect("HDR was asked for"),
+                image.raw_hdr.expect("raw kept"),
+            ));
         }
-        let (cpu, gpu) = (cpu.unwrap(), gpu.unwrap());
+        let ((cpu, cpu_raw), (gpu, gpu_raw)) = (cpu.unwrap(), gpu.unwrap());
         let (fraction, max_abs) = agreement(&cpu, &gpu);
+        let (raw_fraction, _) = agreement(&cpu_raw, &gpu_raw);
+        let (denoised_is_raw, _) = agreement(&gpu, &gpu_raw);
         let messages = ctx.validation_messages();
         eprintln!(
-            "denoised, {history_frames} frames of history: CPU against lavapipe {:.3} % of pixels within 1e-3, max abs {max_abs:.2e}; {} validation messages",
+            "denoised, {history_frames} frames of history: CPU against lavapipe {:.3} % of pixels within 1e-3, max abs {max_abs:.2e} (raw: {:.3} %); {} validation messages",
             fraction * 100.0,
+            raw_fraction * 100.0,
             messages.len()
         );
         assert!(messages.is_empty(), "{messages:?}");
         assert!(fraction >= 0.995, "{fraction}");
+        assert!(raw_fraction >= 0.995, "{raw_fraction}");
+        assert!(
+            denoised_is_raw < 0.9,
+            "the denoiser changed {denoised_is_raw} of the pixels"
+        );
     }
 }

@@ -282,7 +282,12 @@ fn bad_samples_never_enter_the_history_on_the_cpu() {
     let mut history = TemporalHistory::new();
     let f0 = frame(camera, CENTRE, [4, 2, 1], 0);
     let (filled, _) = render_frame(&scene.view(), &f0, FILL_BILINEAR, &|_| {});
-    history.accumulate(&scene.view(), &f0, &history.params_for(&f0), &filled);
+    history.accumulate(
+        &scene.view(),
+        &f0,
+        &history.params_for(&f0, FILL_BILINEAR),
+        &filled,
+    );
     let before: Vec<HistoryTexel> = history.texels().to_vec();
     let f1 = frame(camera, CENTRE, [4, 2, 1], 1);
     let (mut bad, _) = render_frame(&scene.view(), &f1, FILL_BILINEAR, &|_| {});
@@ -295,7 +300,7 @@ fn bad_samples_never_enter_the_history_on_the_cpu() {
     for (i, v) in poisoned {
         bad.pixels[i] = [v, v, v, 1.0];
     }
-    let params: TemporalParams = history.params_for(&f1);
+    let params: TemporalParams = history.params_for(&f1, FILL_BILINEAR);
     history.accumulate(&scene.view(), &f1, &params, &bad);
     for (i, t) in history.texels().iter().enumerate() {
         assert!(
@@ -393,12 +398,37 @@ fn lost_empire_eye_tracker_benchmark() {
         f.frame_index = i;
         f
     };
+    // FOVEA_BENCH_REFERENCE_DIR keeps the references between runs (they take minutes; delete the
+    // folder when the renderer changes).
+    let cache_dir = std::env::var_os("FOVEA_BENCH_REFERENCE_DIR").map(std::path::PathBuf::from);
     let reference_of = |camera: Camera| {
+        let cached = cache_dir.as_ref().map(|d| {
+            d.join(format!(
+                "lost_empire_{w}x{h}_{}.f32",
+                bytemuck::cast_slice::<f32, u32>(&camera.position)
+                    .iter()
+                    .map(|b| format!("{b:08x}"))
+                    .collect::<String>()
+            ))
+        });
+        if let Some(bytes) = cached.as_ref().and_then(|p| std::fs::read(p).ok()) {
+            if bytes.len() == (w * h) as usize * 16 {
+                return FrameImage {
+                    width: w,
+                    height: h,
+                    pixels: bytemuck::pod_collect_to_vec(&bytes),
+                };
+            }
+        }
         let mut f = frame_params(camera, FoveationParams::uniform(512), w, h, 99);
         f.frame_index = 1 << 20;
         let start = std::time::Instant::now();
         let r = render(&scene, &f).0;
         eprintln!("reference: {:.1} s", start.elapsed().as_secs_f64());
+        if let Some(p) = &cached {
+            let _ = std::fs::create_dir_all(p.parent().unwrap());
+            let _ = std::fs::write(p, bytemuck::cast_slice(&r.pixels));
+        }
         r
     };
     let d = |x: u32, y: u32| {
@@ -433,42 +463,46 @@ fn lost_empire_eye_tracker_benchmark() {
         (images, passes)
     };
     const FRAMES: u32 = 50;
-    let (still, _) = run(&|_| centre, FRAMES, true);
-    let (tracked, passes) = run(&|i| tracker.gaze(i), FRAMES, true);
-    let (single, single_passes) = run(&|i| tracker.gaze(i + FRAMES - 16), 16, false);
-    let last = FRAMES as usize - 1;
-    eprintln!("| run | fovea relMSE | periphery relMSE |");
-    eprintln!("|---|---|---|");
-    for (name, image) in [
-        ("history, still gaze, frame 50", &still[last]),
-        ("history, tracker gaze, frame 50", &tracked[last]),
-        ("no history (one frame), tracker gaze", &single[15]),
-    ] {
+    // FOVEA_BENCH_PAN_ONLY=1 skips the still-camera runs.
+    let pan_only = std::env::var_os("FOVEA_BENCH_PAN_ONLY").is_some();
+    if !pan_only {
+        let (still, _) = run(&|_| centre, FRAMES, true);
+        let (tracked, passes) = run(&|i| tracker.gaze(i), FRAMES, true);
+        let (single, single_passes) = run(&|i| tracker.gaze(i + FRAMES - 16), 16, false);
+        let last = FRAMES as usize - 1;
+        eprintln!("| run | fovea relMSE | periphery relMSE |");
+        eprintln!("|---|---|---|");
+        for (name, image) in [
+            ("history, still gaze, frame 50", &still[last]),
+            ("history, tracker gaze, frame 50", &tracked[last]),
+            ("no history (one frame), tracker gaze", &single[15]),
+        ] {
+            eprintln!(
+                "| {name} | {:.4e} | {:.4e} |",
+                rel_mse_where(image, &reference, fovea),
+                rel_mse_where(image, &reference, periphery)
+            );
+        }
         eprintln!(
-            "| {name} | {:.4e} | {:.4e} |",
-            rel_mse_where(image, &reference, fovea),
-            rel_mse_where(image, &reference, periphery)
+            "periphery flicker (luminance variance over the last 16 frames): history {:.4e}, no history {:.4e}",
+            flicker(&tracked[last - 15..], periphery),
+            flicker(&single, periphery)
         );
+        let mp = (w * h) as f64 * 1e-6;
+        let per_mp: Vec<String> = passes
+            .iter()
+            .map(|(n, ms)| format!("{n} {:.2}", ms / mp))
+            .collect();
+        eprintln!(
+            "CPU ms per megapixel per pass (mean of {FRAMES} frames): {}",
+            per_mp.join(", ")
+        );
+        let per_mp: Vec<String> = single_passes
+            .iter()
+            .map(|(n, ms)| format!("{n} {:.2}", ms / mp))
+            .collect();
+        eprintln!("without history: {}", per_mp.join(", "));
     }
-    eprintln!(
-        "periphery flicker (luminance variance over the last 16 frames): history {:.4e}, no history {:.4e}",
-        flicker(&tracked[last - 15..], periphery),
-        flicker(&single, periphery)
-    );
-    let mp = (w * h) as f64 * 1e-6;
-    let per_mp: Vec<String> = passes
-        .iter()
-        .map(|(n, ms)| format!("{n} {:.2}", ms / mp))
-        .collect();
-    eprintln!(
-        "CPU ms per megapixel per pass (mean of {FRAMES} frames): {}",
-        per_mp.join(", ")
-    );
-    let per_mp: Vec<String> = single_passes
-        .iter()
-        .map(|(n, ms)| format!("{n} {:.2}", ms / mp))
-        .collect();
-    eprintln!("without history: {}", per_mp.join(", "));
 
     // The pan: 30 moving frames then 20 at rest, with and without reuse, against the last camera's
     // reference.

@@ -493,7 +493,10 @@ fn run_scene(
                 exposure_ev: args.exposure,
                 history: false,
                 denoise: false,
-                output: FrameOutput::ReadBack { want_hdr: true },
+                output: FrameOutput::ReadBack {
+                    want_hdr: true,
+                    want_raw: false,
+                },
             };
             let rendered =
                 renderer.render(&scene.packed, &reference_frame, &request, &|n| bar.inc(n))?;
@@ -711,6 +714,7 @@ impl Measurer<'_> {
                 denoise: spec.denoise,
                 output: FrameOutput::ReadBack {
                     want_hdr: first.is_none(),
+                    want_raw: false,
                 },
             };
             let rendered = renderer.render(self.packed, &frame, &request, &|n| self.bar.inc(n))?;

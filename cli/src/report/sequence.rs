@@ -436,7 +436,10 @@ pub fn run_sequence(
                 exposure_ev: inputs.exposure_ev,
                 history: spec.history,
                 denoise: spec.denoise,
-                output: FrameOutput::ReadBack { want_hdr: true },
+                output: FrameOutput::ReadBack {
+                    want_hdr: true,
+                    want_raw: false,
+                },
             };
             let rendered = renderer.render(inputs.packed, &frame, &request, &|n| {
                 inputs.bar.inc(n);

@@ -178,7 +178,7 @@ fn cell_centre(i: u32, b: u32, extent: u32) -> f32 {
 /// clamped at the image border.
 #[inline]
 #[must_use]
-fn axis_weights(x: u32, extent: u32, b: u32, cells: u32) -> (u32, u32, f32) {
+pub fn axis_weights(x: u32, extent: u32, b: u32, cells: u32) -> (u32, u32, f32) {
     let p = x as f32 + 0.5;
     let t = p / b as f32 - 0.5;
     if t <= 0.0 {

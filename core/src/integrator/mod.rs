@@ -71,12 +71,20 @@ pub fn cone_spread(frame: &FrameParams, block: &OwnedBlock) -> f32 {
     if lod == path::TEXTURE_LOD_OFF {
         return 0.0;
     }
-    let pixel = 2.0 * crate::math::vec3_from(frame.camera.up).length() / frame.height.max(1) as f32;
+    let pixel = pixel_cone_spread(frame);
     if lod == path::TEXTURE_LOD_BLOCK {
         pixel * block.size as f32
     } else {
         pixel
     }
+}
+
+/// The spread angle of one pixel's ray cone: `2 tan(fov / 2) / height` (the camera's `up` is
+/// `tan(fov / 2)` long).
+#[inline]
+#[must_use]
+pub fn pixel_cone_spread(frame: &FrameParams) -> f32 {
+    2.0 * crate::math::vec3_from(frame.camera.up).length() / frame.height.max(1) as f32
 }
 
 /// Sample `sample` of `block`'s jittered camera ray and the random numbers its path goes on with.

@@ -10,7 +10,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 
 use crate::bvh::closest_hit_with;
-use crate::integrator::FrameParams;
+use crate::integrator::{pixel_cone_spread, FrameParams};
 use crate::lights::INFINITE_DISTANCE;
 use crate::material::shading::surface_point_lod;
 use crate::scene::{Features, SceneSource, SceneView};
@@ -70,7 +70,12 @@ pub fn first_hit_gbuffer<F: Features, S: SceneSource>(
     if !hit.is_hit() {
         return GBufferTexel::SKY;
     }
-    let surface = surface_point_lod(scene, source, &hit, ray.direction, 0.0);
+    // The albedo over the pixel's footprint (the mip level of its ray cone), not at its centre: the
+    // pixel's samples are jittered over it, so this is the albedo they saw on average
+    // (`super::albedo` divides their radiance by it). A point sample of a minified texture would be
+    // noise against their mean.
+    let cone_width = pixel_cone_spread(frame) * hit.t;
+    let surface = surface_point_lod(scene, source, &hit, ray.direction, cone_width);
     let mut normal = surface.frame.z;
     if normal.dot(ray.direction) > 0.0 {
         normal = -normal;

@@ -1,5 +1,12 @@
 //! Each pixel's history and how a frame joins it: the "reproject and accumulate" pass.
 //!
+//! **Lighting, not texture.** The history keeps each pixel's *lighting*: the frame's filled value divided
+//! by the albedo its samples saw (its block's mean, [`super::albedo`]). The displayed pixel is that
+//! lighting times the pixel's own albedo ([`HistoryTexel::displayed`]). Resampling the history while the
+//! camera moves then blurs only lighting, which is smooth, while the texture comes sharp from this
+//! frame's G-buffer; and a periphery pixel converges to its block's lighting under its own texture, not
+//! to the block's blur.
+//!
 //! **Weights that respect the footprint.** A frame's filled value at a pixel comes from `spp` samples
 //! spread over its block's `b × b` pixels: it is worth `spp / b²` samples of that pixel (32 in the
 //! paper's fovea, 4 in the intermediate ring, 0.5 in the periphery), and it estimates the pixel blurred
@@ -31,6 +38,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 
+use super::albedo::{demodulation_albedo, filled_albedo};
 use super::gbuffer::GBufferTexel;
 use super::reproject::reproject_history;
 use crate::camera::Camera;
@@ -53,9 +61,10 @@ pub const HISTORY_SAMPLE_MAX: f32 = 1.0e6;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct HistoryTexel {
-    /// rgb: the mean radiance; w: its weight, in samples of this pixel.
+    /// rgb: the mean lighting (radiance over the albedo the samples saw); w: its weight, in samples of
+    /// this pixel.
     pub mean: [f32; 4],
-    /// x: the mean luminance, y: the mean squared luminance (the second moment, for a variance), z: the
+    /// x: the lighting's mean luminance, y: its mean squared luminance (the second moment, for a variance), z: the
     /// footprint (weighted mean block edge of the samples), w: frames in the history (capped).
     pub moments: [f32; 4],
 }
@@ -67,18 +76,20 @@ impl HistoryTexel {
         moments: [0.0; 4],
     };
 
-    /// The mean radiance.
+    /// The mean lighting: radiance divided by the albedo its samples saw.
     #[inline]
     #[must_use]
-    pub fn radiance(&self) -> Vec3 {
+    pub fn lighting(&self) -> Vec3 {
         vec3_from(self.mean)
     }
 
-    /// The pixel as displayed: the mean radiance, alpha 1 (the HDR image's layout).
+    /// The pixel as displayed, over the G-buffer texel `g` of this frame: the mean lighting times the
+    /// pixel's own albedo, alpha 1 (the HDR image's layout).
     #[inline]
     #[must_use]
-    pub fn displayed(&self) -> [f32; 4] {
-        [self.mean[0], self.mean[1], self.mean[2], 1.0]
+    pub fn displayed(&self, g: &GBufferTexel) -> [f32; 4] {
+        let c = self.lighting() * demodulation_albedo(g);
+        [c.x, c.y, c.z, 1.0]
     }
 
     /// The weight (samples of this pixel behind the mean).
@@ -102,7 +113,7 @@ impl HistoryTexel {
         self.moments[3]
     }
 
-    /// The luminance variance of the samples' means (second moment minus the squared mean).
+    /// The luminance variance of the frames' lighting (second moment minus the squared mean).
     #[inline]
     #[must_use]
     pub fn luminance_variance(&self) -> f32 {
@@ -143,7 +154,10 @@ pub struct TemporalParams {
     pub max_frames_moving: f32,
     /// The neighbourhood clamp's half-width in standard deviations (`γ`).
     pub clamp_gamma: f32,
-    pub _pad: [u32; 2],
+    /// The fill mode the frame's filled values were made with (`crate::foveation::FILL_*`): which
+    /// albedo their samples saw ([`filled_albedo`]).
+    pub fill_mode: u32,
+    pub _pad: u32,
 }
 
 /// Default [`TemporalParams::max_frames_resting`]: as many frames as the live view used to average.
@@ -154,11 +168,15 @@ pub const DEFAULT_MAX_FRAMES_MOVING: f32 = 16.0;
 pub const DEFAULT_CLAMP_GAMMA: f32 = 1.5;
 
 impl TemporalParams {
-    /// The parameters for `frame` after a frame rendered with `previous` (its camera and image size);
-    /// `None` starts every pixel's history afresh. Default caps and clamp.
+    /// The parameters for `frame`, filled in `fill_mode`, after a frame rendered with `previous` (its
+    /// camera and image size); `None` starts every pixel's history afresh. Default caps and clamp.
     #[cfg(not(target_arch = "spirv"))]
     #[must_use]
-    pub fn after(previous: Option<(Camera, [u32; 2])>, frame: &FrameParams) -> Self {
+    pub fn after(
+        previous: Option<(Camera, [u32; 2])>,
+        frame: &FrameParams,
+        fill_mode: u32,
+    ) -> Self {
         let (previous_camera, previous_size, flags) = match previous {
             None => (frame.camera, [frame.width, frame.height], 0),
             Some((camera, size)) => {
@@ -174,7 +192,8 @@ impl TemporalParams {
             max_frames_resting: DEFAULT_MAX_FRAMES_RESTING,
             max_frames_moving: DEFAULT_MAX_FRAMES_MOVING,
             clamp_gamma: DEFAULT_CLAMP_GAMMA,
-            _pad: [0; 2],
+            fill_mode,
+            _pad: 0,
         }
     }
 }
@@ -182,29 +201,42 @@ impl TemporalParams {
 /// A frame's value at one pixel, as it joins the history.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameSample {
-    /// The filled radiance.
-    pub radiance: Vec3,
+    /// The filled radiance divided by `albedo`.
+    pub lighting: Vec3,
+    /// The albedo its samples saw ([`filled_albedo`]).
+    pub albedo: Vec3,
     /// Samples of this pixel it is worth (`spp / b²`).
     pub weight: f32,
     /// Its footprint: the block edge `b`.
     pub footprint: f32,
 }
 
-/// The frame's value of pixel (`x`, `y`): `filled` at the pixel, weighted by its block's samples and
-/// footprint. A non-finite value weighs 0; a finite one is clamped to `[0, HISTORY_SAMPLE_MAX]`.
+/// The frame's value of pixel (`x`, `y`): `filled` (in fill mode `fill_mode`) at the pixel over the
+/// albedo its samples saw in `gbuffer`, weighted by its block's samples and footprint. A non-finite
+/// value weighs 0; a finite one is clamped to `[0, HISTORY_SAMPLE_MAX]`, before and after the division.
 #[inline]
 #[must_use]
-pub fn frame_sample(frame: &FrameParams, filled: &[[f32; 4]], x: u32, y: u32) -> FrameSample {
+pub fn frame_sample(
+    frame: &FrameParams,
+    filled: &[[f32; 4]],
+    gbuffer: &[GBufferTexel],
+    fill_mode: u32,
+    x: u32,
+    y: u32,
+) -> FrameSample {
     let block = owning_block(x, y, &frame.foveation);
     let b = block.size.max(1) as f32;
     let c = vec3_from(filled[(y * frame.width + x) as usize]);
     let finite = is_finite3(c);
+    let albedo = filled_albedo(frame, gbuffer, fill_mode, x, y);
+    let max = Vec3::splat(HISTORY_SAMPLE_MAX);
     FrameSample {
-        radiance: if finite {
-            c.clamp(Vec3::ZERO, Vec3::splat(HISTORY_SAMPLE_MAX))
+        lighting: if finite {
+            (c.clamp(Vec3::ZERO, max) / albedo).min(max)
         } else {
             Vec3::ZERO
         },
+        albedo,
         weight: if finite {
             samples_in_block(&block, &frame.foveation) as f32 / (b * b)
         } else {
@@ -268,6 +300,16 @@ impl ClampBox {
         lo: Vec3::ZERO,
         hi: Vec3::splat(HISTORY_SAMPLE_MAX),
     };
+
+    /// The box of radiance values as a box of lighting under `albedo` (each channel positive).
+    #[inline]
+    #[must_use]
+    pub fn demodulated(self, albedo: Vec3) -> Self {
+        Self {
+            lo: self.lo / albedo,
+            hi: self.hi / albedo,
+        }
+    }
 }
 
 /// Merges `sample` into `history` (already reprojected, its weight scaled by its validity): the
@@ -304,7 +346,7 @@ pub fn blend_history(
         w_sample
     };
     w_history = w_history.min((max_frames - 1.0).max(0.0) * w_sample.max(per_frame));
-    let mut old = history.radiance();
+    let mut old = history.lighting();
     let mut old_moments = Vec4::from(history.moments);
     let clamped = old.max(clamp.lo).min(clamp.hi);
     if clamped != old {
@@ -316,7 +358,7 @@ pub fn blend_history(
     }
     let total = w_history + w_sample;
     let a = w_sample / total;
-    let l = luminance(sample.radiance);
+    let l = luminance(sample.lighting);
     let new_moments = Vec4::new(l, l * l, sample.footprint, 0.0);
     let mut moments = old_moments + (new_moments - old_moments) * a;
     moments.w = (if w_history > 0.0 {
@@ -325,7 +367,7 @@ pub fn blend_history(
         0.0
     } + 1.0)
         .min(max_frames);
-    let mean = old + (sample.radiance - old) * a;
+    let mean = old + (sample.lighting - old) * a;
     HistoryTexel {
         mean: [mean.x, mean.y, mean.z, total],
         moments: moments.to_array(),
@@ -333,7 +375,7 @@ pub fn blend_history(
 }
 
 /// The temporal pass for pixel (`x`, `y`): the previous history reprojected to it, this frame's filled
-/// value merged in, the pixel's new history returned (its `radiance` is what is displayed).
+/// value merged in, the pixel's new history returned ([`HistoryTexel::displayed`] is what is shown).
 #[must_use]
 pub fn temporal_accumulate(
     frame: &FrameParams,
@@ -356,12 +398,15 @@ pub fn temporal_accumulate(
     );
     let mut history = reprojected.history;
     history.mean[3] *= reprojected.validity;
-    let sample = frame_sample(frame, filled, x, y);
+    let sample = frame_sample(frame, filled, gbuffer, temporal.fill_mode, x, y);
     let moved = temporal.flags & TEMPORAL_CAMERA_MOVED != 0;
     let (max_frames, clamp) = if moved {
+        // The box is of the frame's radiance around the pixel; the history is compared with it as
+        // this pixel's samples would see it.
         (
             temporal.max_frames_moving,
-            neighbourhood_box(frame, filled, x, y, 1, temporal.clamp_gamma),
+            neighbourhood_box(frame, filled, x, y, 1, temporal.clamp_gamma)
+                .demodulated(sample.albedo),
         )
     } else {
         (temporal.max_frames_resting, ClampBox::NONE)
@@ -376,12 +421,13 @@ mod tests {
     use std::vec::Vec;
 
     use super::*;
-    use crate::foveation::FoveationParams;
+    use crate::foveation::{FoveationParams, FILL_BILINEAR};
     use crate::integrator::IntegratorSettings;
 
     fn sample(v: f32, weight: f32, footprint: f32) -> FrameSample {
         FrameSample {
-            radiance: Vec3::splat(v),
+            lighting: Vec3::splat(v),
+            albedo: Vec3::ONE,
             weight,
             footprint,
         }
@@ -400,7 +446,7 @@ mod tests {
         let values = [1.0f32, 5.0, 2.0, 8.0, 4.0];
         let samples: Vec<_> = values.iter().map(|&v| sample(v, 32.0, 1.0)).collect();
         let h = run(&samples, 4096.0);
-        assert!((h.radiance().x - 4.0).abs() < 1e-5, "{h:?}");
+        assert!((h.lighting().x - 4.0).abs() < 1e-5, "{h:?}");
         assert_eq!(h.weight(), 160.0);
         assert_eq!(h.frames(), 5.0);
         // Second moment: mean of squared luminances (grey: luminance = value).
@@ -415,7 +461,7 @@ mod tests {
         let mut samples = vec![sample(10.0, 0.5, 4.0); 50];
         samples.push(sample(2.0, 32.0, 1.0));
         let h = run(&samples, 4096.0);
-        assert_eq!(h.radiance().x, 2.0, "no blur trail");
+        assert_eq!(h.lighting().x, 2.0, "no blur trail");
         assert_eq!(h.weight(), 32.0);
         assert_eq!(h.footprint(), 1.0);
         assert_eq!(h.frames(), 1.0);
@@ -427,7 +473,7 @@ mod tests {
         samples.extend(vec![sample(10.0, 0.5, 4.0); 20]);
         let h = run(&samples, 4096.0);
         // 20 periphery frames worth 0.5/16 each against 320 fovea samples: 0.2 % of the mean.
-        assert!(h.radiance().x < 2.02, "{h:?}");
+        assert!(h.lighting().x < 2.02, "{h:?}");
         assert!(h.footprint() < 1.01);
         // And the fovea coming back merges with it rather than restarting it.
         let back = blend_history(&h, &sample(2.0, 32.0, 1.0), 4096.0, ClampBox::NONE);
@@ -447,7 +493,7 @@ mod tests {
         let mut samples = vec![sample(0.0, 1.0, 1.0); 100];
         samples.push(sample(16.0, 1.0, 1.0));
         let h = run(&samples, 16.0);
-        assert!((h.radiance().x - 1.0).abs() < 1e-5, "{h:?}");
+        assert!((h.lighting().x - 1.0).abs() < 1e-5, "{h:?}");
         assert_eq!(h.weight(), 16.0);
         assert_eq!(h.frames(), 16.0);
     }
@@ -460,7 +506,7 @@ mod tests {
             hi: Vec3::splat(1.0),
         };
         let h = blend_history(&bright, &sample(0.5, 1.0, 1.0), 16.0, clamp);
-        assert!(h.radiance().x <= 1.0, "{h:?}");
+        assert!(h.lighting().x <= 1.0, "{h:?}");
     }
 
     fn tiny_frame(gaze: [f32; 2]) -> FrameParams {
@@ -478,18 +524,25 @@ mod tests {
     #[test]
     fn bad_samples_never_enter_the_history() {
         let frame = tiny_frame([0.5, 0.5]);
+        let sky = vec![GBufferTexel::SKY; 64];
         let mut filled = vec![[1.0f32, 1.0, 1.0, 1.0]; 64];
         filled[0] = [f32::NAN, 1.0, 1.0, 1.0];
         filled[1] = [f32::INFINITY, 1.0, 1.0, 1.0];
         filled[2] = [1.0e30, -5.0, 1.0, 1.0];
-        assert_eq!(frame_sample(&frame, &filled, 0, 0).weight, 0.0);
-        assert_eq!(frame_sample(&frame, &filled, 1, 0).weight, 0.0);
-        let huge = frame_sample(&frame, &filled, 2, 0);
-        assert_eq!(huge.radiance, Vec3::new(HISTORY_SAMPLE_MAX, 0.0, 1.0));
+        assert_eq!(
+            frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 0, 0).weight,
+            0.0
+        );
+        assert_eq!(
+            frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 1, 0).weight,
+            0.0
+        );
+        let huge = frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 2, 0);
+        assert_eq!(huge.lighting, Vec3::new(HISTORY_SAMPLE_MAX, 0.0, 1.0));
         let h = run(&[sample(1.0, 32.0, 1.0)], 4096.0);
         let after = blend_history(
             &h,
-            &frame_sample(&frame, &filled, 0, 0),
+            &frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 0, 0),
             4096.0,
             ClampBox::NONE,
         );
@@ -503,10 +556,39 @@ mod tests {
     fn frame_samples_weigh_their_footprint() {
         // Gaze in a corner of an 8 x 8 image: the far corner is periphery (4 x 4 block, 8 spp).
         let frame = tiny_frame([0.5, 0.5]);
+        let sky = vec![GBufferTexel::SKY; 64];
         let filled = vec![[1.0f32; 4]; 64];
-        let fovea = frame_sample(&frame, &filled, 0, 0);
+        let fovea = frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 0, 0);
         assert_eq!((fovea.weight, fovea.footprint), (32.0, 1.0));
-        let periphery = frame_sample(&frame, &filled, 7, 7);
+        let periphery = frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 7, 7);
         assert_eq!((periphery.weight, periphery.footprint), (0.5, 4.0));
+    }
+
+    #[test]
+    fn history_keeps_lighting_and_shows_each_pixel_its_own_texture() {
+        // The periphery's 4 x 4 block at (4, 4) sees a checker of albedos 0.2 and 0.8 (mean 0.5) lit
+        // by 2: its filled value is 1 everywhere.
+        let frame = tiny_frame([0.5, 0.5]);
+        let wall = |a: f32| GBufferTexel {
+            normal_distance: [0.0, 0.0, 1.0, 3.0],
+            albedo: [a, a, a, 1.0],
+        };
+        let g: Vec<_> = (0..64u32)
+            .map(|i| wall(if (i % 8 + i / 8) % 2 == 0 { 0.2 } else { 0.8 }))
+            .collect();
+        let filled = vec![[1.0f32; 4]; 64];
+        let s = frame_sample(&frame, &filled, &g, FILL_BILINEAR, 6, 6);
+        assert!((s.albedo.x - 0.5).abs() < 1e-6 && (s.lighting.x - 2.0).abs() < 1e-5);
+        let h = blend_history(&HistoryTexel::EMPTY, &s, 4096.0, ClampBox::NONE);
+        // Shown with the pixel's own albedo: the checker comes back at full resolution.
+        assert!((h.displayed(&g[6 * 8 + 6])[0] - 0.4).abs() < 1e-5);
+        assert!((h.displayed(&g[6 * 8 + 7])[0] - 1.6).abs() < 1e-5);
+        // A box of radiance becomes a box of lighting under the albedo the samples saw.
+        let b = ClampBox {
+            lo: Vec3::splat(0.5),
+            hi: Vec3::splat(1.0),
+        }
+        .demodulated(s.albedo);
+        assert_eq!((b.lo.x, b.hi.x), (1.0, 2.0));
     }
 }

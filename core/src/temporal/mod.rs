@@ -11,6 +11,7 @@
 //!
 //! The history holds what was learned, whatever the gaze did since: a gaze move changes where the next
 //! samples go and how much they weigh, never what is already known.
+pub mod albedo;
 pub mod gbuffer;
 pub mod history;
 pub mod reproject;

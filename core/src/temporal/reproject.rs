@@ -237,7 +237,7 @@ mod tests {
 
     use super::*;
     use crate::camera::Camera;
-    use crate::foveation::FoveationParams;
+    use crate::foveation::{FoveationParams, FILL_BILINEAR};
     use crate::integrator::IntegratorSettings;
 
     const W: u32 = 32;
@@ -291,7 +291,8 @@ mod tests {
     fn a_moved_camera_finds_the_surface_where_it_was() {
         let previous = frame(Vec3::ZERO);
         let current = frame(Vec3::new(0.13, -0.07, 0.2));
-        let temporal = TemporalParams::after(Some((previous.camera, [W, H])), &current);
+        let temporal =
+            TemporalParams::after(Some((previous.camera, [W, H])), &current, FILL_BILINEAR);
         assert_ne!(temporal.flags & TEMPORAL_CAMERA_MOVED, 0);
         let (g, g_prev, h_prev) = (wall(&current), wall(&previous), film_positions());
         let mut interior = 0;
@@ -327,7 +328,8 @@ mod tests {
     fn a_surface_that_was_hidden_has_no_history() {
         let previous = frame(Vec3::ZERO);
         let current = frame(Vec3::new(0.1, 0.0, 0.0));
-        let temporal = TemporalParams::after(Some((previous.camera, [W, H])), &current);
+        let temporal =
+            TemporalParams::after(Some((previous.camera, [W, H])), &current, FILL_BILINEAR);
         let g = wall(&current);
         // Last frame something nearer covered the view.
         let mut g_prev = wall(&previous);
@@ -354,12 +356,12 @@ mod tests {
     #[test]
     fn a_resting_camera_reads_its_own_texel() {
         let f = frame(Vec3::ZERO);
-        let temporal = TemporalParams::after(Some((f.camera, [W, H])), &f);
+        let temporal = TemporalParams::after(Some((f.camera, [W, H])), &f, FILL_BILINEAR);
         assert_eq!(temporal.flags, TEMPORAL_HISTORY_VALID);
         let h = film_positions();
         let r = reproject_history(&f, &temporal, &wall(&f), &wall(&f), &h, 5, 7);
         assert_eq!(r.history, h[(7 * W + 5) as usize]);
-        let none = TemporalParams::after(None, &f);
+        let none = TemporalParams::after(None, &f, FILL_BILINEAR);
         assert_eq!(
             reproject_history(&f, &none, &wall(&f), &wall(&f), &h, 5, 7),
             Reprojected::NONE
