@@ -196,7 +196,8 @@ fn a_gaze_trace_is_judged_by_eccentricity_and_over_time() {
     let trace = dir.join("trace.csv");
     std::fs::write(
         &trace,
-        "frame,x,y\n0,120,68\n1,122.5,67\n2,118.7,70.2\n3,121,68.4\n4,120.3,66.9\n",
+        // Three frames of a jittering fixation, then a saccade of about 9 degrees.
+        "frame,x,y\n0,120,68\n1,122.5,67\n2,118.7,70.2\n3,90,60.4\n4,90.3,58.9\n",
     )
     .unwrap();
     let trace_arg = trace.to_string_lossy().into_owned();
@@ -259,6 +260,21 @@ fn a_gaze_trace_is_judged_by_eccentricity_and_over_time() {
         "{bounds:?}"
     );
 
+    // The saccade, and the fovea's recovery after it (every configuration), and what scoring cost.
+    assert_eq!(seq["saccade_frames"], serde_json::json!([3]));
+    for c in configs {
+        assert_eq!(c["fovea_lag"]["saccades"], 1, "{}", c["fovea_lag"]);
+        assert!(c["evaluation_ms_per_frame"].as_f64().unwrap() > 0.0);
+    }
+    let jump = |slug: &str| by_slug(slug)["fovea_lag"]["median_jump"].as_f64().unwrap();
+    eprintln!(
+        "fovea jump after the saccade: {} without history, {} with",
+        jump("32-16-8"),
+        jump("32-16-8-history")
+    );
+    // Without history each frame stands alone: the fovea lands as good as it was.
+    assert!((jump("32-16-8") - 1.0).abs() < 0.25, "{}", jump("32-16-8"));
+    assert!(md.contains("**After a saccade** (1 in the trace"), "{md}");
     // History: the periphery flickers much less than without it.
     let flicker = |slug: &str| regions(&by_slug(slug)["flicker"])[3];
     let (raw, kept) = (flicker("32-16-8"), flicker("32-16-8-history"));

@@ -8,6 +8,7 @@ mod fvvdp;
 mod metrics;
 mod plot;
 mod reference_cache;
+mod saccades;
 mod sequence;
 mod write;
 

@@ -26,6 +26,7 @@ use super::configs::{ConfigKind, UNIFORM_SPP};
 use super::fvvdp::{FovVideoVdp, RawFrames};
 use super::median;
 use super::metrics::{self, RegionMap, RegionMeans, REL_MSE_EPSILON};
+use super::saccades::{fovea_lag, saccade_frames, FoveaLag};
 use crate::backend::{FrameOutput, FrameRequest, Renderer};
 use crate::error::{FoveaError, Result};
 
@@ -83,6 +84,11 @@ pub struct SequenceResult {
     pub bands: Vec<BandResult>,
     /// FovVideoVDP's verdict on the sequence, where it is set up.
     pub fovvideovdp: Option<FovVideoVdpScore>,
+    /// How long the fovea takes to recover its quality after a saccade (`None` without saccades).
+    pub fovea_lag: Option<FoveaLag>,
+    /// Median milliseconds per frame of fovea's own scoring (FLIP, relMSE, flicker, pooling), not
+    /// counting FovVideoVDP.
+    pub evaluation_ms: f64,
 }
 
 /// What FovVideoVDP (Mantiuk et al. 2021) said of a test sequence against its reference.
@@ -108,6 +114,8 @@ pub struct SequenceReport {
     pub results: Vec<SequenceResult>,
     /// Whether FovVideoVDP ran, and if not, how to set it up.
     pub fovvideovdp_note: String,
+    /// Frames where the gaze jumped out of the previous fovea ([`saccade_frames`]).
+    pub saccades: Vec<usize>,
 }
 
 /// The configurations of a sequence: uniform 32 and the paper's three foveated ones, each without and
@@ -389,6 +397,9 @@ pub fn run_sequence(
         Err(_) => None,
     };
     let fixations: Vec<[f32; 2]> = plan.frames.iter().map(|(_, g)| *g).collect();
+    let bounds = [inputs.paper.radius_fovea, inputs.paper.radius_intermediate]
+        .map(|r| radius_px_to_eccentricity_deg(r, &inputs.display));
+    let saccades = saccade_frames(&fixations, &inputs.display, bounds[0]);
     let mut fvvdp_failure: Option<String> = None;
 
     let mut results = Vec::new();
@@ -408,6 +419,8 @@ pub fn run_sequence(
         let mut rel_bands = FrameMeans::new(bands);
         let mut flicker_bands = FrameMeans::new(bands);
         let mut frame_ms = Vec::new();
+        let mut evaluation_ms = Vec::new();
+        let mut fovea_flip = Vec::new();
         let mut samples = 0u64;
         let mut previous: Option<FrameImage> = None;
         for (i, &(frame_number, _)) in plan.frames.iter().enumerate() {
@@ -454,9 +467,12 @@ pub fn run_sequence(
             if let Some(raw) = raw.as_mut() {
                 raw.push(&rgb8).map_err(FoveaError::Backend)?;
             }
+            let evaluation = std::time::Instant::now();
             let flip = metrics::flip_map(inputs.reference_rgb8, &rgb8, w, h, inputs.ppd);
             let rel = metrics::rel_mse_map(&hdr, inputs.reference);
-            flip_regions.add(&region_array(RegionMeans::of(&flip, regions)));
+            let flip_by_region = RegionMeans::of(&flip, regions);
+            fovea_flip.push(flip_by_region.fovea);
+            flip_regions.add(&region_array(flip_by_region));
             rel_regions.add(&region_array(RegionMeans::of(&rel, regions)));
             flip_bands.add(&band_means(&flip, band, bands));
             rel_bands.add(&band_means(&rel, band, bands));
@@ -465,6 +481,7 @@ pub fn run_sequence(
                 flicker_regions.add(&region_array(RegionMeans::of(&flicker, regions)));
                 flicker_bands.add(&band_means(&flicker, band, bands));
             }
+            evaluation_ms.push(evaluation.elapsed().as_secs_f64() * 1e3);
             previous = Some(hdr);
         }
         let fovvideovdp = match (raw, &inputs.fovvideovdp, &fvvdp_reference) {
@@ -517,19 +534,20 @@ pub fn run_sequence(
             flicker: region_means(&flicker_regions.means()),
             bands: band_results,
             fovvideovdp,
+            fovea_lag: fovea_lag(&fovea_flip, &saccades),
+            evaluation_ms: median(&evaluation_ms),
         });
     }
     if let Some(reference) = &fvvdp_reference {
         let _ = std::fs::remove_file(reference);
     }
-    let bounds = [inputs.paper.radius_fovea, inputs.paper.radius_intermediate]
-        .map(|r| f64::from(radius_px_to_eccentricity_deg(r, &inputs.display)));
     Ok(SequenceReport {
         trace: plan.trace.clone(),
         frames: plan.frames.len() as u32,
         fps: plan.fps,
         band_deg,
-        region_bounds_deg: bounds,
+        region_bounds_deg: bounds.map(f64::from),
+        saccades,
         fovvideovdp_note: fovvideovdp_note(&inputs.fovvideovdp, fvvdp_failure, &results),
         results,
     })

@@ -112,6 +112,8 @@ fn sequence_json(q: &SequenceReport) -> Value {
         "band_deg": q.band_deg,
         "region_bounds_deg": q.region_bounds_deg,
         "flicker_definition": "mean over pixels and consecutive frame pairs of (Y_t - Y_{t-1})^2 / (Y_ref^2 + 0.01)",
+        "saccade_frames": q.saccades,
+        "fovea_lag_definition": "per saccade (a gaze step beyond the fovea's radius): frames until the fovea's mean FLIP is within 10 % of its mean over the 3 frames before; jump: the saccade frame's fovea FLIP over that mean",
         "configs": q.results.iter().map(|c| json!({
             "name": c.spec.name,
             "slug": c.spec.slug,
@@ -136,7 +138,16 @@ fn sequence_json(q: &SequenceReport) -> Value {
             "fovvideovdp": c.fovvideovdp.as_ref().map(|v| json!({
                 "jod": finite_or_null(v.jod),
                 "info": v.info,
+                "seconds": v.seconds,
+                "seconds_per_frame": v.seconds / f64::from(c.frames.max(1)),
             })),
+            "fovea_lag": c.fovea_lag.as_ref().map(|l| json!({
+                "saccades": l.saccades,
+                "recovered": l.recovered,
+                "median_frames": finite_or_null(l.median_frames),
+                "median_jump": finite_or_null(l.median_jump),
+            })),
+            "evaluation_ms_per_frame": finite_or_null(c.evaluation_ms),
         })).collect::<Vec<_>>(),
         "fovvideovdp_note": q.fovvideovdp_note,
     })
@@ -182,6 +193,46 @@ fn sequence_md(s: &mut String, q: &SequenceReport) {
         );
     }
     let _ = writeln!(s, "\n{}\n", q.fovvideovdp_note);
+    sequence_cost_and_lag_md(s, q);
+}
+
+/// The fovea's recovery after saccades and the evaluation's own cost, per configuration.
+fn sequence_cost_and_lag_md(s: &mut String, q: &SequenceReport) {
+    let _ = writeln!(
+        s,
+        "**After a saccade** ({} in the trace: gaze steps beyond the fovea's {:.2}°): the fovea's FLIP \
+         on the saccade's frame against the 3 frames before (jump), and frames until it is back within \
+         10 % (lag; its regions follow the gaze on the same frame, its quality may not). **Evaluation \
+         cost**: fovea's own scoring per frame, and FovVideoVDP's.\n",
+        q.saccades.len(),
+        q.region_bounds_deg[0]
+    );
+    s.push_str(
+        "| Configuration | Jump | Lag (frames, median) | Recovered | Scoring ms/frame | FovVideoVDP s/frame |\n",
+    );
+    s.push_str("|---|---:|---:|---:|---:|---:|\n");
+    for c in &q.results {
+        let (jump, lag, recovered) = c.fovea_lag.as_ref().map_or(
+            ("–".to_string(), "–".to_string(), "–".to_string()),
+            |l| {
+                (
+                    md_number(l.median_jump, 2),
+                    md_number(l.median_frames, 1),
+                    format!("{}/{}", l.recovered, l.saccades),
+                )
+            },
+        );
+        let fvvdp = c.fovvideovdp.as_ref().map_or("–".to_string(), |v| {
+            md_number(v.seconds / f64::from(c.frames.max(1)), 3)
+        });
+        let _ = writeln!(
+            s,
+            "| {} | {jump} | {lag} | {recovered} | {} | {fvvdp} |",
+            c.spec.name,
+            md_number(c.evaluation_ms, 1),
+        );
+    }
+    s.push('\n');
 }
 
 fn csv_number(x: f64) -> String {
