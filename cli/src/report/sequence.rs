@@ -403,6 +403,8 @@ pub fn run_sequence(
     let mut fvvdp_failure: Option<String> = None;
 
     let mut results = Vec::new();
+    // Each configuration's fovea FLIP per frame, for the recovery after saccades.
+    let mut fovea_series: Vec<Vec<f64>> = Vec::new();
     for spec in specs {
         renderer.reset_history();
         let mut raw = match &fvvdp_reference {
@@ -524,6 +526,7 @@ pub fn run_sequence(
                 flicker: flicker_b[b],
             })
             .collect();
+        fovea_series.push(fovea_flip);
         results.push(SequenceResult {
             spec: spec.clone(),
             frames: plan.frames.len() as u32,
@@ -534,12 +537,28 @@ pub fn run_sequence(
             flicker: region_means(&flicker_regions.means()),
             bands: band_results,
             fovvideovdp,
-            fovea_lag: fovea_lag(&fovea_flip, &saccades),
+            fovea_lag: None,
             evaluation_ms: median(&evaluation_ms),
         });
     }
     if let Some(reference) = &fvvdp_reference {
         let _ = std::fs::remove_file(reference);
+    }
+    // The fovea's recovery, its error taken relative to uniform 32 spp without history on the same
+    // frame: the new point of gaze may see harder content than the old one, which is not lag.
+    let baseline = results
+        .iter()
+        .position(|r| !r.spec.foveated && !r.spec.history && !r.spec.denoise);
+    for (result, series) in results.iter_mut().zip(&fovea_series) {
+        let relative: Vec<f64> = match baseline {
+            Some(b) => series
+                .iter()
+                .zip(&fovea_series[b])
+                .map(|(e, u)| e / u)
+                .collect(),
+            None => series.clone(),
+        };
+        result.fovea_lag = fovea_lag(&relative, &saccades);
     }
     Ok(SequenceReport {
         trace: plan.trace.clone(),

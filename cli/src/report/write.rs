@@ -113,7 +113,7 @@ fn sequence_json(q: &SequenceReport) -> Value {
         "region_bounds_deg": q.region_bounds_deg,
         "flicker_definition": "mean over pixels and consecutive frame pairs of (Y_t - Y_{t-1})^2 / (Y_ref^2 + 0.01)",
         "saccade_frames": q.saccades,
-        "fovea_lag_definition": "per saccade (a gaze step beyond the fovea's radius): frames until the fovea's mean FLIP is within 10 % of its mean over the 3 frames before; jump: the saccade frame's fovea FLIP over that mean",
+        "fovea_lag_definition": "per saccade (a gaze step beyond the fovea's radius), on the fovea's mean FLIP relative to uniform 32 spp without history on the same frame: frames until it is within 10 % of its mean over the 3 frames before; jump: the saccade frame's value over that mean",
         "configs": q.results.iter().map(|c| json!({
             "name": c.spec.name,
             "slug": c.spec.slug,
@@ -200,7 +200,8 @@ fn sequence_md(s: &mut String, q: &SequenceReport) {
 fn sequence_cost_and_lag_md(s: &mut String, q: &SequenceReport) {
     let _ = writeln!(
         s,
-        "**After a saccade** ({} in the trace: gaze steps beyond the fovea's {:.2}°): the fovea's FLIP \
+        "**After a saccade** ({} in the trace: gaze steps beyond the fovea's {:.2}°): the fovea's FLIP, \
+         relative to uniform 32 spp on the same frame (the new point of gaze may see harder content), \
          on the saccade's frame against the 3 frames before (jump), and frames until it is back within \
          10 % (lag; its regions follow the gaze on the same frame, its quality may not). **Evaluation \
          cost**: fovea's own scoring per frame, and FovVideoVDP's.\n",
