@@ -211,6 +211,29 @@ fn host_read_barrier(device: &ash::Device, cb: vk::CommandBuffer) {
     );
 }
 
+/// A buffer handle with its size in bytes, as [`record_copy`] takes it.
+type SizedBuffer = (vk::Buffer, u64);
+
+/// Records a copy of the first `bytes` bytes of `src` into `dst`; the caller orders it against the
+/// passes around it with barriers. Panics if either buffer is smaller than `bytes`.
+fn record_copy(
+    device: &ash::Device,
+    cb: vk::CommandBuffer,
+    src: SizedBuffer,
+    dst: SizedBuffer,
+    bytes: u64,
+) {
+    assert!(
+        bytes <= src.1 && bytes <= dst.1,
+        "a copy past a buffer's end"
+    );
+    // SAFETY: both buffers hold at least `bytes` bytes (checked above) and outlive the submission
+    // the command buffer belongs to, which the caller waits for.
+    unsafe {
+        device.cmd_copy_buffer(cb, src.0, dst.0, &[vk::BufferCopy::default().size(bytes)]);
+    }
+}
+
 /// Timestamp queries of a frame: 0 its start, 1 its end (after the read-back copies), and `2 + k`
 /// after pass `k` of [`FramePass::ALL`] where the frame runs it. The samples end where the last
 /// submission starts.
@@ -428,20 +451,13 @@ impl VulkanContext {
             .ok_or_else(|| VulkanError::Invalid("no frame has been rendered yet".into()))?;
         let pixels = u64::from(w) * u64::from(h);
         let res = self.frame.as_ref().expect("a rendered frame has resources");
-        let (src, dst) = (res.replicated.buffer, res.hdr_readback.buffer);
+        let src = (res.replicated.buffer, res.replicated.size);
+        let dst = (res.hdr_readback.buffer, res.hdr_readback.size);
         self.submit_and_wait("the HDR read-back", CHUNK_TIMEOUT, |device, cb| {
             barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
-            // SAFETY: both buffers hold at least `pixels` HDR pixels; the host barrier makes the copy
-            // visible to the mapped read after the fence.
-            unsafe {
-                device.cmd_copy_buffer(
-                    cb,
-                    src,
-                    dst,
-                    &[vk::BufferCopy::default().size(pixels * PIXEL)],
-                );
-                host_read_barrier(device, cb);
-            }
+            record_copy(device, cb, src, dst, pixels * PIXEL);
+            // The host barrier makes the copy visible to the mapped read after the fence.
+            host_read_barrier(device, cb);
         })?;
         let res = self.frame.as_mut().expect("a rendered frame has resources");
         Ok(FrameImage {
@@ -788,17 +804,18 @@ impl VulkanContext {
 
         // Every later pass, then the read-back, in one submission.
         let res = self.frame.as_ref().expect("frame resources exist");
+        let sized = |b: &GpuBuffer| (b.buffer, b.size);
         let (ldr, ldr_rb, hdr, hdr_rb) = (
-            res.ldr.buffer,
-            res.ldr_readback.buffer,
-            res.replicated.buffer,
-            res.hdr_readback.buffer,
+            sized(&res.ldr),
+            sized(&res.ldr_readback),
+            sized(&res.replicated),
+            sized(&res.hdr_readback),
         );
         let raw_rb = res
             .raw_readback
             .as_ref()
             .filter(|_| request.output.wants_raw())
-            .map(|b| b.buffer);
+            .map(sized);
         let (pixels, cells) = (sizes.pixels, sizes.cells);
         let no_chunks = plan.chunks.is_empty();
         let output = request.output;
@@ -813,18 +830,10 @@ impl VulkanContext {
                     if let (FramePass::DenoiseInput, Some(raw_rb)) = (pass, raw_rb) {
                         // The image as the denoiser finds it, copied aside before its output pass
                         // overwrites it.
+                        // The barriers order the copy after the passes that wrote the image and
+                        // before the denoiser's output pass writes it again.
                         barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
-                        // SAFETY: both buffers hold `pixels` HDR pixels; the barriers order the copy
-                        // after the passes that wrote the image and before the denoiser's output
-                        // pass writes it again.
-                        unsafe {
-                            device.cmd_copy_buffer(
-                                cb,
-                                hdr,
-                                raw_rb,
-                                &[vk::BufferCopy::default().size(pixels * PIXEL)],
-                            );
-                        }
+                        record_copy(device, cb, hdr, raw_rb, pixels * PIXEL);
                         memory_barrier(
                             device,
                             cb,
@@ -870,29 +879,19 @@ impl VulkanContext {
                     }
                 }
                 barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
-                // SAFETY: the readback buffers are as large as the images; the host barrier makes the copies
-                // visible to the mapped reads after the fence.
+                // The host barrier makes the copies visible to the mapped reads after the fence.
+                let (want_ldr, want_hdr) = read_back(output);
+                if want_ldr {
+                    record_copy(device, cb, ldr, ldr_rb, pixels * 4);
+                }
+                if want_hdr {
+                    record_copy(device, cb, hdr, hdr_rb, pixels * PIXEL);
+                }
+                if want_ldr || want_hdr {
+                    host_read_barrier(device, cb);
+                }
+                // SAFETY: query 1 of the pool is reset at the frame's start and written once here.
                 unsafe {
-                    let (want_ldr, want_hdr) = read_back(output);
-                    if want_ldr {
-                        device.cmd_copy_buffer(
-                            cb,
-                            ldr,
-                            ldr_rb,
-                            &[vk::BufferCopy::default().size(pixels * 4)],
-                        );
-                    }
-                    if want_hdr {
-                        device.cmd_copy_buffer(
-                            cb,
-                            hdr,
-                            hdr_rb,
-                            &[vk::BufferCopy::default().size(pixels * PIXEL)],
-                        );
-                    }
-                    if want_ldr || want_hdr {
-                        host_read_barrier(device, cb);
-                    }
                     if timed {
                         device.cmd_write_timestamp(
                             cb,
