@@ -31,7 +31,11 @@
 //! **History length.** The history's weight is capped at `(N − 1)` frames (of the larger of the frame's
 //! weight and the history's mean weight per frame), so a frame like the history's count at least
 //! `1 / N`: `N` = [`TemporalParams::max_frames_moving`] (16 by default) while the camera moves,
-//! [`TemporalParams::max_frames_resting`] (4096) while it rests.
+//! [`TemporalParams::max_frames_resting`] (4096) while it rests. While the camera moves the weight is
+//! also capped at [`TemporalParams::max_weight_moving`] samples of the pixel (128): each reprojection
+//! blurs the history a little, and a pixel whose frames already bring many samples (the fovea's 32)
+//! gains less from more frames than it loses to their blur, so it keeps four frames while the
+//! periphery's half a sample a frame keeps sixteen (docs/performance.md, "A dense history stays short").
 //!
 //! **Bad samples.** A non-finite frame value never joins the history (the pixel keeps what it had); a
 //! finite one is clamped to [`HISTORY_SAMPLE_MAX`], so one huge sample cannot dominate a mean forever.
@@ -157,13 +161,20 @@ pub struct TemporalParams {
     /// The fill mode the frame's filled values were made with (`crate::foveation::FILL_*`): which
     /// albedo their samples saw ([`filled_albedo`]).
     pub fill_mode: u32,
-    pub _pad: u32,
+    /// The history's weight cap in samples of the pixel while the camera moves (the frame's own weight
+    /// included); the frame cap applies too.
+    pub max_weight_moving: f32,
 }
 
 /// Default [`TemporalParams::max_frames_resting`]: as many frames as the live view used to average.
 pub const DEFAULT_MAX_FRAMES_RESTING: f32 = 4096.0;
 /// Default [`TemporalParams::max_frames_moving`] (kajiya and SVGF keep 8 to 32 frames).
 pub const DEFAULT_MAX_FRAMES_MOVING: f32 = 16.0;
+/// Default [`TemporalParams::max_weight_moving`]: four frames of the paper's fovea (32 spp), sixteen
+/// or more of every coarser region. Measured on a slow pan of Lost Empire (`tests/tests/temporal.rs`'s
+/// benchmark): a fovea history of 16 frames had 1.4x the error of one of 4, the periphery's error
+/// rose by half with 4.
+pub const DEFAULT_MAX_WEIGHT_MOVING: f32 = 128.0;
 /// Default [`TemporalParams::clamp_gamma`].
 pub const DEFAULT_CLAMP_GAMMA: f32 = 1.5;
 
@@ -193,7 +204,7 @@ impl TemporalParams {
             max_frames_moving: DEFAULT_MAX_FRAMES_MOVING,
             clamp_gamma: DEFAULT_CLAMP_GAMMA,
             fill_mode,
-            _pad: 0,
+            max_weight_moving: DEFAULT_MAX_WEIGHT_MOVING,
         }
     }
 }
@@ -312,16 +323,37 @@ impl ClampBox {
     }
 }
 
+/// The history's caps: `frames` in frames of the larger of the frame's weight and the history's mean
+/// weight per frame, `weight` in samples of the pixel (the new frame's included).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HistoryCap {
+    pub frames: f32,
+    pub weight: f32,
+}
+
+impl HistoryCap {
+    /// A cap of `frames` frames and no weight cap.
+    #[inline]
+    #[must_use]
+    pub const fn frames(frames: f32) -> Self {
+        Self {
+            frames,
+            weight: f32::MAX,
+        }
+    }
+}
+
 /// Merges `sample` into `history` (already reprojected, its weight scaled by its validity): the
-/// footprint rules, the cap of `max_frames` and the clamp of the history's colour into `clamp` (see the
-/// module documentation). A sample of weight 0 leaves the history as it is.
+/// footprint rules, the caps and the clamp of the history's colour into `clamp` (see the module
+/// documentation). A sample of weight 0 leaves the history as it is.
 #[must_use]
 pub fn blend_history(
     history: &HistoryTexel,
     sample: &FrameSample,
-    max_frames: f32,
+    cap: HistoryCap,
     clamp: ClampBox,
 ) -> HistoryTexel {
+    let max_frames = cap.frames;
     if !(sample.weight > 0.0) {
         return *history;
     }
@@ -345,7 +377,9 @@ pub fn blend_history(
     } else {
         w_sample
     };
-    w_history = w_history.min((max_frames - 1.0).max(0.0) * w_sample.max(per_frame));
+    w_history = w_history
+        .min((max_frames - 1.0).max(0.0) * w_sample.max(per_frame))
+        .min((cap.weight - w_sample).max(0.0));
     let mut old = history.lighting();
     let mut old_moments = Vec4::from(history.moments);
     let clamped = old.max(clamp.lo).min(clamp.hi);
@@ -400,18 +434,24 @@ pub fn temporal_accumulate(
     history.mean[3] *= reprojected.validity;
     let sample = frame_sample(frame, filled, gbuffer, temporal.fill_mode, x, y);
     let moved = temporal.flags & TEMPORAL_CAMERA_MOVED != 0;
-    let (max_frames, clamp) = if moved {
+    let (cap, clamp) = if moved {
         // The box is of the frame's radiance around the pixel; the history is compared with it as
         // this pixel's samples would see it.
         (
-            temporal.max_frames_moving,
+            HistoryCap {
+                frames: temporal.max_frames_moving,
+                weight: temporal.max_weight_moving,
+            },
             neighbourhood_box(frame, filled, x, y, 1, temporal.clamp_gamma)
                 .demodulated(sample.albedo),
         )
     } else {
-        (temporal.max_frames_resting, ClampBox::NONE)
+        (
+            HistoryCap::frames(temporal.max_frames_resting),
+            ClampBox::NONE,
+        )
     };
-    blend_history(&history, &sample, max_frames, clamp)
+    blend_history(&history, &sample, cap, clamp)
 }
 
 #[cfg(test)]
@@ -436,7 +476,7 @@ mod tests {
     fn run(samples: &[FrameSample], max_frames: f32) -> HistoryTexel {
         let mut h = HistoryTexel::EMPTY;
         for s in samples {
-            h = blend_history(&h, s, max_frames, ClampBox::NONE);
+            h = blend_history(&h, s, HistoryCap::frames(max_frames), ClampBox::NONE);
         }
         h
     }
@@ -476,7 +516,12 @@ mod tests {
         assert!(h.lighting().x < 2.02, "{h:?}");
         assert!(h.footprint() < 1.01);
         // And the fovea coming back merges with it rather than restarting it.
-        let back = blend_history(&h, &sample(2.0, 32.0, 1.0), 4096.0, ClampBox::NONE);
+        let back = blend_history(
+            &h,
+            &sample(2.0, 32.0, 1.0),
+            HistoryCap::frames(4096.0),
+            ClampBox::NONE,
+        );
         assert!(back.weight() > 350.0);
     }
 
@@ -486,6 +531,31 @@ mod tests {
         let h = run(&samples, 4096.0);
         assert_eq!(h.weight(), 32.0);
         assert_eq!(h.footprint(), 2.0);
+    }
+
+    #[test]
+    fn the_weight_cap_keeps_a_dense_history_short_and_a_sparse_one_long() {
+        let cap = HistoryCap {
+            frames: 16.0,
+            weight: 128.0,
+        };
+        let blend = |w: f32| {
+            let mut h = HistoryTexel::EMPTY;
+            for _ in 0..40 {
+                h = blend_history(&h, &sample(0.0, w, 1.0), cap, ClampBox::NONE);
+            }
+            blend_history(&h, &sample(1.0, w, 1.0), cap, ClampBox::NONE)
+        };
+        // 32 samples a frame: the frame counts 1/4 (four frames of history).
+        let fovea = blend(32.0);
+        assert!((fovea.lighting().x - 0.25).abs() < 1e-6, "{fovea:?}");
+        assert_eq!(fovea.weight(), 128.0);
+        // Half a sample a frame: the frame cap (1/16) binds, not the weight's.
+        let periphery = blend(0.5);
+        assert!(
+            (periphery.lighting().x - 1.0 / 16.0).abs() < 1e-6,
+            "{periphery:?}"
+        );
     }
 
     #[test]
@@ -505,7 +575,12 @@ mod tests {
             lo: Vec3::splat(0.0),
             hi: Vec3::splat(1.0),
         };
-        let h = blend_history(&bright, &sample(0.5, 1.0, 1.0), 16.0, clamp);
+        let h = blend_history(
+            &bright,
+            &sample(0.5, 1.0, 1.0),
+            HistoryCap::frames(16.0),
+            clamp,
+        );
         assert!(h.lighting().x <= 1.0, "{h:?}");
     }
 
@@ -543,7 +618,7 @@ mod tests {
         let after = blend_history(
             &h,
             &frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 0, 0),
-            4096.0,
+            HistoryCap::frames(4096.0),
             ClampBox::NONE,
         );
         assert_eq!(after, h);
@@ -579,7 +654,12 @@ mod tests {
         let filled = vec![[1.0f32; 4]; 64];
         let s = frame_sample(&frame, &filled, &g, FILL_BILINEAR, 6, 6);
         assert!((s.albedo.x - 0.5).abs() < 1e-6 && (s.lighting.x - 2.0).abs() < 1e-5);
-        let h = blend_history(&HistoryTexel::EMPTY, &s, 4096.0, ClampBox::NONE);
+        let h = blend_history(
+            &HistoryTexel::EMPTY,
+            &s,
+            HistoryCap::frames(4096.0),
+            ClampBox::NONE,
+        );
         // Shown with the pixel's own albedo: the checker comes back at full resolution.
         assert!((h.displayed(&g[6 * 8 + 6])[0] - 0.4).abs() < 1e-5);
         assert!((h.displayed(&g[6 * 8 + 7])[0] - 1.6).abs() < 1e-5);
