@@ -4,8 +4,8 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::values::{
-    BlockTriple, DisplayCm, Eccentricity, PixelPoint, Point3, PointLight, RadiiPx, Resolution, Rgb,
-    SppTriple,
+    whole_number, BlockTriple, DisplayCm, Eccentricity, PixelPoint, Point3, PointLight, RadiiPx,
+    Resolution, Rgb, SppTriple,
 };
 
 /// fovea: a foveated real-time path tracer (after Mohanto, Kluge and Staadt 2023).
@@ -93,11 +93,21 @@ pub struct ViewArgs {
     pub scene: Option<PathBuf>,
 
     /// Initial window size (the frame is rendered at the window's size).
-    #[arg(long, default_value = "1280x720", value_name = "WxH")]
+    #[arg(
+        long,
+        default_value = "1280x720",
+        value_name = "WxH",
+        allow_hyphen_values = true
+    )]
     pub size: WindowSize,
     /// Render at this fraction of the window's size (0.1 to 1); the presenter scales the frame up.
     /// Trades sharpness for speed where the per-pixel passes alone exceed the budget.
-    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "S",
+        allow_hyphen_values = true
+    )]
     pub render_scale: f32,
     /// Where the gaze comes from: `mouse` (the pointer), `udp:PORT` (an eye tracker sending `t,x,y`
     /// datagrams to 127.0.0.1:PORT; see docs/view.md, "Eye-tracker protocol") or `trace` (--gaze-trace).
@@ -114,13 +124,23 @@ pub struct ViewArgs {
     /// Fixation filter for eye-tracker gaze (udp and trace): I-DT with this dispersion radius in
     /// degrees of visual angle on the display model; the regions sit on each fixation's centroid and
     /// jump at saccades. 0 follows every raw sample.
-    #[arg(long, default_value_t = 1.0, value_name = "DEG")]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "DEG",
+        allow_hyphen_values = true
+    )]
     pub fixation_filter: f32,
     #[command(flatten)]
     pub foveation: FoveationArgs,
     /// Frame-time budget in milliseconds: frames that would take longer render a fraction of the
     /// configuration's samples and accumulation completes it while the eye rests (0: no budget).
-    #[arg(long, default_value_t = 33.0, value_name = "MS")]
+    #[arg(
+        long,
+        default_value_t = 33.0,
+        value_name = "MS",
+        allow_hyphen_values = true
+    )]
     pub budget_ms: f64,
     #[command(flatten)]
     pub image: ImageArgs,
@@ -143,10 +163,10 @@ pub struct ViewArgs {
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
     /// Exit (status 0) after this many frames.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole_number::<u64>)]
     pub exit_after_frames: Option<u64>,
     /// Take a screenshot after frame K (repeat for several).
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", allow_hyphen_values = true, value_parser = whole_number::<u64>)]
     pub screenshot_at_frame: Vec<u64>,
     /// Folder for screenshots (P key): fovea_view_FRAME.png, .exr, _regions.png and .json.
     #[arg(long, default_value = "screenshots", value_name = "DIR")]
@@ -227,7 +247,12 @@ pub struct RenderArgs {
     pub scene: Option<PathBuf>,
 
     /// Image size WxH in pixels.
-    #[arg(long, default_value = "1920x1080", value_name = "WxH")]
+    #[arg(
+        long,
+        default_value = "1920x1080",
+        value_name = "WxH",
+        allow_hyphen_values = true
+    )]
     pub resolution: Resolution,
     /// Fixation in pixels X,Y (default: the image centre). A gaze off the image is allowed.
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
@@ -238,7 +263,12 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE.csv")]
     pub gaze_trace: Option<PathBuf>,
     /// Frames per second at which a timed gaze trace (`t,x,y`) is rendered.
-    #[arg(long, default_value_t = 30.0, value_name = "FPS")]
+    #[arg(
+        long,
+        default_value_t = 30.0,
+        value_name = "FPS",
+        allow_hyphen_values = true
+    )]
     pub trace_fps: f64,
     /// The gaze trace's x,y are 0..1 of the image (origin top-left), as `fovea view` reads them.
     #[arg(long)]
@@ -267,7 +297,12 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub image: ImageArgs,
     /// Frame index (part of the random-number key).
-    #[arg(long, default_value_t = 0, value_name = "N")]
+    #[arg(
+        long,
+        default_value_t = 0,
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
     pub frame: u32,
     #[command(flatten)]
     pub camera: CameraArgs,
@@ -310,29 +345,29 @@ pub struct ReportArgs {
     #[arg(long, default_value = "report", value_name = "DIR")]
     pub out: PathBuf,
     /// Image size WxH in pixels (default 3840x2160, the paper's; 320x180 with --quick).
-    #[arg(long, value_name = "WxH")]
+    #[arg(long, value_name = "WxH", allow_hyphen_values = true)]
     pub resolution: Option<Resolution>,
     /// Fixation in pixels X,Y (default: the image centre).
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
     pub gaze: Option<PixelPoint>,
     /// Your own samples per pixel / block, measured as one more configuration (with --blocks,
     /// --radii, --eccentricity; the others default to the paper's).
-    #[arg(long, value_name = "F,I,P")]
+    #[arg(long, value_name = "F,I,P", allow_hyphen_values = true)]
     pub spp: Option<SppTriple>,
     /// Block edges of your own configuration.
-    #[arg(long, value_name = "F,I,P")]
+    #[arg(long, value_name = "F,I,P", allow_hyphen_values = true)]
     pub blocks: Option<BlockTriple>,
     /// Region radii in pixels of your own configuration (instead of --eccentricity).
-    #[arg(long, value_name = "R1,R2")]
+    #[arg(long, value_name = "R1,R2", allow_hyphen_values = true)]
     pub radii: Option<RadiiPx>,
     /// Timed runs per configuration; the median render time is reported (default 3; 1 with --quick).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub runs: Option<u32>,
     /// Samples per pixel of the converged reference (default 1024; 256 with --quick).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub reference_spp: Option<u32>,
     /// Largest spp of the uniform sweep 1, 2, 4, ... (default 64; 8 with --quick).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub sweep_max: Option<u32>,
     /// The diffuse lobe of purely diffuse MTL materials (as for `render`).
     #[arg(long, value_enum, default_value = "disney")]
@@ -354,16 +389,26 @@ pub struct ReportArgs {
     #[arg(long, value_name = "FILE.csv")]
     pub gaze_trace: Option<PathBuf>,
     /// Frames per second at which a timed gaze trace (`t,x,y`) is rendered.
-    #[arg(long, default_value_t = 30.0, value_name = "FPS")]
+    #[arg(
+        long,
+        default_value_t = 30.0,
+        value_name = "FPS",
+        allow_hyphen_values = true
+    )]
     pub trace_fps: f64,
     /// The gaze trace's x,y are 0..1 of the image (origin top-left).
     #[arg(long)]
     pub gaze_normalized: bool,
     /// Render at most this many frames of the gaze trace.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub sequence_frames: Option<u32>,
     /// Width of the eccentricity bands the sequence's error is pooled in, in degrees.
-    #[arg(long, default_value_t = 1.0, value_name = "DEG")]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "DEG",
+        allow_hyphen_values = true
+    )]
     pub band_deg: f32,
     /// Do not score the sequence with FovVideoVDP even where scripts/setup-fvvdp.sh has set it up.
     #[arg(long)]
@@ -380,7 +425,12 @@ pub struct ReportArgs {
     )]
     pub exposure: f32,
     /// Seed of the test renders (the reference uses a different one, so its noise is independent).
-    #[arg(long, default_value_t = 0, value_name = "N")]
+    #[arg(
+        long,
+        default_value_t = 0,
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
     pub seed: u32,
     #[command(flatten)]
     pub camera: CameraArgs,
@@ -403,14 +453,14 @@ pub struct BackendArgs {
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: Backend,
     /// Vulkan device index (see `fovea devices`); default: the first discrete, else integrated GPU.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole_number::<usize>)]
     pub device: Option<usize>,
     /// Ray traversal on a Vulkan device: `hardware` uses the driver's acceleration structures
     /// (VK_KHR_ray_query), `software` the kernel's BVH, `auto` hardware on a GPU that has ray queries.
     #[arg(long, value_enum, default_value = "auto")]
     pub traversal: Traversal,
     /// Worker threads of the CPU backend (default: all cores).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole_number::<usize>)]
     pub threads: Option<usize>,
 }
 
@@ -418,10 +468,15 @@ pub struct BackendArgs {
 #[derive(Args, Debug, Clone)]
 pub struct PathArgs {
     /// Bounces per path (3: camera -> x1 -> x2 -> x3 -> light; at most 64).
-    #[arg(long, default_value_t = 3, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=64))]
+    #[arg(long, default_value_t = 3, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=64), allow_hyphen_values = true)]
     pub depth: u32,
     /// Russian roulette from this bounce on (0: off).
-    #[arg(long, default_value_t = 0, value_name = "N")]
+    #[arg(
+        long,
+        default_value_t = 0,
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
     pub russian_roulette: u32,
     /// How block pixels are filled.
     #[arg(long, value_enum, default_value = "bilinear")]
@@ -487,7 +542,7 @@ pub struct CameraArgs {
     )]
     pub up: Point3,
     /// Vertical field of view in degrees.
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub fov: Option<f32>,
 }
 
@@ -542,13 +597,23 @@ pub struct FoveationArgs {
     pub uniform: bool,
     /// Samples per pixel (fovea) and per block (intermediate, periphery); in `view`, the first
     /// configuration C cycles through.
-    #[arg(long, default_value = "32,16,8", value_name = "F,I,P")]
+    #[arg(
+        long,
+        default_value = "32,16,8",
+        value_name = "F,I,P",
+        allow_hyphen_values = true
+    )]
     pub spp: SppTriple,
     /// Block edge in pixels per region; each must divide the next.
-    #[arg(long, default_value = "1,2,4", value_name = "F,I,P")]
+    #[arg(
+        long,
+        default_value = "1,2,4",
+        value_name = "F,I,P",
+        allow_hyphen_values = true
+    )]
     pub blocks: BlockTriple,
     /// Region radii in pixels (instead of eccentricity angles).
-    #[arg(long, value_name = "R1,R2")]
+    #[arg(long, value_name = "R1,R2", allow_hyphen_values = true)]
     pub radii: Option<RadiiPx>,
     #[command(flatten)]
     pub display: DisplayArgs,
@@ -567,7 +632,12 @@ pub struct ImageArgs {
     )]
     pub exposure: f32,
     /// Seed of all random numbers.
-    #[arg(long, default_value_t = 0, value_name = "N")]
+    #[arg(
+        long,
+        default_value_t = 0,
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
     pub seed: u32,
 }
 
@@ -587,13 +657,28 @@ pub struct MtlArgs {
 #[derive(Args, Debug, Clone)]
 pub struct DisplayArgs {
     /// Eccentricity angles in degrees bounding the fovea and the intermediate region.
-    #[arg(long, default_value = "5.2,17", value_name = "E1,E2")]
+    #[arg(
+        long,
+        default_value = "5.2,17",
+        value_name = "E1,E2",
+        allow_hyphen_values = true
+    )]
     pub eccentricity: Eccentricity,
     /// Physical display size in centimetres (the image fills it, whatever --resolution is).
-    #[arg(long, default_value = "70.848x39.852", value_name = "WxH")]
+    #[arg(
+        long,
+        default_value = "70.848x39.852",
+        value_name = "WxH",
+        allow_hyphen_values = true
+    )]
     pub display_cm: DisplayCm,
     /// Viewing distance in centimetres.
-    #[arg(long, default_value_t = 60.0, value_name = "D")]
+    #[arg(
+        long,
+        default_value_t = 60.0,
+        value_name = "D",
+        allow_hyphen_values = true
+    )]
     pub distance_cm: f32,
 }
 
@@ -603,7 +688,7 @@ pub struct BenchArgs {
     #[command(subcommand)]
     pub what: BenchCommand,
     /// Worker threads (default: all cores).
-    #[arg(long, global = true, value_name = "N")]
+    #[arg(long, global = true, value_name = "N", allow_hyphen_values = true, value_parser = whole_number::<usize>)]
     pub threads: Option<usize>,
     /// Also write the figures as JSON to this file.
     #[arg(long, global = true, value_name = "FILE")]
@@ -644,7 +729,12 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 10_000_000)]
         triangles: u64,
         /// Image size WxH.
-        #[arg(long, default_value = "3840x2160", value_name = "WxH")]
+        #[arg(
+            long,
+            default_value = "3840x2160",
+            value_name = "WxH",
+            allow_hyphen_values = true
+        )]
         resolution: Resolution,
     },
 }

@@ -49,12 +49,23 @@ pub fn check_output_path(path: &Path, what: &'static str, allow_exr: bool) -> Re
     };
     let dir = parent_dir(path);
     if !dir.is_dir() {
-        return Err(FoveaError::option(
-            what,
-            format!("the folder '{}' does not exist", dir.display()),
-        ));
+        return Err(FoveaError::option(what, missing_folder(&dir)));
     }
     Ok(format)
+}
+
+/// Why the folder `dir` cannot take an output file: a path through a file names that file, else the
+/// folder does not exist.
+#[must_use]
+pub fn missing_folder(dir: &Path) -> String {
+    match dir.ancestors().find(|a| a.is_file()) {
+        Some(file) => format!(
+            "'{}' is a file, so '{}' cannot be a folder",
+            file.display(),
+            dir.display()
+        ),
+        None => format!("the folder '{}' does not exist", dir.display()),
+    }
 }
 
 fn parent_dir(path: &Path) -> PathBuf {
@@ -81,10 +92,7 @@ pub fn check_json_path(p: &Path, option: &'static str) -> Result<()> {
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
     if !dir.is_dir() {
-        return Err(FoveaError::option(
-            option,
-            format!("the folder '{}' does not exist", dir.display()),
-        ));
+        return Err(FoveaError::option(option, missing_folder(dir)));
     }
     Ok(())
 }

@@ -27,11 +27,28 @@ fn split<T: FromStr + Copy + Default, const N: usize>(
     }
     let mut out = [T::default(); N];
     for (slot, part) in out.iter_mut().zip(&parts) {
-        *slot = part
-            .parse()
-            .map_err(|_| format!("'{part}' is not a valid number"))?;
+        *slot = part.parse().map_err(|_| not_a_number(part))?;
     }
     Ok(out)
+}
+
+/// Why `text` did not parse as the number an option wanted: negative, fractional or too large for a
+/// whole number, or no number at all.
+fn not_a_number(text: &str) -> String {
+    match text.parse::<f64>() {
+        Ok(v) if v < 0.0 => format!("'{text}' is negative"),
+        Ok(v) if v.is_finite() && v.fract() != 0.0 => format!("'{text}' is not a whole number"),
+        Ok(v) if !v.is_nan() => format!("'{text}' is too large"),
+        _ => format!("'{text}' is not a valid number"),
+    }
+}
+
+/// A whole number of type `T` (a count or an index: `--threads`, `--device`), with fovea's messages
+/// for a negative, fractional or too large one rather than the parser's "invalid digit".
+pub fn whole_number<T: FromStr + TryFrom<u64>>(text: &str) -> Result<T, String> {
+    let text = text.trim();
+    let v: u64 = text.parse().map_err(|_| not_a_number(text))?;
+    T::try_from(v).map_err(|_| format!("'{text}' is too large"))
 }
 
 /// `N` finite floats separated by `sep`.
@@ -77,11 +94,13 @@ macro_rules! typed_value {
 typed_value!(
     /// `WxH`, each edge 1 to [`MAX_IMAGE_EDGE`] pixels.
     Resolution([u32; 2]) = |s| {
-        let [w, h]: [u32; 2] = split(&s.to_ascii_lowercase(), 'x')?;
-        if w == 0 || h == 0 || w > MAX_IMAGE_EDGE || h > MAX_IMAGE_EDGE {
+        // Parsed wide, so that a negative or huge edge gets the range message too.
+        let [w, h]: [i64; 2] = split(&s.to_ascii_lowercase(), 'x')?;
+        let edge = 1..=i64::from(MAX_IMAGE_EDGE);
+        if !edge.contains(&w) || !edge.contains(&h) {
             return Err(format!("out of range (each edge 1 to {MAX_IMAGE_EDGE} pixels)"));
         }
-        Ok([w, h])
+        Ok([w as u32, h as u32])
     }
 );
 
@@ -89,21 +108,22 @@ typed_value!(
     /// `F,I,P`: samples per fovea pixel, intermediate block and periphery block, each 1 to
     /// [`MAX_SPP`].
     SppTriple([u32; 3]) = |s| {
-        let v: [u32; 3] = split(s, ',')?;
-        if v.iter().any(|&x| x == 0 || x > MAX_SPP) {
+        let v: [i64; 3] = split(s, ',')?;
+        if v.iter().any(|&x| !(1..=i64::from(MAX_SPP)).contains(&x)) {
             return Err(format!("each value must be 1 to {MAX_SPP}"));
         }
-        Ok(v)
+        Ok(v.map(|x| x as u32))
     }
 );
 
 typed_value!(
     /// `F,I,P`: block edges in pixels per region, each 1 to [`MAX_BLOCK_EDGE`] and dividing the next.
     BlockTriple([u32; 3]) = |s| {
-        let v: [u32; 3] = split(s, ',')?;
-        if v.iter().any(|&x| x == 0 || x > MAX_BLOCK_EDGE) {
+        let v: [i64; 3] = split(s, ',')?;
+        if v.iter().any(|&x| !(1..=i64::from(MAX_BLOCK_EDGE)).contains(&x)) {
             return Err(format!("each block edge must be 1 to {MAX_BLOCK_EDGE}"));
         }
+        let v = v.map(|x| x as u32);
         if !v[1].is_multiple_of(v[0]) || !v[2].is_multiple_of(v[1]) {
             return Err(
                 "each block edge must divide the next (fovea | intermediate | periphery)".into(),
@@ -278,6 +298,25 @@ mod tests {
         assert!("1,3,4".parse::<BlockTriple>().is_err());
         assert!("1,2,4".parse::<BlockTriple>().is_ok());
         assert!("1,nan".parse::<PixelPoint>().is_err());
+        // Negative and huge values get the range message; a fraction or a word says what it is.
+        let err = |e: Result<SppTriple, String>| e.unwrap_err();
+        assert_eq!(err("-1,2,3".parse()), "each value must be 1 to 1048576");
+        assert_eq!(
+            err("99999999999,1,1".parse()),
+            "each value must be 1 to 1048576"
+        );
+        assert_eq!(err("2.5,1,1".parse()), "'2.5' is not a whole number");
+        assert_eq!(err("x,1,1".parse()), "'x' is not a valid number");
+        assert!("-5x10"
+            .parse::<Resolution>()
+            .unwrap_err()
+            .contains("out of range"));
+        assert_eq!(whole_number::<usize>("-2").unwrap_err(), "'-2' is negative");
+        assert_eq!(
+            whole_number::<u32>("4294967296").unwrap_err(),
+            "'4294967296' is too large"
+        );
+        assert_eq!(whole_number::<u32>("7"), Ok(7));
         assert!("1e9,0".parse::<PixelPoint>().is_err());
         assert!("-100,5000".parse::<PixelPoint>().is_ok());
         assert!("5,2".parse::<RadiiPx>().is_err());

@@ -171,6 +171,30 @@ fn bad_input_fails_cleanly() {
         .output()
         .unwrap();
     assert!(String::from_utf8_lossy(&out.stderr).contains("does not exist"));
+    // A path through a file is named as such, not as a missing folder.
+    let through_file = Path::new(scene).join("x.png");
+    let out = fovea()
+        .args(["render", scene, "-o"])
+        .arg(&through_file)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("is a file"), "{stderr}");
+    // Negative and huge numbers get fovea's range messages, not clap's tip to write `-- -1`.
+    expect_failure(&[scene, "--spp", "-1,2,3"], "each value must be 1 to", &png);
+    expect_failure(
+        &[scene, "--spp", "99999999999,1,1"],
+        "each value must be 1 to",
+        &png,
+    );
+    expect_failure(&[scene, "--resolution", "-5x10"], "out of range", &png);
+    expect_failure(&[scene, "--seed", "-1"], "is not in 0..=", &png);
+    expect_failure(&[scene, "--threads", "-2"], "'-2' is negative", &png);
+    expect_failure(
+        &[scene, "--threads", "99999999999999999999999"],
+        "is too large",
+        &png,
+    );
     let trace = dir.join("trace.csv");
     std::fs::write(&trace, "0,1,2\n1,x,2\n").unwrap();
     let out = fovea()
