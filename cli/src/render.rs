@@ -265,6 +265,8 @@ fn frame_path(path: &Path, frame: u32) -> PathBuf {
 pub fn run(args: &RenderArgs) -> Result<()> {
     let wall = Instant::now();
     let plan = plan(args)?;
+    // The command line's warnings (the scene's are in `scene.warnings`), for `--stats` too.
+    let mut run_warnings = plan.warnings.clone();
     if !args.quiet {
         for w in &plan.warnings {
             eprintln!("warning: {w}");
@@ -317,10 +319,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         );
     }
     if scene.packed.lights.list.is_empty() {
-        eprintln!(
-            "warning: the scene has no light and no sky: the image will be black (add --sky R,G,B \
-             or --point-light X,Y,Z,R,G,B)"
-        );
+        let w = "the scene has no light and no sky: the image will be black (add --sky R,G,B or \
+                 --point-light X,Y,Z,R,G,B)";
+        eprintln!("warning: {w}");
+        run_warnings.push(w.to_string());
     }
 
     let [w, h] = plan.resolution;
@@ -443,6 +445,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         plan.radii_px,
         plan.resolution,
         &scene,
+        &run_warnings,
         &frames,
         wall_ms,
     );

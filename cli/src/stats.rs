@@ -43,6 +43,7 @@ pub fn build_report(
     radii_px: [f32; 2],
     resolution: [u32; 2],
     scene: &PreparedScene,
+    run_warnings: &[String],
     frames: &[FrameStats],
     wall_ms: f64,
 ) -> Value {
@@ -92,7 +93,8 @@ pub fn build_report(
         "wall_ms": wall_ms,
         "paths_per_second": first.render.primary_samples as f64 / (render_ms / 1e3).max(1e-9),
         "frames": frame_list,
-        "warnings": scene.warnings,
+        // Every warning the run printed: the command line's first, then the scene's.
+        "warnings": run_warnings.iter().chain(&scene.warnings).collect::<Vec<_>>(),
         "backend_details": backend_details,
     })
 }

@@ -494,9 +494,12 @@ fn ignored_option_combinations_are_refused_or_warned() {
         &png,
     );
     let exr = dir.join("x.exr");
+    let stats = dir.join("warned.json");
     let out = fovea()
         .args(["render", scene, "--backend", "cpu", "--resolution", "32x24"])
-        .args(["--uniform", "--spp", "2,4,4", "--exposure", "1", "-o"])
+        .args(["--uniform", "--spp", "2,4,4", "--exposure", "1", "--stats"])
+        .arg(&stats)
+        .arg("-o")
         .arg(&exr)
         .output()
         .unwrap();
@@ -509,6 +512,19 @@ fn ignored_option_combinations_are_refused_or_warned() {
     assert!(
         stderr.contains("--exposure") && stderr.contains("EXR"),
         "{stderr}"
+    );
+    // `--stats` lists the warnings the command line got, not only the scene's.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let warnings: Vec<&str> = json["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|w| w.as_str())
+        .collect();
+    assert!(
+        warnings.iter().any(|w| w.contains("--exposure")),
+        "{warnings:?}"
     );
     let out = fovea()
         .args(["render", scene, "--backend", "cpu", "--resolution", "32x32"])

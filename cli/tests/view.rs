@@ -175,6 +175,9 @@ fn the_window_presents_frames_whose_fovea_sits_at_the_scripted_gaze() {
     assert_eq!(json["summary"]["frames"], 5);
     assert_eq!(json["summary"]["presented"], 5, "every frame is presented");
     assert_eq!(json["run"]["backend"], "vulkan");
+    // The run records the traversal it was asked for and the warnings it printed (none here).
+    assert_eq!(json["run"]["traversal"], "auto");
+    assert_eq!(json["run"]["warnings"], serde_json::json!([]));
     for f in frames(&json) {
         assert_eq!(gaze(f), [40.0, 60.0]);
         assert_eq!(f["window"], serde_json::json!([160, 120]));

@@ -8,6 +8,7 @@
 //! disocclusion restarts it there), a new configuration or the uniform toggle only changes the next
 //! samples. It restarts only when the rendered size changes or on `R`. After
 //! [`MAX_ACCUMULATED_FRAMES`] frames with nothing changing, the view stops rendering and waits.
+use clap::ValueEnum;
 use std::collections::HashSet;
 use std::time::{Duration, Instant};
 
@@ -71,7 +72,7 @@ pub fn run(options: ViewOptions) -> Result<()> {
             }
         },
     };
-    let scene = prepare_scene(
+    let mut scene = prepare_scene(
         options.scene.as_deref(),
         options.mtl.as_deref(),
         options.mtl_diffuse,
@@ -80,10 +81,11 @@ pub fn run(options: ViewOptions) -> Result<()> {
         !use_gpu,
     )?;
     if scene.packed.lights.list.is_empty() {
-        eprintln!(
-            "warning: the scene has no light and no sky: the image will be black (add --sky R,G,B \
-             or --point-light X,Y,Z,R,G,B)"
-        );
+        let w = "the scene has no light and no sky: the image will be black (add --sky R,G,B or \
+                 --point-light X,Y,Z,R,G,B)";
+        eprintln!("warning: {w}");
+        // `--stats` lists it with the scene's own warnings.
+        scene.warnings.insert(0, w.to_string());
     }
     let event_loop = EventLoop::new().map_err(|e| {
         FoveaError::View(format!(
@@ -830,6 +832,8 @@ impl Viewer {
                 "present_mode": self.present_mode,
                 "upload_ms": renderer.map(|r| r.upload_ms),
                 "scene": self.options.scene,
+                "traversal": self.options.traversal.to_possible_value().map(|v| v.get_name().to_string()),
+                "warnings": self.scene.warnings,
                 "triangles": self.scene.triangle_count,
                 "gaze_source": self.options.gaze.describe(),
                 "malformed_gaze_datagrams": malformed,
