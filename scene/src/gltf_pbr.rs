@@ -8,7 +8,7 @@
 //! |---|---|
 //! | `KHR_materials_transmission` (`transmissionFactor`) | `transmission`: the rough dielectric interface of `fovea_core::bsdf::dielectric` (GGX refraction, Walter et al. 2007) with the material's roughness and `ior`, tinted by the base colour, in place of the non-metallic base |
 //! | `KHR_materials_volume` (`thicknessFactor` > 0) | the mesh is a closed volume: its front faces are the outside of the interface, and `attenuationColor`/`attenuationDistance` give its inside's absorption (`Material::absorption`, Beer–Lambert, [`absorption_coefficient`]). Without the extension glTF means a thin wall: `MATERIAL_THIN_WALLED`, straight-through transmission (`RoughDielectric::thin`) |
-//! | `KHR_materials_ior` (`ior`) | `specular` = F0 / 0.08 with F0 = ((ior − 1) / (ior + 1))² (Burley's dielectric F0 is 0.08 · specular; ior 1.5 gives 0.5; clamped at 1, i.e. ior 1.78) |
+//! | `KHR_materials_ior` (`ior`) | `specular` = F0 / 0.08 with F0 = ((ior − 1) / (ior + 1))² (Burley's dielectric F0 is 0.08 · specular; ior 1.5 gives 0.5, diamond's 2.4 gives 2.1); `ior: 0`, an infinite index, is F0 = 1 (`SPECULAR_MAX`) and transmits nothing; other values below 1 are warned about and read as 1 |
 //! | `KHR_materials_specular` (`specularFactor`, `specularColorFactor`) | F0 above × `specularFactor` × the colour's largest component (Burley's specular is not coloured) |
 //! | `KHR_materials_clearcoat` (`clearcoatFactor`, `clearcoatRoughnessFactor`) | `clearcoat`, `clearcoat_gloss` = 1 − roughness |
 //! | `KHR_materials_sheen` (`sheenColorFactor`) | `sheen` = the colour's largest component, `sheen_tint` 0 (`sheenRoughnessFactor` has no Burley counterpart) |
@@ -25,6 +25,7 @@
 //! What a material asks for and fovea cannot render (`sheenRoughnessTexture`, `clearcoatNormalTexture`,
 //! the anisotropy direction, iridescence, dispersion) is returned as [`Unsupported`] notes: the loader
 //! warns once per extension, naming the materials.
+use fovea_core::bsdf::disney::SPECULAR_MAX;
 use fovea_core::scene::{Material, MATERIAL_LAMBERTIAN, MATERIAL_THIN_WALLED, MATERIAL_UNLIT};
 use gltf::json::Value;
 
@@ -133,14 +134,19 @@ pub fn coordinate_set(tex_coord: u32, transform: Option<&TextureTransform>) -> u
     transform.and_then(|t| t.tex_coord).unwrap_or(tex_coord)
 }
 
-/// Burley's `specular` for a dielectric of index `ior` and a glTF specular weight: F0 / 0.08, clamped to
-/// [0, 1].
+/// Burley's `specular` for a dielectric of index `ior` and a glTF specular weight: F0 / 0.08, with
+/// F0 = ((ior − 1) / (ior + 1))² · weight at most 1. `KHR_materials_ior`'s `ior: 0` means an infinite
+/// index, F0 = 1 (what converted specular-glossiness assets use); other values below 1 are invalid and
+/// read as 1 (the loader warns).
 #[must_use]
 pub fn specular_from_ior(ior: f32, weight: f32) -> f32 {
-    // glTF: ior 0 is not a valid index; treat values below 1 as 1 (no reflection).
-    let ior = ior.max(1.0);
-    let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
-    (f0 * weight / 0.08).clamp(0.0, 1.0)
+    let f0 = if ior == 0.0 {
+        1.0
+    } else {
+        let ior = ior.max(1.0);
+        ((ior - 1.0) / (ior + 1.0)).powi(2)
+    };
+    ((f0 * weight).min(1.0) / 0.08).clamp(0.0, SPECULAR_MAX)
 }
 
 /// A material field that one of the extensions' textures fills.
@@ -247,6 +253,13 @@ pub fn apply_material_extensions(
     let ior = extensions
         .get("KHR_materials_ior")
         .map_or(1.5, |e| number(e, "ior", 1.5));
+    // The spec allows 0 (an infinite index) and 1 upwards.
+    if ior != 0.0 && !(ior >= 1.0) {
+        out.unsupported.push(Unsupported::new(
+            "KHR_materials_ior",
+            &format!("ior {ior} is neither 0 nor at least 1 (the spec's values); read as 1"),
+        ));
+    }
     let mut specular_weight = 1.0;
     if let Some(e) = extensions.get("KHR_materials_specular") {
         let colour = rgb(e, "specularColorFactor", [1.0; 3]);
@@ -274,7 +287,12 @@ pub fn apply_material_extensions(
         material.specular = specular_from_ior(ior, specular_weight);
     }
     if let Some(e) = extensions.get("KHR_materials_transmission") {
-        material.transmission = number(e, "transmissionFactor", 0.0).clamp(0.0, 1.0);
+        // ior 0: Fresnel 1 reflects everything, so nothing is transmitted.
+        material.transmission = if ior == 0.0 {
+            0.0
+        } else {
+            number(e, "transmissionFactor", 0.0).clamp(0.0, 1.0)
+        };
         // glTF allows 1 (no refraction); the dielectric needs a little above it.
         material.ior = ior.max(1.01);
         texture(
@@ -400,11 +418,22 @@ mod tests {
             apply(r#"{"KHR_materials_ior":{"ior":1.0}}"#).0.specular,
             0.0
         );
-        // Beyond what Burley's specular reaches: clamped.
-        assert_eq!(
-            apply(r#"{"KHR_materials_ior":{"ior":2.4}}"#).0.specular,
-            1.0
+        // Beyond Burley's 1: diamond's F0 of 0.17.
+        let diamond = apply(r#"{"KHR_materials_ior":{"ior":2.4}}"#).0.specular;
+        assert!(
+            (diamond - (1.4f32 / 3.4).powi(2) / 0.08).abs() < 1e-5,
+            "{diamond}"
         );
+        // ior 0: an infinite index, Fresnel 1 (F0 = 1), and nothing transmits.
+        let (m, notes) = apply(
+            r#"{"KHR_materials_ior":{"ior":0},"KHR_materials_transmission":{"transmissionFactor":1}}"#,
+        );
+        assert_eq!((m.specular, m.transmission), (SPECULAR_MAX, 0.0));
+        assert!(notes.is_empty(), "{notes:?}");
+        // Between 0 and 1 the index is invalid: read as 1, with a warning naming it.
+        let (m, notes) = apply(r#"{"KHR_materials_ior":{"ior":0.5}}"#);
+        assert_eq!(m.specular, 0.0);
+        assert!(notes.iter().any(|n| n.what.contains("0.5")), "{notes:?}");
     }
 
     #[test]

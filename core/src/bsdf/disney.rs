@@ -59,6 +59,9 @@ pub struct DisneyParams {
     /// Perceptual roughness; GGX alpha = roughness².
     pub roughness: f32,
     pub anisotropic: f32,
+    /// The dielectric reflectance at normal incidence over 0.08 (Burley: 0.5 is an index of 1.5),
+    /// 0 to [`SPECULAR_MAX`]; above Burley's 1 for indices above 1.78, and at the maximum for glTF's
+    /// `ior: 0` (an infinite index: F0 = 1, and the layering leaves the base nothing).
     pub specular: f32,
     pub specular_tint: f32,
     pub sheen: f32,
@@ -265,6 +268,9 @@ impl Lobes {
     }
 }
 
+/// The largest [`DisneyParams::specular`]: F0 = 0.08 · specular reaches 1.
+pub const SPECULAR_MAX: f32 = 12.5;
+
 /// Clearcoat's fixed GGX alpha for masking-shadowing (Burley's `smithG_GGX(·, 0.25)`).
 const CLEARCOAT_G_ALPHA: f32 = 0.25;
 
@@ -326,7 +332,7 @@ impl DisneyParams {
         let specular_tint = self.specular_tint.clamp(0.0, 1.0);
         let specular_on = features.has(FEATURE_LOBE_SPECULAR);
         let cspec0 = if specular_on {
-            (Vec3::ONE.lerp(tint, specular_tint) * (0.08 * self.specular.clamp(0.0, 1.0)))
+            (Vec3::ONE.lerp(tint, specular_tint) * (0.08 * self.specular.clamp(0.0, SPECULAR_MAX)))
                 .lerp(base, metallic)
         } else {
             Vec3::ZERO
@@ -963,6 +969,26 @@ mod tests {
             (f.x * PI * (1.0 + 1.0 / 42.0 + 1.0 / 84.0) - 1.0).abs() < 1e-5,
             "{f}"
         );
+    }
+
+    #[test]
+    fn a_dielectric_of_infinite_index_reflects_like_a_white_metal() {
+        // glTF's `ior: 0`: F0 = 1, so the base layer underneath gets nothing.
+        let mut dielectric = DisneyParams::diffuse(Vec3::new(0.8, 0.3, 0.1));
+        dielectric.roughness = 0.4;
+        dielectric.specular = SPECULAR_MAX;
+        let mut metal = DisneyParams::diffuse(Vec3::ONE);
+        metal.roughness = 0.4;
+        metal.metallic = 1.0;
+        let mut rng = Rng(5);
+        for _ in 0..50 {
+            let (wo, wi) = (rng.upper_dir(), rng.upper_dir());
+            let (a, b) = (dielectric.eval(wo, wi), metal.eval(wo, wi));
+            assert!(
+                (a - b).abs().max_element() <= 1e-5 * b.max_element().max(1.0),
+                "{a} vs {b}"
+            );
+        }
     }
 
     #[test]
