@@ -23,6 +23,10 @@
 //! linear magnification, and whether it gets mip levels (not for `minFilter` `NEAREST`/`LINEAR`). The PBR
 //! extensions are mapped in [`crate::gltf_pbr`].
 //!
+//! Morph targets (positions, normals, tangents) are applied with the node's `weights`, else the
+//! mesh's defaults: the static pose the file describes. Skins are drawn in their bind pose, and
+//! `COLOR_0` and animations are not read; each gets a warning naming it.
+//!
 //! Only `TEXCOORD_0` is read (a texture asking for another set gets a warning and uses set 0);
 //! `occlusionTexture` is ignored. Images are decoded by [`crate::texture`] with the option's limits: from a
 //! buffer view, a data URI or an external file (missing file: a warning, and the material keeps its
@@ -47,6 +51,24 @@ use crate::error::SceneError;
 use crate::mesh::{CameraDesc, LoadOptions, LoadedScene};
 use crate::source::{FileSource, Filesystem};
 use crate::texture::{decode_texture_bytes, load_texture_from, TextureLimits, TextureRole};
+
+/// A primitive's morphed displacements per vertex: each list empty (nothing moves) or one per vertex.
+#[derive(Default)]
+struct MorphDisplacements {
+    positions: Vec<[f32; 3]>,
+    normals: Vec<[f32; 3]>,
+    tangents: Vec<[f32; 3]>,
+}
+
+impl MorphDisplacements {
+    fn normal(&self, i: usize) -> Vec3 {
+        self.normals.get(i).map_or(Vec3::ZERO, |&n| Vec3::from(n))
+    }
+
+    fn tangent(&self, i: usize) -> Vec3 {
+        self.tangents.get(i).map_or(Vec3::ZERO, |&t| Vec3::from(t))
+    }
+}
 
 /// The glTF extensions the loader reads whole; the material extensions of
 /// [`crate::gltf_pbr::MAPPED_EXTENSIONS`] are read in part (see there).
@@ -106,6 +128,12 @@ pub fn load_gltf_from(
         unsupported: std::collections::BTreeMap::new(),
     };
     loader.walk()?;
+    let animations = document.animations().count();
+    if animations > 0 {
+        loader.warn(format!(
+            "{animations} animation(s) are not played: the scene is drawn as its nodes stand"
+        ));
+    }
     loader.rebase();
     let mut scene = loader.scene;
     // An optional extension fovea does not read changes how the asset should look: say so, once per
@@ -447,7 +475,15 @@ impl Loader<'_> {
             let local = node.transform().matrix().map(|c| c.map(f64::from));
             let world = parent * DMat4::from_cols_array_2d(&local);
             if let Some(mesh) = node.mesh() {
-                self.add_mesh(&mesh, world)?;
+                if node.skin().is_some() {
+                    self.warn(format!(
+                        "node {} is skinned; its mesh is drawn in its bind pose (skins are not posed)",
+                        node.index()
+                    ));
+                }
+                // Morph weights: the node's override the mesh's defaults (glTF 2.0 §3.7.2.2).
+                let weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
+                self.add_mesh(&mesh, world, weights)?;
             }
             if let Some(camera) = node.camera() {
                 self.add_camera(&camera, world);
@@ -625,7 +661,82 @@ impl Loader<'_> {
         Ok(())
     }
 
-    fn add_mesh(&mut self, mesh: &gltf::Mesh, world_f64: DMat4) -> Result<(), SceneError> {
+    /// The summed displacements of `primitive`'s morph targets under `weights`, per vertex (empty
+    /// where nothing moves). A target whose accessor is malformed or of another length, and weights
+    /// that do not match the targets in number, are warned about; a missing weight is 0.
+    fn morph_displacements(
+        &mut self,
+        primitive: &gltf::Primitive,
+        label: &str,
+        weights: &[f32],
+        vertex_count: usize,
+    ) -> Result<MorphDisplacements, SceneError> {
+        let mut out = MorphDisplacements::default();
+        let targets: Vec<gltf::mesh::MorphTarget> = primitive.morph_targets().collect();
+        if targets.is_empty() {
+            return Ok(out);
+        }
+        if weights.len() != targets.len() {
+            self.warn(format!(
+                "{label}: {} morph targets but {} weights; missing weights are 0, extra ones ignored",
+                targets.len(),
+                weights.len()
+            ));
+        }
+        let buffers = self.buffers;
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+        for (t, ((positions, normals, tangents), target)) in
+            reader.read_morph_targets().zip(&targets).enumerate()
+        {
+            let w = weights.get(t).copied().unwrap_or(0.0);
+            if !w.is_finite() {
+                self.warn(format!("{label}: morph weight {t} is {w}; read as 0"));
+                continue;
+            }
+            if w == 0.0 {
+                continue;
+            }
+            let fields = [
+                ("POSITION", target.positions(), &mut out.positions),
+                ("NORMAL", target.normals(), &mut out.normals),
+                ("TANGENT", target.tangents(), &mut out.tangents),
+            ];
+            let mut values = [
+                positions.map(|i| i.collect::<Vec<[f32; 3]>>()),
+                normals.map(|i| i.collect::<Vec<[f32; 3]>>()),
+                tangents.map(|i| i.collect::<Vec<[f32; 3]>>()),
+            ];
+            for ((name, accessor, sum), read) in fields.into_iter().zip(values.iter_mut()) {
+                let Some(accessor) = accessor else { continue };
+                let what = format!("{label} morph target {t} {name}");
+                let usable = self
+                    .check_accessor(&accessor, &what, Dimensions::Vec3, &[DataType::F32])
+                    .is_ok()
+                    && accessor.count() == vertex_count;
+                match read.take().filter(|v| usable && v.len() == vertex_count) {
+                    Some(displacements) => {
+                        sum.resize(vertex_count, [0.0; 3]);
+                        for (s, d) in sum.iter_mut().zip(displacements) {
+                            *s = (Vec3::from(*s) + w * Vec3::from(d)).to_array();
+                        }
+                    }
+                    None => self.warn(format!(
+                        "{what} is not {vertex_count} float vectors in its buffer; ignored"
+                    )),
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Adds `mesh`'s primitives in world space, each morphed by `weights` (its morph targets'
+    /// displacements of positions, normals and tangents, weighted and summed).
+    fn add_mesh(
+        &mut self,
+        mesh: &gltf::Mesh,
+        world_f64: DMat4,
+        weights: &[f32],
+    ) -> Result<(), SceneError> {
         let world = world_f64.as_mat4();
         let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
         let det = Mat3::from_mat4(world).determinant();
@@ -721,11 +832,20 @@ impl Loader<'_> {
                 path: self.path.to_owned(),
                 message: format!("{label} {what} cannot be read from its buffer"),
             };
-            let positions: Vec<[f32; 3]> = reader
+            let mut positions: Vec<[f32; 3]> = reader
                 .read_positions()
                 .ok_or_else(|| short("POSITION"))?
                 .collect();
             let vertex_count = positions.len();
+            if primitive.get(&gltf::Semantic::Colors(0)).is_some() {
+                self.warn(format!(
+                    "{label}: COLOR_0 vertex colours are not read; the material's colour is used"
+                ));
+            }
+            let morph = self.morph_displacements(&primitive, &label, weights, vertex_count)?;
+            for (p, d) in positions.iter_mut().zip(&morph.positions) {
+                *p = (Vec3::from(*p) + Vec3::from(*d)).to_array();
+            }
             let base = self.world_positions.len();
             if base + vertex_count > u32::MAX as usize {
                 return Err(self.malformed("more than 2^32 vertices".to_owned()));
@@ -740,8 +860,8 @@ impl Loader<'_> {
             if let Some(acc) = &normal_acc {
                 if acc.count() == vertex_count {
                     let normals = reader.read_normals().ok_or_else(|| short("NORMAL"))?;
-                    self.scene.normals.extend(normals.map(|n| {
-                        let n = Vec3::from(n);
+                    self.scene.normals.extend(normals.enumerate().map(|(i, n)| {
+                        let n = Vec3::from(n) + morph.normal(i);
                         // A non-finite normal stays non-finite, so that validation skips its triangles.
                         if n.is_finite() {
                             (normal_matrix * n).normalize_or_zero().to_array()
@@ -773,10 +893,13 @@ impl Loader<'_> {
                     let mirror = if flip { -1.0 } else { 1.0 };
                     let tangents = reader.read_tangents().ok_or_else(|| short("TANGENT"))?;
                     self.scene.tangents.resize(base, [0.0; 4]);
-                    self.scene.tangents.extend(tangents.map(|[x, y, z, w]| {
-                        let t = (linear * Vec3::new(x, y, z)).normalize_or_zero();
-                        [t.x, t.y, t.z, w * mirror]
-                    }));
+                    self.scene
+                        .tangents
+                        .extend(tangents.enumerate().map(|(i, [x, y, z, w])| {
+                            let t = (linear * (Vec3::new(x, y, z) + morph.tangent(i)))
+                                .normalize_or_zero();
+                            [t.x, t.y, t.z, w * mirror]
+                        }));
                     if self.scene.tangents.len() != base + vertex_count {
                         return Err(short("TANGENT"));
                     }
@@ -1304,6 +1427,117 @@ mod tests {
     }
 
     const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+    /// A triangle with two morph targets (target 0 lifts vertex 2 by 2 in z, target 1 moves vertex 1
+    /// by 4 in y), the mesh's default weights 0.5 and 0.25, `node_extra` added to the node, and
+    /// `extra` (more top-level members) added to the file.
+    fn morphed_triangle_gltf(node_extra: &str, extra: &str) -> String {
+        let mut bytes = Vec::new();
+        let mut push = |v: [[f32; 3]; 3]| {
+            for p in v {
+                for c in p {
+                    bytes.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+        };
+        push(TRI);
+        push([[0.0; 3], [0.0; 3], [0.0, 0.0, 2.0]]);
+        push([[0.0; 3], [0.0, 4.0, 0.0], [0.0; 3]]);
+        let b64 = base64_encode(&bytes);
+        let accessor = |offset: u32, max: &str| {
+            format!(
+                r#"{{"bufferView":0,"byteOffset":{offset},"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":{max}}}"#
+            )
+        };
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+            "nodes":[{{"mesh":0{node_extra}}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":0}},
+                "targets":[{{"POSITION":1}},{{"POSITION":2}}]}}],"weights":[0.5,0.25]}}],
+            "accessors":[{a0},{a1},{a2},{{"bufferView":0,"componentType":5126,"count":3,"type":"SCALAR","min":[0],"max":[1]}}],
+            "bufferViews":[{{"buffer":0,"byteLength":108}}],
+            "buffers":[{{"byteLength":108,"uri":"data:application/octet-stream;base64,{b64}"}}]{extra}}}"#,
+            a0 = accessor(0, "[1,1,0]"),
+            a1 = accessor(36, "[0,0,2]"),
+            a2 = accessor(72, "[0,4,0]"),
+        )
+    }
+
+    /// Morph targets move the vertices by their default weights (the mesh's, or the node's, which
+    /// override them), as glTF 2.0 §3.7.2.2 says; vertex colours and animations, not read, are warned
+    /// about.
+    #[test]
+    fn morph_targets_apply_their_default_weights_and_what_is_not_read_is_named() {
+        let dir = temp_dir("morph");
+        let file = dir.join("m.gltf");
+        let load = |node_extra: &str, extra: &str| {
+            std::fs::write(&file, morphed_triangle_gltf(node_extra, extra)).unwrap();
+            load_scene(&file, &LoadOptions::default()).unwrap()
+        };
+        let s = load("", "");
+        let p = |s: &LoadedScene, i: usize| Vec3::from(s.positions[s.triangles[0][i] as usize]);
+        // The mesh's weights: vertex 1 up by 0.25 · 4, vertex 2 up by 0.5 · 2 (z).
+        let mut got: Vec<Vec3> = (0..3).map(|i| p(&s, i)).collect();
+        got.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.z.total_cmp(&b.z)));
+        assert_eq!(
+            got,
+            [
+                Vec3::ZERO,
+                Vec3::new(0.0, 1.0, 1.0),
+                Vec3::new(1.0, 1.0, 0.0)
+            ],
+            "{:?}",
+            s.positions
+        );
+        assert!(
+            s.warnings.iter().any(|w| w.contains("COLOR_0")),
+            "{:?}",
+            s.warnings
+        );
+        // The node's weights override them.
+        let s = load(r#","weights":[1,0]"#, "");
+        let mut got: Vec<Vec3> = (0..3).map(|i| p(&s, i)).collect();
+        got.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.z.total_cmp(&b.z)));
+        assert_eq!(
+            got,
+            [
+                Vec3::ZERO,
+                Vec3::new(0.0, 1.0, 2.0),
+                Vec3::new(1.0, 0.0, 0.0)
+            ]
+        );
+        // Too few weights: the missing one is 0, with a warning.
+        let s = load(r#","weights":[1]"#, "");
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.contains("2 morph targets but 1 weights")),
+            "{:?}",
+            s.warnings
+        );
+        // An animation is named, not dropped in silence.
+        let animated = load(
+            "",
+            r#","animations":[{"channels":[{"sampler":0,"target":{"node":0,"path":"translation"}}],
+                "samplers":[{"input":3,"output":0}]}]"#,
+        );
+        assert!(
+            animated
+                .warnings
+                .iter()
+                .any(|w| w.contains("1 animation(s) are not played")),
+            "{:?}",
+            animated.warnings
+        );
+        // A skin is named too: its mesh is drawn in its bind pose.
+        let skinned = load(r#","skin":0"#, r#","skins":[{"joints":[0]}]"#);
+        assert!(
+            skinned.warnings.iter().any(|w| w.contains("skinned")),
+            "{:?}",
+            skinned.warnings
+        );
+        std::fs::remove_dir_all(dir).ok();
+    }
 
     #[test]
     fn minimal_gltf_with_mirror_transform_flips_winding() {
