@@ -24,8 +24,9 @@
 //! extensions are mapped in [`crate::gltf_pbr`].
 //!
 //! Morph targets (positions, normals, tangents) are applied with the node's `weights`, else the
-//! mesh's defaults: the static pose the file describes. Skins are drawn in their bind pose, and
-//! `COLOR_0` and animations are not read; each gets a warning naming it.
+//! mesh's defaults, and skinned meshes are posed by their joints' node transforms (`JOINTS_0`,
+//! `WEIGHTS_0`, inverse bind matrices; the mesh node's own transform ignored): the static pose the
+//! file describes. `COLOR_0` and animations are not read; each gets a warning naming it.
 //!
 //! Only `TEXCOORD_0` is read (a texture asking for another set gets a warning and uses set 0);
 //! `occlusionTexture` is ignored. Images are decoded by [`crate::texture`] with the option's limits: from a
@@ -51,6 +52,78 @@ use crate::error::SceneError;
 use crate::mesh::{CameraDesc, LoadOptions, LoadedScene};
 use crate::source::{FileSource, Filesystem};
 use crate::texture::{decode_texture_bytes, load_texture_from, TextureLimits, TextureRole};
+
+/// Where a primitive's vertices go: its node's world matrix, or one matrix per vertex (a skin's
+/// blend of its joints).
+enum VertexPlacement {
+    Node { world: DMat4, normal_matrix: Mat3 },
+    Skinned(Vec<DMat4>),
+}
+
+impl VertexPlacement {
+    fn node(world: DMat4) -> Self {
+        Self::Node {
+            world,
+            normal_matrix: Mat3::from_mat4(world.as_mat4()).inverse().transpose(),
+        }
+    }
+
+    /// Vertex `i`'s matrix.
+    fn matrix(&self, i: usize) -> DMat4 {
+        match self {
+            Self::Node { world, .. } => *world,
+            Self::Skinned(m) => m.get(i).copied().unwrap_or(DMat4::IDENTITY),
+        }
+    }
+
+    /// Vertex `i`'s linear part (tangents move by it).
+    fn linear(&self, i: usize) -> Mat3 {
+        Mat3::from_mat4(self.matrix(i).as_mat4())
+    }
+
+    /// Vertex `i`'s normal matrix: the inverse transpose of its linear part.
+    fn normal_matrix(&self, i: usize) -> Mat3 {
+        match self {
+            Self::Node { normal_matrix, .. } => *normal_matrix,
+            Self::Skinned(_) => self.linear(i).inverse().transpose(),
+        }
+    }
+}
+
+/// Every node's world matrix, through its parents (glTF 2.0 §3.5.3): what a skin's joints need,
+/// wherever they sit in the hierarchy. A node in a cycle gets its local matrix only.
+fn node_world_matrices(document: &gltf::Document) -> Vec<DMat4> {
+    let n = document.nodes().len();
+    let mut parent = vec![None; n];
+    for node in document.nodes() {
+        for child in node.children() {
+            parent[child.index()] = Some(node.index());
+        }
+    }
+    let local: Vec<DMat4> = document
+        .nodes()
+        .map(|node| {
+            let m = node.transform().matrix().map(|c| c.map(f64::from));
+            DMat4::from_cols_array_2d(&m)
+        })
+        .collect();
+    (0..n)
+        .map(|i| {
+            let mut world = local[i];
+            let mut at = parent[i];
+            let mut steps = 0;
+            while let Some(p) = at {
+                steps += 1;
+                if steps > n {
+                    return local[i];
+                }
+                world = local[p] * world;
+                at = parent[p];
+            }
+            world
+        })
+        .collect()
+}
 
 /// A primitive's morphed displacements per vertex: each list empty (nothing moves) or one per vertex.
 #[derive(Default)]
@@ -456,6 +529,7 @@ impl Loader<'_> {
                 document.nodes().filter(|n| !is_child[n.index()]).collect()
             }
         };
+        let node_worlds = node_world_matrices(document);
         // World transforms in f64: a node far from the origin keeps its scene's detail until the rebase.
         let mut stack: Vec<(gltf::Node, DMat4)> = roots
             .into_iter()
@@ -475,15 +549,13 @@ impl Loader<'_> {
             let local = node.transform().matrix().map(|c| c.map(f64::from));
             let world = parent * DMat4::from_cols_array_2d(&local);
             if let Some(mesh) = node.mesh() {
-                if node.skin().is_some() {
-                    self.warn(format!(
-                        "node {} is skinned; its mesh is drawn in its bind pose (skins are not posed)",
-                        node.index()
-                    ));
-                }
                 // Morph weights: the node's override the mesh's defaults (glTF 2.0 §3.7.2.2).
                 let weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
-                self.add_mesh(&mesh, world, weights)?;
+                let joints = match node.skin() {
+                    Some(skin) => self.joint_matrices(&skin, &node_worlds),
+                    None => None,
+                };
+                self.add_mesh(&mesh, world, weights, joints.as_deref())?;
             }
             if let Some(camera) = node.camera() {
                 self.add_camera(&camera, world);
@@ -661,6 +733,117 @@ impl Loader<'_> {
         Ok(())
     }
 
+    /// A skin's joint matrices, `world(joint) · inverse bind matrix` (glTF 2.0 §3.7.3), in the skin's
+    /// joint order; `None`, with a warning, where its inverse bind matrices cannot be read.
+    fn joint_matrices(&mut self, skin: &gltf::Skin, node_worlds: &[DMat4]) -> Option<Vec<DMat4>> {
+        let label = format!("skin {}", skin.index());
+        let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+        let inverse_bind: Vec<DMat4> = match skin.inverse_bind_matrices() {
+            None => vec![DMat4::IDENTITY; joints.len()],
+            Some(accessor) => {
+                let checked = self.check_accessor(
+                    &accessor,
+                    &format!("{label} inverseBindMatrices"),
+                    Dimensions::Mat4,
+                    &[DataType::F32],
+                );
+                let buffers = self.buffers;
+                let read: Option<Vec<DMat4>> = checked.ok().and_then(|_| {
+                    skin.reader(|b| buffers.get(b.index()).map(Vec::as_slice))
+                        .read_inverse_bind_matrices()
+                        .map(|m| {
+                            m.map(|c| DMat4::from_cols_array_2d(&c.map(|c| c.map(f64::from))))
+                                .collect()
+                        })
+                });
+                match read.filter(|m| m.len() == joints.len()) {
+                    Some(m) => m,
+                    None => {
+                        self.warn(format!(
+                            "{label}: its inverse bind matrices cannot be read as {} matrices; its meshes are drawn unposed",
+                            joints.len()
+                        ));
+                        return None;
+                    }
+                }
+            }
+        };
+        Some(
+            joints
+                .iter()
+                .zip(inverse_bind)
+                .map(|(&j, ibm)| node_worlds[j] * ibm)
+                .collect(),
+        )
+    }
+
+    /// Where `primitive`'s vertices go: its node's `world` matrix, or, for a skinned mesh (`joints`
+    /// given), each vertex's blend of joint matrices by `JOINTS_0` and `WEIGHTS_0` (the node's own
+    /// transform is then ignored, as glTF 2.0 §3.7.3 says). A skin whose attributes are missing or
+    /// malformed falls back to the node, with a warning.
+    fn placement(
+        &mut self,
+        primitive: &gltf::Primitive,
+        label: &str,
+        world: DMat4,
+        joints: Option<&[DMat4]>,
+        vertex_count: usize,
+    ) -> VertexPlacement {
+        let Some(joints) = joints else {
+            return VertexPlacement::node(world);
+        };
+        let buffers = self.buffers;
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+        let indices: Option<Vec<[u16; 4]>> = reader.read_joints(0).map(|j| j.into_u16().collect());
+        let weights: Option<Vec<[f32; 4]>> = reader.read_weights(0).map(|w| w.into_f32().collect());
+        let (Some(indices), Some(weights)) = (indices, weights) else {
+            self.warn(format!(
+                "{label}: skinned but without JOINTS_0 and WEIGHTS_0; drawn by its node's transform"
+            ));
+            return VertexPlacement::node(world);
+        };
+        if indices.len() != vertex_count || weights.len() != vertex_count {
+            self.warn(format!(
+                "{label}: JOINTS_0 or WEIGHTS_0 is not one per vertex; drawn by its node's transform"
+            ));
+            return VertexPlacement::node(world);
+        }
+        let mut out_of_range = false;
+        let matrices = indices
+            .iter()
+            .zip(&weights)
+            .map(|(j, w)| {
+                let mut m = DMat4::ZERO;
+                let mut total = 0.0f64;
+                for (&joint, &weight) in j.iter().zip(w) {
+                    let weight = f64::from(weight);
+                    if !(weight > 0.0) {
+                        continue;
+                    }
+                    match joints.get(usize::from(joint)) {
+                        Some(jm) => {
+                            m += *jm * weight;
+                            total += weight;
+                        }
+                        None => out_of_range = true,
+                    }
+                }
+                // Weights should sum to 1; normalised here, and a vertex with none stays put.
+                if total > 0.0 {
+                    m * (1.0 / total)
+                } else {
+                    world
+                }
+            })
+            .collect();
+        if out_of_range {
+            self.warn(format!(
+                "{label}: JOINTS_0 names joints its skin does not have; those weights are ignored"
+            ));
+        }
+        VertexPlacement::Skinned(matrices)
+    }
+
     /// The summed displacements of `primitive`'s morph targets under `weights`, per vertex (empty
     /// where nothing moves). A target whose accessor is malformed or of another length, and weights
     /// that do not match the targets in number, are warned about; a missing weight is 0.
@@ -736,11 +919,8 @@ impl Loader<'_> {
         mesh: &gltf::Mesh,
         world_f64: DMat4,
         weights: &[f32],
+        joints: Option<&[DMat4]>,
     ) -> Result<(), SceneError> {
-        let world = world_f64.as_mat4();
-        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-        let det = Mat3::from_mat4(world).determinant();
-        let flip = det < 0.0;
         for primitive in mesh.primitives() {
             let label = format!("mesh {} primitive {}", mesh.index(), primitive.index());
             let mode = primitive.mode();
@@ -846,15 +1026,20 @@ impl Loader<'_> {
             for (p, d) in positions.iter_mut().zip(&morph.positions) {
                 *p = (Vec3::from(*p) + Vec3::from(*d)).to_array();
             }
+            let placement = self.placement(&primitive, &label, world_f64, joints, vertex_count);
+            // A mirroring transform flips the winding (a skin: judged by its first vertex).
+            let flip = placement.linear(0).determinant() < 0.0;
             let base = self.world_positions.len();
             if base + vertex_count > u32::MAX as usize {
                 return Err(self.malformed("more than 2^32 vertices".to_owned()));
             }
-            self.world_positions.extend(positions.iter().map(|&p| {
-                world_f64
-                    .transform_point3(Vec3::from(p).as_dvec3())
-                    .to_array()
-            }));
+            self.world_positions
+                .extend(positions.iter().enumerate().map(|(i, &p)| {
+                    placement
+                        .matrix(i)
+                        .transform_point3(Vec3::from(p).as_dvec3())
+                        .to_array()
+                }));
 
             let mut normals_added = false;
             if let Some(acc) = &normal_acc {
@@ -864,7 +1049,9 @@ impl Loader<'_> {
                         let n = Vec3::from(n) + morph.normal(i);
                         // A non-finite normal stays non-finite, so that validation skips its triangles.
                         if n.is_finite() {
-                            (normal_matrix * n).normalize_or_zero().to_array()
+                            (placement.normal_matrix(i) * n)
+                                .normalize_or_zero()
+                                .to_array()
                         } else {
                             n.to_array()
                         }
@@ -889,14 +1076,13 @@ impl Loader<'_> {
             let mut tangents_added = false;
             if let Some(acc) = tangent_acc.as_ref().filter(|_| normals_added) {
                 if acc.count() == vertex_count {
-                    let linear = Mat3::from_mat4(world);
                     let mirror = if flip { -1.0 } else { 1.0 };
                     let tangents = reader.read_tangents().ok_or_else(|| short("TANGENT"))?;
                     self.scene.tangents.resize(base, [0.0; 4]);
                     self.scene
                         .tangents
                         .extend(tangents.enumerate().map(|(i, [x, y, z, w])| {
-                            let t = (linear * (Vec3::new(x, y, z) + morph.tangent(i)))
+                            let t = (placement.linear(i) * (Vec3::new(x, y, z) + morph.tangent(i)))
                                 .normalize_or_zero();
                             [t.x, t.y, t.z, w * mirror]
                         }));
@@ -1428,6 +1614,66 @@ mod tests {
 
     const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
 
+    /// A skinned triangle is posed by its joints' world transforms, its own node's transform ignored
+    /// (glTF 2.0 §3.7.3): vertex 0 follows joint 0 (5 up), vertex 1 half of it, vertex 2 joint 1
+    /// (which stays put).
+    #[test]
+    fn skins_are_posed_by_their_joints() {
+        let mut bytes = Vec::new();
+        for p in TRI {
+            for c in p {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        for j in [[0u16, 0, 0, 0], [0, 1, 0, 0], [0, 1, 0, 0]] {
+            for c in j {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        for w in [
+            [1.0f32, 0.0, 0.0, 0.0],
+            [0.5, 0.5, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+        ] {
+            for c in w {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        let b64 = base64_encode(&bytes);
+        let gltf = format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1,2]}}],
+            "nodes":[{{"mesh":0,"skin":0,"translation":[100,0,0]}},{{"translation":[0,5,0]}},{{}}],
+            "skins":[{{"joints":[1,2]}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"JOINTS_0":1,"WEIGHTS_0":2}}}}]}}],
+            "accessors":[
+                {{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                {{"bufferView":0,"byteOffset":36,"componentType":5123,"count":3,"type":"VEC4"}},
+                {{"bufferView":0,"byteOffset":60,"componentType":5126,"count":3,"type":"VEC4"}}],
+            "bufferViews":[{{"buffer":0,"byteLength":108}}],
+            "buffers":[{{"byteLength":108,"uri":"data:application/octet-stream;base64,{b64}"}}]}}"#
+        );
+        let dir = temp_dir("skin");
+        let file = dir.join("s.gltf");
+        std::fs::write(&file, gltf).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        let mut got: Vec<Vec3> = s.triangles[0]
+            .iter()
+            .map(|&v| Vec3::from(s.positions[v as usize]))
+            .collect();
+        got.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+        assert_eq!(
+            got,
+            [
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(0.0, 5.0, 0.0),
+                Vec3::new(1.0, 2.5, 0.0)
+            ],
+            "{:?}",
+            s.warnings
+        );
+        std::fs::remove_dir_all(dir).ok();
+    }
+
     /// A triangle with two morph targets (target 0 lifts vertex 2 by 2 in z, target 1 moves vertex 1
     /// by 4 in y), the mesh's default weights 0.5 and 0.25, `node_extra` added to the node, and
     /// `extra` (more top-level members) added to the file.
@@ -1529,7 +1775,7 @@ mod tests {
             "{:?}",
             animated.warnings
         );
-        // A skin is named too: its mesh is drawn in its bind pose.
+        // A skin without JOINTS_0 and WEIGHTS_0 is named: its mesh stays where its node puts it.
         let skinned = load(r#","skin":0"#, r#","skins":[{"joints":[0]}]"#);
         assert!(
             skinned.warnings.iter().any(|w| w.contains("skinned")),
