@@ -34,8 +34,8 @@ with open(f"{out}/gaze.csv", "w") as g, open(f"{out}/camera.csv", "w") as c:
         c.write(f"{f},{-20 + d},30,60,{5 + d},15,20\n")
 PY
 
-echo "| backend | size | frames | samples | cell_means | fill | gbuffer | temporal | resolve_history | denoise_input | denoise_atrous | denoise_output | tonemap |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| backend | size | frames | samples | cell_means | fill | gbuffer | cell_albedo | temporal | resolve_history | denoise_input | denoise_atrous | denoise_output | tonemap |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for backend in $BACKENDS; do
   "$BIN" render --backend "$backend" --resolution "$SIZE" --fov 60 --history --denoise -q \
     --gaze-trace "$out/gaze.csv" --camera-path "$out/camera.csv" \
@@ -46,7 +46,7 @@ doc, backend, size = json.load(open(sys.argv[1])), sys.argv[2], sys.argv[3]
 w, h = map(int, size.split("x"))
 mp = w * h / 1e6
 frames = doc["frames"][2:] or doc["frames"]
-names = ["samples", "cell_means", "fill", "gbuffer", "temporal", "resolve_history",
+names = ["samples", "cell_means", "fill", "gbuffer", "cell_albedo", "temporal", "resolve_history",
          "denoise_input", "denoise_atrous", "denoise_output", "tonemap"]
 cells = []
 for n in names:

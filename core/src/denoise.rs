@@ -144,12 +144,15 @@ fn clean(hdr: &[[f32; 4]], p: usize) -> (Vec3, bool) {
 }
 
 /// The first pass at pixel (`x`, `y`): its HDR value demodulated, its variance and its number of
-/// à-trous steps. `history` is read only with [`DENOISE_WITH_HISTORY`] in `flags`.
+/// à-trous steps. `history` is read only with [`DENOISE_WITH_HISTORY`] in `flags`; `cell_albedo`
+/// (the cell-albedo pass's buffer, [`crate::temporal::albedo::cell_albedo_at`]) only without it.
+#[allow(clippy::too_many_arguments)]
 #[must_use]
 pub fn denoise_input(
     frame: &FrameParams,
     hdr: &[[f32; 4]],
     gbuffer: &[GBufferTexel],
+    cell_albedo: &[[f32; 4]],
     history: &[HistoryTexel],
     flags: u32,
     x: u32,
@@ -181,7 +184,7 @@ pub fn denoise_input(
         } else {
             FILL_BILINEAR
         };
-        let albedo = filled_albedo(frame, gbuffer, mode, x, y);
+        let albedo = filled_albedo(frame, gbuffer, cell_albedo, mode, x, y);
         (c / albedo, albedo)
     };
 
@@ -371,8 +374,15 @@ mod tests {
     /// Runs the three passes over an image.
     fn denoise(f: &FrameParams, hdr: &[[f32; 4]], g: &[GBufferTexel]) -> Vec<[f32; 4]> {
         let (w, h) = (f.width, f.height);
+        let cells: Vec<[f32; 4]> = (0..crate::foveation::cell_buffer_len(w, h, &f.foveation))
+            .map(|i| {
+                crate::temporal::albedo::cell_albedo_at(f, g, i)
+                    .extend(0.0)
+                    .to_array()
+            })
+            .collect();
         let mut a: Vec<DenoiseTexel> = (0..w * h)
-            .map(|i| denoise_input(f, hdr, g, &[], 0, i % w, i / w))
+            .map(|i| denoise_input(f, hdr, g, &cells, &[], 0, i % w, i / w))
             .collect();
         for pass in 0..DENOISE_MAX_PASSES {
             a = (0..w * h)

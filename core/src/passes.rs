@@ -24,6 +24,10 @@ pub enum FramePass {
     Fill,
     /// Each pixel's first hit (distance, normal, albedo): [`crate::temporal::first_hit_gbuffer`].
     GBuffer,
+    /// The mean G-buffer albedo of each cell of the fill's grids, over the cell means (which the fill
+    /// no longer needs): [`crate::temporal::albedo::cell_albedo_at`]. The temporal pass and the
+    /// denoiser divide by its bilinear blend ([`crate::temporal::albedo::filled_albedo`]).
+    CellAlbedo,
     /// The frame reprojected into each pixel's history and accumulated:
     /// [`crate::temporal::temporal_accumulate`].
     Temporal,
@@ -125,11 +129,12 @@ impl FrameRequest {
 
 impl FramePass {
     /// Every pass, in the order a frame runs them.
-    pub const ALL: [FramePass; 11] = [
+    pub const ALL: [FramePass; 12] = [
         FramePass::Samples,
         FramePass::CellMeans,
         FramePass::Fill,
         FramePass::GBuffer,
+        FramePass::CellAlbedo,
         FramePass::Temporal,
         FramePass::ResolveHistory,
         FramePass::DenoiseInput,
@@ -147,6 +152,7 @@ impl FramePass {
             FramePass::CellMeans => "cell_means",
             FramePass::Fill => "fill",
             FramePass::GBuffer => "gbuffer",
+            FramePass::CellAlbedo => "cell_albedo",
             FramePass::Temporal => "temporal",
             FramePass::ResolveHistory => "resolve_history",
             FramePass::DenoiseInput => "denoise_input",
@@ -166,6 +172,7 @@ impl FramePass {
             FramePass::CellMeans => &["cell_means"],
             FramePass::Fill => &["fill"],
             FramePass::GBuffer => &["gbuffer"],
+            FramePass::CellAlbedo => &["cell_albedo"],
             FramePass::Temporal => &["temporal"],
             FramePass::ResolveHistory => &["resolve_history"],
             FramePass::DenoiseInput => &["denoise_input"],
@@ -191,7 +198,7 @@ impl FramePass {
     pub const fn runs_in(self, setup: FrameSetup) -> bool {
         match self {
             FramePass::Samples | FramePass::CellMeans | FramePass::Fill => true,
-            FramePass::GBuffer => setup.history || setup.denoise,
+            FramePass::GBuffer | FramePass::CellAlbedo => setup.history || setup.denoise,
             FramePass::Temporal | FramePass::ResolveHistory => setup.history,
             FramePass::DenoiseInput | FramePass::DenoiseAtrous | FramePass::DenoiseOutput => {
                 setup.denoise
@@ -244,6 +251,7 @@ mod tests {
                 FramePass::CellMeans,
                 FramePass::Fill,
                 FramePass::GBuffer,
+                FramePass::CellAlbedo,
                 FramePass::DenoiseInput,
                 FramePass::DenoiseAtrous,
                 FramePass::DenoiseOutput

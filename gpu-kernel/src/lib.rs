@@ -31,6 +31,7 @@ use fovea_core::integrator::{render_sample_stream, FrameParams};
 use fovea_core::kernel_abi::{self, KernelPushConstants, WORKGROUP_SIZE};
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::features::FEATURES_ALL;
+use fovea_core::temporal::albedo::cell_albedo_at;
 // Built for the host (a plain library), the scene texel binding is the scene's own slices.
 #[cfg(not(target_arch = "spirv"))]
 use fovea_core::scene::SceneSlices as SceneTexels;
@@ -328,7 +329,25 @@ scene_entry_point! {
     }
 }
 
-/// Temporal reuse, after `gbuffer`: invocation `p < item_count` reprojects the previous history to pixel
+/// After `gbuffer`: invocation `i < item_count` writes element `i` of the cell buffer, its cell's mean
+/// albedo (core's [`cell_albedo_at`]), over the cell means the fill has used.
+#[spirv(compute(threads(64)))]
+pub fn cell_albedo(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(num_workgroups)] num_workgroups: UVec3,
+    #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 18)] cells: &mut [[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 27)] gbuffer: &[GBufferTexel],
+) {
+    let i = invocation_index(id, num_workgroups);
+    if i >= pc.item_count {
+        return;
+    }
+    cells[i as usize] = cell_albedo_at(frame, gbuffer, i).extend(0.0).to_array();
+}
+
+/// Temporal reuse, after `cell_albedo`: invocation `p < item_count` reprojects the previous history to pixel
 /// `p`, merges the filled HDR pixel into it (core's [`temporal_accumulate`]) and writes the new history.
 /// The HDR image is only read here (the clamp reads the neighbours): `resolve_history` writes it.
 #[spirv(compute(threads(64)))]
@@ -336,6 +355,7 @@ pub fn temporal(
     #[spirv(global_invocation_id)] id: UVec3,
     #[spirv(num_workgroups)] num_workgroups: UVec3,
     #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 18)] cell_albedo: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 24)] history: &mut [HistoryTexel],
@@ -353,6 +373,7 @@ pub fn temporal(
         temporal,
         hdr,
         gbuffer,
+        cell_albedo,
         previous_gbuffer,
         previous_history,
         p % frame.width,
@@ -388,6 +409,7 @@ pub fn denoise_input(
     #[spirv(global_invocation_id)] id: UVec3,
     #[spirv(num_workgroups)] num_workgroups: UVec3,
     #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 18)] cell_albedo: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 24)] history: &[HistoryTexel],
@@ -402,6 +424,7 @@ pub fn denoise_input(
         frame,
         hdr,
         gbuffer,
+        cell_albedo,
         history,
         pc.flags,
         p % frame.width,

@@ -101,7 +101,9 @@ pub fn render_frame_passes(
                 *pixel = [v.x, v.y, v.z, 1.0];
             }),
             FramePass::GBuffer => history.gbuffer_pass(scene, frame),
-            FramePass::Temporal => history.temporal_pass(frame, &temporal, &pixels),
+            // Over the cell means, which the fill has used: each cell's mean albedo.
+            FramePass::CellAlbedo => cell_means = history.cell_albedo_pass(frame),
+            FramePass::Temporal => history.temporal_pass(frame, &temporal, &pixels, &cell_means),
             FramePass::ResolveHistory => history.resolve_pass(&mut pixels),
             FramePass::DenoiseInput => {
                 if request.output.wants_raw() {
@@ -114,7 +116,7 @@ pub fn render_frame_passes(
                 let flags = request.denoise_flags();
                 let (gbuffer, texels) = (history.gbuffer(), history.texels());
                 denoise[0] = per_pixel(width, height, |x, y| {
-                    denoise_input(frame, &pixels, gbuffer, texels, flags, x, y)
+                    denoise_input(frame, &pixels, gbuffer, &cell_means, texels, flags, x, y)
                 });
             }
             FramePass::DenoiseAtrous => {

@@ -3,8 +3,10 @@
 //! ([`fovea_core::temporal::temporal_accumulate`]), over two history buffers used in turn. The state
 //! between frames (history, G-buffer, the previous camera) lives in [`TemporalHistory`].
 use fovea_core::camera::Camera;
+use fovea_core::foveation::fill::cell_buffer_len;
 use fovea_core::integrator::FrameParams;
 use fovea_core::scene::{SceneSlices, SceneView};
+use fovea_core::temporal::albedo::cell_albedo_at;
 use fovea_core::temporal::{
     first_hit_gbuffer, temporal_accumulate, GBufferTexel, HistoryTexel, TemporalParams,
 };
@@ -85,14 +87,30 @@ impl TemporalHistory {
             });
     }
 
+    /// The cell-albedo pass, after [`Self::gbuffer_pass`]: each cell's mean albedo
+    /// ([`cell_albedo_at`]), laid out as the cell means.
+    #[must_use]
+    pub fn cell_albedo_pass(&self, frame: &FrameParams) -> Vec<[f32; 4]> {
+        (0..cell_buffer_len(frame.width, frame.height, &frame.foveation))
+            .into_par_iter()
+            .map(|i| {
+                cell_albedo_at(frame, &self.gbuffer, i)
+                    .extend(0.0)
+                    .to_array()
+            })
+            .collect()
+    }
+
     /// The temporal pass: `filled` (the frame's filled HDR image) reprojected into each pixel's history
     /// ([`temporal_accumulate`], with `temporal`, usually [`Self::params_for`]), after
-    /// [`Self::gbuffer_pass`]. This frame's history then becomes the previous one.
+    /// [`Self::gbuffer_pass`] and the cell-albedo pass (`cell_albedo`,
+    /// [`fovea_core::temporal::albedo::cell_albedo_at`]). This frame's history then becomes the previous one.
     pub fn temporal_pass(
         &mut self,
         frame: &FrameParams,
         temporal: &TemporalParams,
         filled: &[[f32; 4]],
+        cell_albedo: &[[f32; 4]],
     ) {
         let (w, h) = (frame.width, frame.height);
         self.next_history
@@ -109,6 +127,7 @@ impl TemporalHistory {
                         temporal,
                         filled,
                         gbuffer,
+                        cell_albedo,
                         previous_gbuffer,
                         previous_history,
                         x as u32,
@@ -138,6 +157,7 @@ impl TemporalHistory {
         filled: &FrameImage,
     ) {
         self.gbuffer_pass(scene, frame);
-        self.temporal_pass(frame, temporal, &filled.pixels);
+        let cell_albedo = self.cell_albedo_pass(frame);
+        self.temporal_pass(frame, temporal, &filled.pixels, &cell_albedo);
     }
 }

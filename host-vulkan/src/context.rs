@@ -75,10 +75,19 @@ pub(crate) mod pipeline {
     pub const DENOISE_INPUT: usize = 9;
     pub const DENOISE_ATROUS: usize = 10;
     pub const DENOISE_OUTPUT: usize = 11;
-    /// The denoiser's pipelines, and the G-buffer's it reads, in their order in a frame.
-    pub const DENOISE_PASSES: [usize; 4] = [GBUFFER, DENOISE_INPUT, DENOISE_ATROUS, DENOISE_OUTPUT];
+    /// Each cell's mean albedo, after the G-buffer (temporal reuse and the denoiser divide by it).
+    pub const CELL_ALBEDO: usize = 12;
+    /// The denoiser's pipelines, and the G-buffer's and cell albedo's it reads, in their order in a
+    /// frame.
+    pub const DENOISE_PASSES: [usize; 5] = [
+        GBUFFER,
+        CELL_ALBEDO,
+        DENOISE_INPUT,
+        DENOISE_ATROUS,
+        DENOISE_OUTPUT,
+    ];
     /// Temporal reuse's pipelines, in their order in a frame.
-    pub const TEMPORAL_PASSES: [usize; 3] = [GBUFFER, TEMPORAL, RESOLVE_HISTORY];
+    pub const TEMPORAL_PASSES: [usize; 4] = [GBUFFER, CELL_ALBEDO, TEMPORAL, RESOLVE_HISTORY];
     /// Every frame's pipelines.
     pub const FRAME_PASSES: [usize; 6] = [
         RENDER_SAMPLES,

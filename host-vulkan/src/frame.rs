@@ -132,6 +132,7 @@ pub(crate) const fn pass_pipelines(pass: FramePass) -> &'static [usize] {
         FramePass::CellMeans => &[pipeline::CELL_MEANS],
         FramePass::Fill => &[pipeline::FILL],
         FramePass::GBuffer => &[pipeline::GBUFFER],
+        FramePass::CellAlbedo => &[pipeline::CELL_ALBEDO],
         FramePass::Temporal => &[pipeline::TEMPORAL],
         FramePass::ResolveHistory => &[pipeline::RESOLVE_HISTORY],
         FramePass::DenoiseInput => &[pipeline::DENOISE_INPUT],
@@ -850,7 +851,7 @@ impl VulkanContext {
                     // Each pass's items: its core function runs once per cell or per pixel.
                     let items = match pass {
                         FramePass::Samples => 0, // dispatched chunk by chunk above
-                        FramePass::CellMeans => cells,
+                        FramePass::CellMeans | FramePass::CellAlbedo => cells,
                         _ => pixels,
                     };
                     if items > 0 {

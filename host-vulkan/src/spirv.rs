@@ -8,7 +8,7 @@ pub static EMBEDDED_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_SPV"));
 pub static EMBEDDED_RAY_QUERY_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_RQ_SPV"));
 
 /// Entry points the host creates a pipeline for, in [`crate::context`]'s pipeline order.
-pub const ENTRY_POINTS: [&str; 12] = [
+pub const ENTRY_POINTS: [&str; 13] = [
     "render_samples",
     "reduce_blocks",
     "cell_means",
@@ -21,6 +21,7 @@ pub const ENTRY_POINTS: [&str; 12] = [
     "denoise_input",
     "denoise_atrous",
     "denoise_output",
+    "cell_albedo",
 ];
 
 /// The probe entry points (cross-backend tests), whose pipelines are created on first use.

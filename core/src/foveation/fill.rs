@@ -142,6 +142,24 @@ pub fn cell_mean(
     }
 }
 
+/// Which cell element `index` of the cell buffer is (see [`cell_grid_offset`]): its grid's block edge
+/// `b` and the cell's column and row, `[b, cell_x, cell_y]`; `b` is 0 past the buffer's end.
+#[must_use]
+pub fn cell_at(width: u32, height: u32, params: &FoveationParams, index: u32) -> [u32; 3] {
+    let mut base = 0;
+    for s in 0..REGION_COUNT {
+        let n = grid_cells(width, height, params, s);
+        if index < base + n {
+            let b = params.block_size[s as usize];
+            let gw = cell_grid_size(width, height, b)[0];
+            let local = index - base;
+            return [b, local % gw, local / gw];
+        }
+        base += n;
+    }
+    [0, 0, 0]
+}
+
 /// Pass 1 kernel: element `index` of the cell buffer (see [`cell_grid_offset`]); zero past its end.
 #[must_use]
 pub fn cell_mean_at(
@@ -151,18 +169,11 @@ pub fn cell_mean_at(
     params: &FoveationParams,
     index: u32,
 ) -> Vec4 {
-    let mut base = 0;
-    for s in 0..REGION_COUNT {
-        let n = grid_cells(width, height, params, s);
-        if index < base + n {
-            let b = params.block_size[s as usize];
-            let gw = cell_grid_size(width, height, b)[0];
-            let local = index - base;
-            return cell_mean(replicated, width, height, b, local % gw, local / gw);
-        }
-        base += n;
+    let [b, cx, cy] = cell_at(width, height, params, index);
+    if b == 0 {
+        return Vec4::ZERO;
     }
-    Vec4::ZERO
+    cell_mean(replicated, width, height, b, cx, cy)
 }
 
 /// Centre along one axis of cell `i` of the `b` grid over an axis of `extent` pixels: `i · b + b / 2` for

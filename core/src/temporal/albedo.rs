@@ -12,7 +12,9 @@
 use glam::Vec3;
 
 use super::gbuffer::GBufferTexel;
-use crate::foveation::fill::{axis_weights, cell_grid_size, FILL_REPLICATE};
+use crate::foveation::fill::{
+    axis_weights, cell_at, cell_grid_offset, cell_grid_size, FILL_REPLICATE,
+};
 use crate::foveation::owning_block;
 use crate::integrator::FrameParams;
 use crate::math::vec3_from;
@@ -61,16 +63,32 @@ pub fn block_albedo(
     }
 }
 
+/// The cell-albedo pass: element `index` of the cell buffer holds the mean [`demodulation_albedo`]
+/// of its cell's pixels ([`block_albedo`]), laid out as the cell means are
+/// ([`crate::foveation::fill::cell_grid_offset`]); zero past the buffer's end. Computed once per frame
+/// after the G-buffer, so that [`filled_albedo`] reads four values instead of averaging four cells'
+/// texels for every pixel.
+#[must_use]
+pub fn cell_albedo_at(frame: &FrameParams, gbuffer: &[GBufferTexel], index: u32) -> Vec3 {
+    let [b, cx, cy] = cell_at(frame.width, frame.height, &frame.foveation, index);
+    if b == 0 {
+        return Vec3::ZERO;
+    }
+    block_albedo(frame, gbuffer, [cx * b, cy * b], b)
+}
+
 /// The albedo behind pixel (`x`, `y`)'s filled value in fill `mode`: its own G-buffer albedo in a
 /// block of one pixel; its block's mean ([`block_albedo`]) under [`crate::foveation::FILL_REPLICATE`];
 /// else the fill's bilinear blend of the four cells around it
-/// ([`crate::foveation::fill::fill_value`]), each cell's value the mean albedo of its pixels, which is
-/// what the block of that size there saw. Dividing the filled radiance by it leaves the lighting
-/// (exactly, where the lighting is constant over the four cells).
+/// ([`crate::foveation::fill::fill_value`]), each cell's value the mean albedo of its pixels
+/// (`cell_albedo`, made by [`cell_albedo_at`]), which is what the block of that size there saw.
+/// Dividing the filled radiance by it leaves the lighting (exactly, where the lighting is constant over
+/// the four cells).
 #[must_use]
 pub fn filled_albedo(
     frame: &FrameParams,
     gbuffer: &[GBufferTexel],
+    cell_albedo: &[[f32; 4]],
     mode: u32,
     x: u32,
     y: u32,
@@ -83,21 +101,13 @@ pub fn filled_albedo(
     if mode == FILL_REPLICATE {
         return block_albedo(frame, gbuffer, block.origin, b);
     }
+    let offset = cell_grid_offset(frame.width, frame.height, &frame.foveation, block.region);
     let grid = cell_grid_size(frame.width, frame.height, b);
     let (x0, x1, fx) = axis_weights(x, frame.width, b, grid[0]);
     let (y0, y1, fy) = axis_weights(y, frame.height, b, grid[1]);
-    // Cells of zero weight are not read (b² G-buffer texels each).
-    let mut top = block_albedo(frame, gbuffer, [x0 * b, y0 * b], b);
-    if fx > 0.0 {
-        top = top * (1.0 - fx) + block_albedo(frame, gbuffer, [x1 * b, y0 * b], b) * fx;
-    }
-    if fy <= 0.0 {
-        return top;
-    }
-    let mut bottom = block_albedo(frame, gbuffer, [x0 * b, y1 * b], b);
-    if fx > 0.0 {
-        bottom = bottom * (1.0 - fx) + block_albedo(frame, gbuffer, [x1 * b, y1 * b], b) * fx;
-    }
+    let at = |cx: u32, cy: u32| vec3_from(cell_albedo[(offset + cy * grid[0] + cx) as usize]);
+    let top = at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx;
+    let bottom = at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx;
     top * (1.0 - fy) + bottom * fy
 }
 
@@ -172,15 +182,18 @@ mod tests {
         let cells: Vec<[f32; 4]> = (0..cell_buffer_len(16, 8, f))
             .map(|i| cell_mean_at(&replicated, 16, 8, f, i).to_array())
             .collect();
+        let cell_albedo: Vec<[f32; 4]> = (0..cell_buffer_len(16, 8, f))
+            .map(|i| cell_albedo_at(&frame, &g, i).extend(1.0).to_array())
+            .collect();
         for y in 0..8u32 {
             for x in 0..16u32 {
                 let filled = fill_pixel(&replicated, &cells, 16, 8, f, x, y, FILL_BILINEAR);
-                let a = filled_albedo(&frame, &g, FILL_BILINEAR, x, y);
+                let a = filled_albedo(&frame, &g, &cell_albedo, FILL_BILINEAR, x, y);
                 assert!(
                     (filled.x / a.x - 3.0).abs() < 1e-4,
                     "({x}, {y}): {filled} / {a}"
                 );
-                let own = filled_albedo(&frame, &g, FILL_REPLICATE, x, y);
+                let own = filled_albedo(&frame, &g, &cell_albedo, FILL_REPLICATE, x, y);
                 let r = Vec3::from_slice(&replicated[(y * 16 + x) as usize][..3]);
                 assert!((r.x / own.x - 3.0).abs() < 1e-4);
             }

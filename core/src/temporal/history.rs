@@ -223,7 +223,7 @@ pub struct FrameSample {
 }
 
 /// The frame's value of pixel (`x`, `y`): `filled` (in fill mode `fill_mode`) at the pixel over the
-/// albedo its samples saw in `gbuffer`, weighted by its block's samples and footprint. A non-finite
+/// albedo its samples saw in `gbuffer` (`cell_albedo`: [`super::albedo::cell_albedo_at`]'s buffer), weighted by its block's samples and footprint. A non-finite
 /// value weighs 0; a finite one is clamped to `[0, HISTORY_SAMPLE_MAX]`, before and after the division.
 #[inline]
 #[must_use]
@@ -231,6 +231,7 @@ pub fn frame_sample(
     frame: &FrameParams,
     filled: &[[f32; 4]],
     gbuffer: &[GBufferTexel],
+    cell_albedo: &[[f32; 4]],
     fill_mode: u32,
     x: u32,
     y: u32,
@@ -239,7 +240,7 @@ pub fn frame_sample(
     let b = block.size.max(1) as f32;
     let c = vec3_from(filled[(y * frame.width + x) as usize]);
     let finite = is_finite3(c);
-    let albedo = filled_albedo(frame, gbuffer, fill_mode, x, y);
+    let albedo = filled_albedo(frame, gbuffer, cell_albedo, fill_mode, x, y);
     let max = Vec3::splat(HISTORY_SAMPLE_MAX);
     FrameSample {
         lighting: if finite {
@@ -410,12 +411,15 @@ pub fn blend_history(
 
 /// The temporal pass for pixel (`x`, `y`): the previous history reprojected to it, this frame's filled
 /// value merged in, the pixel's new history returned ([`HistoryTexel::displayed`] is what is shown).
+/// `cell_albedo` is the cell-albedo pass's buffer ([`super::albedo::cell_albedo_at`]).
+#[allow(clippy::too_many_arguments)]
 #[must_use]
 pub fn temporal_accumulate(
     frame: &FrameParams,
     temporal: &TemporalParams,
     filled: &[[f32; 4]],
     gbuffer: &[GBufferTexel],
+    cell_albedo: &[[f32; 4]],
     previous_gbuffer: &[GBufferTexel],
     previous_history: &[HistoryTexel],
     x: u32,
@@ -432,7 +436,15 @@ pub fn temporal_accumulate(
     );
     let mut history = reprojected.history;
     history.mean[3] *= reprojected.validity;
-    let sample = frame_sample(frame, filled, gbuffer, temporal.fill_mode, x, y);
+    let sample = frame_sample(
+        frame,
+        filled,
+        gbuffer,
+        cell_albedo,
+        temporal.fill_mode,
+        x,
+        y,
+    );
     let moved = temporal.flags & TEMPORAL_CAMERA_MOVED != 0;
     let (cap, clamp) = if moved {
         // The box is of the frame's radiance around the pixel; the history is compared with it as
@@ -463,6 +475,18 @@ mod tests {
     use super::*;
     use crate::foveation::{FoveationParams, FILL_BILINEAR};
     use crate::integrator::IntegratorSettings;
+
+    /// The cell-albedo pass's buffer for `gbuffer`.
+    fn cell_albedo(frame: &FrameParams, gbuffer: &[GBufferTexel]) -> Vec<[f32; 4]> {
+        let len = crate::foveation::cell_buffer_len(frame.width, frame.height, &frame.foveation);
+        (0..len)
+            .map(|i| {
+                super::super::albedo::cell_albedo_at(frame, gbuffer, i)
+                    .extend(0.0)
+                    .to_array()
+            })
+            .collect()
+    }
 
     fn sample(v: f32, weight: f32, footprint: f32) -> FrameSample {
         FrameSample {
@@ -605,19 +629,53 @@ mod tests {
         filled[1] = [f32::INFINITY, 1.0, 1.0, 1.0];
         filled[2] = [1.0e30, -5.0, 1.0, 1.0];
         assert_eq!(
-            frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 0, 0).weight,
+            frame_sample(
+                &frame,
+                &filled,
+                &sky,
+                &cell_albedo(&frame, &sky),
+                FILL_BILINEAR,
+                0,
+                0
+            )
+            .weight,
             0.0
         );
         assert_eq!(
-            frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 1, 0).weight,
+            frame_sample(
+                &frame,
+                &filled,
+                &sky,
+                &cell_albedo(&frame, &sky),
+                FILL_BILINEAR,
+                1,
+                0
+            )
+            .weight,
             0.0
         );
-        let huge = frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 2, 0);
+        let huge = frame_sample(
+            &frame,
+            &filled,
+            &sky,
+            &cell_albedo(&frame, &sky),
+            FILL_BILINEAR,
+            2,
+            0,
+        );
         assert_eq!(huge.lighting, Vec3::new(HISTORY_SAMPLE_MAX, 0.0, 1.0));
         let h = run(&[sample(1.0, 32.0, 1.0)], 4096.0);
         let after = blend_history(
             &h,
-            &frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 0, 0),
+            &frame_sample(
+                &frame,
+                &filled,
+                &sky,
+                &cell_albedo(&frame, &sky),
+                FILL_BILINEAR,
+                0,
+                0,
+            ),
             HistoryCap::frames(4096.0),
             ClampBox::NONE,
         );
@@ -633,9 +691,25 @@ mod tests {
         let frame = tiny_frame([0.5, 0.5]);
         let sky = vec![GBufferTexel::SKY; 64];
         let filled = vec![[1.0f32; 4]; 64];
-        let fovea = frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 0, 0);
+        let fovea = frame_sample(
+            &frame,
+            &filled,
+            &sky,
+            &cell_albedo(&frame, &sky),
+            FILL_BILINEAR,
+            0,
+            0,
+        );
         assert_eq!((fovea.weight, fovea.footprint), (32.0, 1.0));
-        let periphery = frame_sample(&frame, &filled, &sky, FILL_BILINEAR, 7, 7);
+        let periphery = frame_sample(
+            &frame,
+            &filled,
+            &sky,
+            &cell_albedo(&frame, &sky),
+            FILL_BILINEAR,
+            7,
+            7,
+        );
         assert_eq!((periphery.weight, periphery.footprint), (0.5, 4.0));
     }
 
@@ -652,7 +726,15 @@ mod tests {
             .map(|i| wall(if (i % 8 + i / 8) % 2 == 0 { 0.2 } else { 0.8 }))
             .collect();
         let filled = vec![[1.0f32; 4]; 64];
-        let s = frame_sample(&frame, &filled, &g, FILL_BILINEAR, 6, 6);
+        let s = frame_sample(
+            &frame,
+            &filled,
+            &g,
+            &cell_albedo(&frame, &g),
+            FILL_BILINEAR,
+            6,
+            6,
+        );
         assert!((s.albedo.x - 0.5).abs() < 1e-6 && (s.lighting.x - 2.0).abs() < 1e-5);
         let h = blend_history(
             &HistoryTexel::EMPTY,
