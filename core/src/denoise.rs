@@ -374,13 +374,7 @@ mod tests {
     /// Runs the three passes over an image.
     fn denoise(f: &FrameParams, hdr: &[[f32; 4]], g: &[GBufferTexel]) -> Vec<[f32; 4]> {
         let (w, h) = (f.width, f.height);
-        let cells: Vec<[f32; 4]> = (0..crate::foveation::cell_buffer_len(w, h, &f.foveation))
-            .map(|i| {
-                crate::temporal::albedo::cell_albedo_at(f, g, i)
-                    .extend(0.0)
-                    .to_array()
-            })
-            .collect();
+        let cells = crate::temporal::albedo::test_support::cell_albedo_buffer(f, g);
         let mut a: Vec<DenoiseTexel> = (0..w * h)
             .map(|i| denoise_input(f, hdr, g, &cells, &[], 0, i % w, i / w))
             .collect();

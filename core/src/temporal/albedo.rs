@@ -78,7 +78,8 @@ pub fn cell_albedo_at(frame: &FrameParams, gbuffer: &[GBufferTexel], index: u32)
 }
 
 /// The albedo behind pixel (`x`, `y`)'s filled value in fill `mode`: its own G-buffer albedo in a
-/// block of one pixel; its block's mean ([`block_albedo`]) under [`crate::foveation::FILL_REPLICATE`];
+/// block of one pixel; its block's mean (its cell's, blocks being aligned to their grid) under
+/// [`crate::foveation::FILL_REPLICATE`];
 /// else the fill's bilinear blend of the four cells around it
 /// ([`crate::foveation::fill::fill_value`]), each cell's value the mean albedo of its pixels
 /// (`cell_albedo`, made by [`cell_albedo_at`]), which is what the block of that size there saw.
@@ -98,17 +99,39 @@ pub fn filled_albedo(
     if b == 1 {
         return demodulation_albedo(&gbuffer[(y * frame.width + x) as usize]);
     }
-    if mode == FILL_REPLICATE {
-        return block_albedo(frame, gbuffer, block.origin, b);
-    }
     let offset = cell_grid_offset(frame.width, frame.height, &frame.foveation, block.region);
     let grid = cell_grid_size(frame.width, frame.height, b);
+    let at = |cx: u32, cy: u32| vec3_from(cell_albedo[(offset + cy * grid[0] + cx) as usize]);
+    if mode == FILL_REPLICATE {
+        // Blocks are aligned to their size's grid: the block is the cell the pixel lies in.
+        return at(x / b, y / b);
+    }
     let (x0, x1, fx) = axis_weights(x, frame.width, b, grid[0]);
     let (y0, y1, fy) = axis_weights(y, frame.height, b, grid[1]);
-    let at = |cx: u32, cy: u32| vec3_from(cell_albedo[(offset + cy * grid[0] + cx) as usize]);
     let top = at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx;
     let bottom = at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx;
     top * (1.0 - fy) + bottom * fy
+}
+
+/// For the core's tests.
+#[cfg(test)]
+pub(crate) mod test_support {
+    extern crate std;
+    use std::vec::Vec;
+
+    use super::*;
+
+    /// The cell-albedo pass over a whole frame, serially (the hosts run [`cell_albedo_at`] in
+    /// parallel).
+    pub(crate) fn cell_albedo_buffer(
+        frame: &FrameParams,
+        gbuffer: &[GBufferTexel],
+    ) -> Vec<[f32; 4]> {
+        let len = crate::foveation::cell_buffer_len(frame.width, frame.height, &frame.foveation);
+        (0..len)
+            .map(|i| cell_albedo_at(frame, gbuffer, i).extend(0.0).to_array())
+            .collect()
+    }
 }
 
 #[cfg(test)]
@@ -182,9 +205,7 @@ mod tests {
         let cells: Vec<[f32; 4]> = (0..cell_buffer_len(16, 8, f))
             .map(|i| cell_mean_at(&replicated, 16, 8, f, i).to_array())
             .collect();
-        let cell_albedo: Vec<[f32; 4]> = (0..cell_buffer_len(16, 8, f))
-            .map(|i| cell_albedo_at(&frame, &g, i).extend(1.0).to_array())
-            .collect();
+        let cell_albedo = super::test_support::cell_albedo_buffer(&frame, &g);
         for y in 0..8u32 {
             for x in 0..16u32 {
                 let filled = fill_pixel(&replicated, &cells, 16, 8, f, x, y, FILL_BILINEAR);

@@ -476,16 +476,16 @@ mod tests {
     use crate::foveation::{FoveationParams, FILL_BILINEAR};
     use crate::integrator::IntegratorSettings;
 
-    /// The cell-albedo pass's buffer for `gbuffer`.
-    fn cell_albedo(frame: &FrameParams, gbuffer: &[GBufferTexel]) -> Vec<[f32; 4]> {
-        let len = crate::foveation::cell_buffer_len(frame.width, frame.height, &frame.foveation);
-        (0..len)
-            .map(|i| {
-                super::super::albedo::cell_albedo_at(frame, gbuffer, i)
-                    .extend(0.0)
-                    .to_array()
-            })
-            .collect()
+    /// `frame_sample` at (`x`, `y`) in bilinear fill, with the cell-albedo pass run over `gbuffer`.
+    fn sample_at(
+        frame: &FrameParams,
+        filled: &[[f32; 4]],
+        gbuffer: &[GBufferTexel],
+        x: u32,
+        y: u32,
+    ) -> FrameSample {
+        let cells = crate::temporal::albedo::test_support::cell_albedo_buffer(frame, gbuffer);
+        frame_sample(frame, filled, gbuffer, &cells, FILL_BILINEAR, x, y)
     }
 
     fn sample(v: f32, weight: f32, footprint: f32) -> FrameSample {
@@ -628,54 +628,14 @@ mod tests {
         filled[0] = [f32::NAN, 1.0, 1.0, 1.0];
         filled[1] = [f32::INFINITY, 1.0, 1.0, 1.0];
         filled[2] = [1.0e30, -5.0, 1.0, 1.0];
-        assert_eq!(
-            frame_sample(
-                &frame,
-                &filled,
-                &sky,
-                &cell_albedo(&frame, &sky),
-                FILL_BILINEAR,
-                0,
-                0
-            )
-            .weight,
-            0.0
-        );
-        assert_eq!(
-            frame_sample(
-                &frame,
-                &filled,
-                &sky,
-                &cell_albedo(&frame, &sky),
-                FILL_BILINEAR,
-                1,
-                0
-            )
-            .weight,
-            0.0
-        );
-        let huge = frame_sample(
-            &frame,
-            &filled,
-            &sky,
-            &cell_albedo(&frame, &sky),
-            FILL_BILINEAR,
-            2,
-            0,
-        );
+        assert_eq!(sample_at(&frame, &filled, &sky, 0, 0).weight, 0.0);
+        assert_eq!(sample_at(&frame, &filled, &sky, 1, 0).weight, 0.0);
+        let huge = sample_at(&frame, &filled, &sky, 2, 0);
         assert_eq!(huge.lighting, Vec3::new(HISTORY_SAMPLE_MAX, 0.0, 1.0));
         let h = run(&[sample(1.0, 32.0, 1.0)], 4096.0);
         let after = blend_history(
             &h,
-            &frame_sample(
-                &frame,
-                &filled,
-                &sky,
-                &cell_albedo(&frame, &sky),
-                FILL_BILINEAR,
-                0,
-                0,
-            ),
+            &sample_at(&frame, &filled, &sky, 0, 0),
             HistoryCap::frames(4096.0),
             ClampBox::NONE,
         );
@@ -691,25 +651,9 @@ mod tests {
         let frame = tiny_frame([0.5, 0.5]);
         let sky = vec![GBufferTexel::SKY; 64];
         let filled = vec![[1.0f32; 4]; 64];
-        let fovea = frame_sample(
-            &frame,
-            &filled,
-            &sky,
-            &cell_albedo(&frame, &sky),
-            FILL_BILINEAR,
-            0,
-            0,
-        );
+        let fovea = sample_at(&frame, &filled, &sky, 0, 0);
         assert_eq!((fovea.weight, fovea.footprint), (32.0, 1.0));
-        let periphery = frame_sample(
-            &frame,
-            &filled,
-            &sky,
-            &cell_albedo(&frame, &sky),
-            FILL_BILINEAR,
-            7,
-            7,
-        );
+        let periphery = sample_at(&frame, &filled, &sky, 7, 7);
         assert_eq!((periphery.weight, periphery.footprint), (0.5, 4.0));
     }
 
@@ -726,15 +670,7 @@ mod tests {
             .map(|i| wall(if (i % 8 + i / 8) % 2 == 0 { 0.2 } else { 0.8 }))
             .collect();
         let filled = vec![[1.0f32; 4]; 64];
-        let s = frame_sample(
-            &frame,
-            &filled,
-            &g,
-            &cell_albedo(&frame, &g),
-            FILL_BILINEAR,
-            6,
-            6,
-        );
+        let s = sample_at(&frame, &filled, &g, 6, 6);
         assert!((s.albedo.x - 0.5).abs() < 1e-6 && (s.lighting.x - 2.0).abs() < 1e-5);
         let h = blend_history(
             &HistoryTexel::EMPTY,
