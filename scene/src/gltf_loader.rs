@@ -90,9 +90,18 @@ impl VertexPlacement {
     }
 }
 
+/// A node's local matrix (its `matrix` or TRS), in f64.
+fn local_matrix(node: &gltf::Node) -> DMat4 {
+    DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)))
+}
+
 /// Every node's world matrix, through its parents (glTF 2.0 §3.5.3): what a skin's joints need,
-/// wherever they sit in the hierarchy. A node in a cycle gets its local matrix only.
+/// wherever they sit in the hierarchy; empty for a file without skins. A node in a cycle gets its
+/// local matrix only.
 fn node_world_matrices(document: &gltf::Document) -> Vec<DMat4> {
+    if document.skins().len() == 0 {
+        return Vec::new();
+    }
     let n = document.nodes().len();
     let mut parent = vec![None; n];
     for node in document.nodes() {
@@ -100,13 +109,7 @@ fn node_world_matrices(document: &gltf::Document) -> Vec<DMat4> {
             parent[child.index()] = Some(node.index());
         }
     }
-    let local: Vec<DMat4> = document
-        .nodes()
-        .map(|node| {
-            let m = node.transform().matrix().map(|c| c.map(f64::from));
-            DMat4::from_cols_array_2d(&m)
-        })
-        .collect();
+    let local: Vec<DMat4> = document.nodes().map(|node| local_matrix(&node)).collect();
     (0..n)
         .map(|i| {
             let mut world = local[i];
@@ -546,8 +549,7 @@ impl Loader<'_> {
                     message: "node hierarchy is cyclic or absurdly instanced".to_owned(),
                 });
             }
-            let local = node.transform().matrix().map(|c| c.map(f64::from));
-            let world = parent * DMat4::from_cols_array_2d(&local);
+            let world = parent * local_matrix(&node);
             if let Some(mesh) = node.mesh() {
                 // Morph weights: the node's override the mesh's defaults (glTF 2.0 §3.7.2.2).
                 let weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
@@ -853,11 +855,11 @@ impl Loader<'_> {
         label: &str,
         weights: &[f32],
         vertex_count: usize,
-    ) -> Result<MorphDisplacements, SceneError> {
+    ) -> MorphDisplacements {
         let mut out = MorphDisplacements::default();
         let targets: Vec<gltf::mesh::MorphTarget> = primitive.morph_targets().collect();
         if targets.is_empty() {
-            return Ok(out);
+            return out;
         }
         if weights.len() != targets.len() {
             self.warn(format!(
@@ -909,7 +911,7 @@ impl Loader<'_> {
                 }
             }
         }
-        Ok(out)
+        out
     }
 
     /// Adds `mesh`'s primitives in world space, each morphed by `weights` (its morph targets'
@@ -1022,7 +1024,7 @@ impl Loader<'_> {
                     "{label}: COLOR_0 vertex colours are not read; the material's colour is used"
                 ));
             }
-            let morph = self.morph_displacements(&primitive, &label, weights, vertex_count)?;
+            let morph = self.morph_displacements(&primitive, &label, weights, vertex_count);
             for (p, d) in positions.iter_mut().zip(&morph.positions) {
                 *p = (Vec3::from(*p) + Vec3::from(*d)).to_array();
             }
@@ -1614,6 +1616,20 @@ mod tests {
 
     const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
 
+    /// The first triangle's vertices, sorted by x, then y, then z (loading may reorder them).
+    fn first_triangle_sorted(s: &LoadedScene) -> Vec<Vec3> {
+        let mut v: Vec<Vec3> = s.triangles[0]
+            .iter()
+            .map(|&i| Vec3::from(s.positions[i as usize]))
+            .collect();
+        v.sort_by(|a, b| {
+            a.x.total_cmp(&b.x)
+                .then(a.y.total_cmp(&b.y))
+                .then(a.z.total_cmp(&b.z))
+        });
+        v
+    }
+
     /// A skinned triangle is posed by its joints' world transforms, its own node's transform ignored
     /// (glTF 2.0 §3.7.3): vertex 0 follows joint 0 (5 up), vertex 1 half of it, vertex 2 joint 1
     /// (which stays put).
@@ -1656,13 +1672,8 @@ mod tests {
         let file = dir.join("s.gltf");
         std::fs::write(&file, gltf).unwrap();
         let s = load_scene(&file, &LoadOptions::default()).unwrap();
-        let mut got: Vec<Vec3> = s.triangles[0]
-            .iter()
-            .map(|&v| Vec3::from(s.positions[v as usize]))
-            .collect();
-        got.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
         assert_eq!(
-            got,
+            first_triangle_sorted(&s),
             [
                 Vec3::new(0.0, 1.0, 0.0),
                 Vec3::new(0.0, 5.0, 0.0),
@@ -1721,12 +1732,9 @@ mod tests {
             load_scene(&file, &LoadOptions::default()).unwrap()
         };
         let s = load("", "");
-        let p = |s: &LoadedScene, i: usize| Vec3::from(s.positions[s.triangles[0][i] as usize]);
         // The mesh's weights: vertex 1 up by 0.25 · 4, vertex 2 up by 0.5 · 2 (z).
-        let mut got: Vec<Vec3> = (0..3).map(|i| p(&s, i)).collect();
-        got.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.z.total_cmp(&b.z)));
         assert_eq!(
-            got,
+            first_triangle_sorted(&s),
             [
                 Vec3::ZERO,
                 Vec3::new(0.0, 1.0, 1.0),
@@ -1742,10 +1750,8 @@ mod tests {
         );
         // The node's weights override them.
         let s = load(r#","weights":[1,0]"#, "");
-        let mut got: Vec<Vec3> = (0..3).map(|i| p(&s, i)).collect();
-        got.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.z.total_cmp(&b.z)));
         assert_eq!(
-            got,
+            first_triangle_sorted(&s),
             [
                 Vec3::ZERO,
                 Vec3::new(0.0, 1.0, 2.0),
