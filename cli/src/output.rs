@@ -87,12 +87,9 @@ pub fn check_json_path(p: &Path, option: &'static str) -> Result<()> {
             format!("'{}' must end in .json", p.display()),
         ));
     }
-    let dir = p
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
+    let dir = parent_dir(p);
     if !dir.is_dir() {
-        return Err(FoveaError::option(option, missing_folder(dir)));
+        return Err(FoveaError::option(option, missing_folder(&dir)));
     }
     Ok(())
 }

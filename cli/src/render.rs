@@ -319,10 +319,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         );
     }
     if scene.packed.lights.list.is_empty() {
-        let w = "the scene has no light and no sky: the image will be black (add --sky R,G,B or \
-                 --point-light X,Y,Z,R,G,B)";
-        eprintln!("warning: {w}");
-        run_warnings.push(w.to_string());
+        eprintln!("warning: {}", crate::scene_setup::NO_LIGHT_WARNING);
+        run_warnings.push(crate::scene_setup::NO_LIGHT_WARNING.to_string());
     }
 
     let [w, h] = plan.resolution;

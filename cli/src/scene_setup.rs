@@ -44,6 +44,12 @@ pub struct PreparedScene {
     pub is_default: bool,
 }
 
+/// The warning for a scene with no light and no sky (`render` and `view` print it and list it in
+/// `--stats`).
+pub const NO_LIGHT_WARNING: &str =
+    "the scene has no light and no sky: the image will be black (add \
+                                    --sky R,G,B or --point-light X,Y,Z,R,G,B)";
+
 /// Loads `path` (or the default scene; OBJ materials from `mtl_override` if given, purely diffuse ones
 /// as `mtl_diffuse` says), adds `environment` and the `extra_lights` (point lights from the command line)
 /// and packs it, with the CPU's 8-wide tree if `wide_bvh` (see

@@ -172,14 +172,7 @@ fn bad_input_fails_cleanly() {
         .unwrap();
     assert!(String::from_utf8_lossy(&out.stderr).contains("does not exist"));
     // A path through a file is named as such, not as a missing folder.
-    let through_file = Path::new(scene).join("x.png");
-    let out = fovea()
-        .args(["render", scene, "-o"])
-        .arg(&through_file)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("is a file"), "{stderr}");
+    expect_failure(&[scene], "is a file", &Path::new(scene).join("x.png"));
     // Negative and huge numbers get fovea's range messages, not clap's tip to write `-- -1`.
     expect_failure(&[scene, "--spp", "-1,2,3"], "each value must be 1 to", &png);
     expect_failure(

@@ -81,11 +81,11 @@ pub fn run(options: ViewOptions) -> Result<()> {
         !use_gpu,
     )?;
     if scene.packed.lights.list.is_empty() {
-        let w = "the scene has no light and no sky: the image will be black (add --sky R,G,B or \
-                 --point-light X,Y,Z,R,G,B)";
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", crate::scene_setup::NO_LIGHT_WARNING);
         // `--stats` lists it with the scene's own warnings.
-        scene.warnings.insert(0, w.to_string());
+        scene
+            .warnings
+            .insert(0, crate::scene_setup::NO_LIGHT_WARNING.to_string());
     }
     let event_loop = EventLoop::new().map_err(|e| {
         FoveaError::View(format!(
