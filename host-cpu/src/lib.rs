@@ -18,6 +18,10 @@
 //!    pixel's history, and its resolve into the HDR image.
 //! 5. Where asked: the tone map to RGBA8 and the regions' overlay.
 //!
+//! A render split by samples (`fovea render --samples`, merged by `fovea merge`) runs the samples pass
+//! alone over a range of sample indices ([`render_sample_range`]), and the merge runs the cell means and
+//! fill on the parts' added sums ([`fill_from_sample_sums`]).
+//!
 //! Random numbers are keyed by block, frame and sample, and each block's samples are summed in a fixed
 //! order, so the image does not depend on the number of threads.
 pub mod render;
@@ -25,6 +29,7 @@ pub mod specialize;
 pub mod temporal;
 
 pub use render::{
-    render_frame, render_frame_passes, render_frame_with_history, CpuFrame, FrameImage, RenderStats,
+    fill_from_sample_sums, render_frame, render_frame_passes, render_frame_with_history,
+    render_sample_range, CpuFrame, FrameImage, RenderStats,
 };
 pub use temporal::TemporalHistory;

@@ -4,11 +4,11 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use fovea_core::denoise::{denoise_atrous, denoise_input, denoise_output, DenoiseTexel};
-use fovea_core::foveation::blocks::{for_each_block_in_rows, samples_in_block};
+use fovea_core::foveation::blocks::{block_sample_range, for_each_block_in_rows, samples_in_block};
 use fovea_core::foveation::fill::{block_mean, cell_buffer_len, cell_mean_at, fill_value};
 use fovea_core::foveation::overlay::overlay_rgba8;
 use fovea_core::foveation::regions::REGION_COUNT;
-use fovea_core::integrator::{block_sample_sum, FrameParams};
+use fovea_core::integrator::{block_sample_range_sum, FrameParams};
 use fovea_core::passes::{frame_passes, FrameOutput, FramePass, FrameRequest};
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::{Features, SceneView};
@@ -73,33 +73,14 @@ pub fn render_frame_passes(
                 scene,
                 SamplePass {
                     frame,
+                    output: SampleOutput::Mean,
                     replicated: &mut pixels,
                     counters: &counters,
                     progress,
                 },
             ),
-            // The cell-mean grids of every block size above 1, in one buffer.
-            FramePass::CellMeans => {
-                cell_means = (0..cell_buffer_len(width, height, foveation))
-                    .into_par_iter()
-                    .map(|i| cell_mean_at(&pixels, width, height, foveation, i).to_array())
-                    .collect();
-            }
-            // In place: a pixel's fill reads only its own replicated value and the cell means.
-            FramePass::Fill => for_each_pixel(&mut pixels, width, |x, y, pixel| {
-                let own = Vec4::from(*pixel);
-                let v = fill_value(
-                    own,
-                    &cell_means,
-                    width,
-                    height,
-                    foveation,
-                    x,
-                    y,
-                    request.fill_mode,
-                );
-                *pixel = [v.x, v.y, v.z, 1.0];
-            }),
+            FramePass::CellMeans => cell_means = cell_means_step(frame, &pixels),
+            FramePass::Fill => fill_step(frame, &cell_means, request.fill_mode, &mut pixels),
             FramePass::GBuffer => history.gbuffer_pass(scene, frame),
             // Over the cell means, which the fill has used: each cell's mean albedo.
             FramePass::CellAlbedo => cell_means = history.cell_albedo_pass(frame),
@@ -181,6 +162,100 @@ pub fn render_frame_passes(
     )
 }
 
+/// The cell-means pass: the cell-mean grids of every block size above 1, in one buffer, from the
+/// replicated block means.
+fn cell_means_step(frame: &FrameParams, replicated: &[[f32; 4]]) -> Vec<[f32; 4]> {
+    let (width, height) = (frame.width, frame.height);
+    (0..cell_buffer_len(width, height, &frame.foveation))
+        .into_par_iter()
+        .map(|i| cell_mean_at(replicated, width, height, &frame.foveation, i).to_array())
+        .collect()
+}
+
+/// The fill pass, in place: a pixel's fill reads only its own replicated value and the cell means.
+fn fill_step(
+    frame: &FrameParams,
+    cell_means: &[[f32; 4]],
+    fill_mode: u32,
+    pixels: &mut [[f32; 4]],
+) {
+    let (width, height) = (frame.width, frame.height);
+    for_each_pixel(pixels, width, |x, y, pixel| {
+        let own = Vec4::from(*pixel);
+        let v = fill_value(
+            own,
+            cell_means,
+            width,
+            height,
+            &frame.foveation,
+            x,
+            y,
+            fill_mode,
+        );
+        *pixel = [v.x, v.y, v.z, 1.0];
+    });
+}
+
+/// Part of a frame split by samples (`fovea render --samples first..end`): each block's samples
+/// `first..end` (clipped to its own count, [`block_sample_range`]), their sum and count written to
+/// every pixel of the block as `[r, g, b, count]`. The parts of a split are merged by adding their
+/// sums and counts and calling [`fill_from_sample_sums`].
+pub fn render_sample_range(
+    scene: &SceneView,
+    frame: &FrameParams,
+    [first, end]: [u32; 2],
+    progress: &(dyn Fn(u64) + Sync),
+) -> (FrameImage, RenderStats) {
+    let start = Instant::now();
+    let mut pixels = vec![[0.0f32; 4]; frame.width as usize * frame.height as usize];
+    let counters: [AtomicU64; 6] = Default::default();
+    dispatch(
+        scene,
+        SamplePass {
+            frame,
+            output: SampleOutput::RangeSum { first, end },
+            replicated: &mut pixels,
+            counters: &counters,
+            progress,
+        },
+    );
+    let render_ms = start.elapsed().as_secs_f64() * 1e3;
+    let loaded: Vec<u64> = counters.iter().map(|c| c.load(Ordering::Relaxed)).collect();
+    let stats = RenderStats {
+        render_ms,
+        primary_samples: loaded[0] + loaded[1] + loaded[2],
+        samples_per_region: [loaded[0], loaded[1], loaded[2]],
+        blocks_per_region: [loaded[3], loaded[4], loaded[5]],
+        path_features: path_mask(scene.features.bits()),
+        passes: vec![(FramePass::Samples.name(), render_ms)],
+    };
+    let image = FrameImage {
+        width: frame.width,
+        height: frame.height,
+        pixels,
+    };
+    (image, stats)
+}
+
+/// The foveated HDR image from every block's sample sum and count (`[r, g, b, count]` per pixel, as
+/// [`render_sample_range`] writes them, added over the parts of a split): the block means, then the
+/// frame's cell-means and fill passes. From one part holding every sample it is bit for bit the
+/// image [`render_frame`] renders.
+#[must_use]
+pub fn fill_from_sample_sums(frame: &FrameParams, sums: &[[f32; 4]], fill_mode: u32) -> FrameImage {
+    let mut pixels: Vec<[f32; 4]> = sums
+        .par_iter()
+        .map(|s| block_mean(Vec3::new(s[0], s[1], s[2]), s[3] as u32))
+        .collect();
+    let cell_means = cell_means_step(frame, &pixels);
+    fill_step(frame, &cell_means, fill_mode, &mut pixels);
+    FrameImage {
+        width: frame.width,
+        height: frame.height,
+        pixels,
+    }
+}
+
 /// `f(x, y)` for every pixel of a `width × height` image, row-major, rows in parallel.
 fn per_pixel<T: Send>(width: u32, height: u32, f: impl Fn(u32, u32) -> T + Sync) -> Vec<T> {
     (0..width * height)
@@ -245,10 +320,21 @@ fn hdr_request(fill_mode: u32, history: bool) -> FrameRequest {
     }
 }
 
+/// What the samples pass writes to every pixel of a block.
+#[derive(Clone, Copy, Debug)]
+enum SampleOutput {
+    /// The mean of the block's samples (a frame).
+    Mean,
+    /// The sum of the block's samples `first..end` and their count, `[r, g, b, count]` (a part of a
+    /// render split by samples).
+    RangeSum { first: u32, end: u32 },
+}
+
 /// The samples pass of [`render_frame_passes`]: every block's samples, band by band (core's walk over
 /// the blocks in each band's rows), written to every pixel of the block.
 struct SamplePass<'a> {
     frame: &'a FrameParams,
+    output: SampleOutput,
     replicated: &'a mut [[f32; 4]],
     counters: &'a [AtomicU64; 6],
     progress: &'a (dyn Fn(u64) + Sync),
@@ -260,6 +346,7 @@ impl WithScene for SamplePass<'_> {
     fn run<F: Features + Sync>(self, scene: &SceneView<'_, F>) {
         let SamplePass {
             frame,
+            output,
             replicated,
             counters,
             progress,
@@ -277,7 +364,20 @@ impl WithScene for SamplePass<'_> {
                 let y_band_end = y0 + rows_in_band;
                 for_each_block_in_rows(width, height, y0, y_band_end, foveation, |block| {
                     let spp = samples_in_block(&block, foveation);
-                    let value = block_mean(block_sample_sum(scene, frame, &block, spp), spp);
+                    let [first, end] = match output {
+                        SampleOutput::Mean => [0, spp],
+                        SampleOutput::RangeSum { first, end } => {
+                            block_sample_range(spp, first, end)
+                        }
+                    };
+                    let sum = block_sample_range_sum(scene, frame, &block, first, end);
+                    let value = match output {
+                        SampleOutput::Mean => block_mean(sum, spp),
+                        SampleOutput::RangeSum { .. } => {
+                            [sum.x, sum.y, sum.z, (end - first) as f32]
+                        }
+                    };
+                    let spp = end - first;
                     let x_end = (block.origin[0] + block.size).min(width);
                     let y_end = (block.origin[1] + block.size).min(y_band_end);
                     for by in block.origin[1]..y_end {

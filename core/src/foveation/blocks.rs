@@ -133,6 +133,17 @@ pub fn samples_in_block(block: &OwnedBlock, params: &FoveationParams) -> u32 {
     params.spp[block.region as usize]
 }
 
+/// The samples of a block that a part of a split render takes (`fovea render --samples first..end`):
+/// sample indices `first..end` clipped to the block's `spp`, as `[first, end]` (empty, `first == end`,
+/// where the block has no sample in the range). The parts of a split tile each block's `0..spp`
+/// exactly when their ranges tile `0..` the largest `spp`.
+#[inline]
+#[must_use]
+pub fn block_sample_range(spp: u32, first: u32, end: u32) -> [u32; 2] {
+    let end = end.min(spp);
+    [first.min(end), end]
+}
+
 /// Visits every block of a `width × height` image whose origin lies in rows `first_row..end_row`, once,
 /// in the order the grids nest: each periphery-grid square left to right, then (unless it is one periphery
 /// block) its intermediate-grid squares, then (unless each is one intermediate block) their fovea-grid
@@ -254,6 +265,32 @@ mod tests {
 
     use super::*;
     use crate::foveation::regions::FOVEATION_OK;
+
+    #[test]
+    fn sample_ranges_that_tile_the_largest_spp_tile_every_block() {
+        // Ranges 0..5, 5..11, 11..32 of a frame whose largest spp is 32, for blocks of 32, 16, 8, 1, 0.
+        let ranges = [[0, 5], [5, 11], [11, 32]];
+        for spp in [32, 16, 8, 5, 1, 0] {
+            let parts: Vec<[u32; 2]> = ranges
+                .iter()
+                .map(|r| block_sample_range(spp, r[0], r[1]))
+                .collect();
+            let mut next = 0;
+            for [first, end] in parts {
+                assert!(first <= end, "{spp}: {first}..{end}");
+                if first < end {
+                    assert_eq!(first, next, "{spp}: parts meet without gap or overlap");
+                    next = end;
+                }
+            }
+            assert_eq!(next, spp, "{spp}: the parts cover the block's samples");
+        }
+        assert_eq!(
+            block_sample_range(8, 16, 32),
+            [8, 8],
+            "empty past the block's spp"
+        );
+    }
 
     /// Many parameter sets over a 97 × 61 image: gazes (centre, corner, outside), radii (0, tiny, mixed,
     /// huge) and block sizes.

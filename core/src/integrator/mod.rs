@@ -160,17 +160,33 @@ pub fn block_sample_sum<F: crate::scene::Features>(
     block: &OwnedBlock,
     spp: u32,
 ) -> Vec3 {
+    block_sample_range_sum(scene, frame, block, 0, spp)
+}
+
+/// The sum of samples `first .. end` of `block`, in sample order, traced as
+/// [`block_sample_sum`] traces them: a part of a render split by samples (`fovea render --samples`).
+/// Each sample's value depends only on its own key, so the parts of a split hold exactly the samples
+/// one render would.
+#[cfg(not(target_arch = "spirv"))]
+#[must_use]
+pub fn block_sample_range_sum<F: crate::scene::Features>(
+    scene: &SceneView<F>,
+    frame: &FrameParams,
+    block: &OwnedBlock,
+    first: u32,
+    end: u32,
+) -> Vec3 {
     use crate::bvh::packet::PACKET_SIZE;
     let mut values = [Vec3::ZERO; PACKET_SIZE];
     let mut sum = Vec3::ZERO;
-    let mut first = 0;
-    while first < spp {
-        let n = (spp - first).min(PACKET_SIZE as u32) as usize;
-        render_block_samples_packet(scene, frame, block, first, &mut values[..n]);
+    let mut next = first;
+    while next < end {
+        let n = (end - next).min(PACKET_SIZE as u32) as usize;
+        render_block_samples_packet(scene, frame, block, next, &mut values[..n]);
         for v in &values[..n] {
             sum += *v;
         }
-        first += n as u32;
+        next += n as u32;
     }
     sum
 }
