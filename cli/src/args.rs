@@ -5,7 +5,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::values::{
     whole_number, BlockTriple, DisplayCm, Eccentricity, PixelPoint, Point3, PointLight, RadiiPx,
-    Resolution, Rgb, SppTriple,
+    Resolution, Rgb, SampleSelection, SppTriple,
 };
 
 /// fovea: a foveated real-time path tracer (after Mohanto, Kluge and Staadt 2023).
@@ -20,6 +20,9 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene (the bundled Lost Empire when no SCENE is given).
     Render(Box<RenderArgs>),
+    /// Merge the parts of a render split by samples (`render --samples A..B -o PART.fvpart`) into its
+    /// image, after checking that they belong to one render and tile its samples.
+    Merge(MergeArgs),
     /// Error against run time: foveated and uniform configurations measured against a converged
     /// reference (FLIP and relMSE per region, render time, speed-up), written as Markdown, JSON, CSV,
     /// images and an SVG plot.
@@ -310,9 +313,15 @@ pub struct RenderArgs {
     pub lighting: LightingArgs,
     #[command(flatten)]
     pub materials: MtlArgs,
-    /// Output image: .png (tone-mapped sRGB) or .exr (linear HDR).
+    /// Output image: .png (tone-mapped sRGB) or .exr (linear HDR); with --samples, a part file
+    /// (.fvpart).
     #[arg(short, long, default_value = "fovea.png", value_name = "FILE")]
     pub output: PathBuf,
+    /// Render one part of a render split over machines: samples A..B of every pixel and block (each
+    /// block's own count caps the range), or I/N, part I (from 0) of N equal parts. --output must be
+    /// a .fvpart file; `fovea merge` joins the parts into the image the whole render gives. CPU only.
+    #[arg(long, value_name = "A..B|I/N", allow_hyphen_values = true)]
+    pub samples: Option<SampleSelection>,
     /// Write an image of the regions and blocks over the render.
     #[arg(long, value_name = "FILE.png")]
     pub regions_overlay: Option<PathBuf>,
@@ -680,6 +689,28 @@ pub struct DisplayArgs {
         allow_hyphen_values = true
     )]
     pub distance_cm: f32,
+}
+
+/// `fovea merge`: the parts of a split render into its image (see `crate::merge`).
+#[derive(Args, Debug, Clone)]
+pub struct MergeArgs {
+    /// Part files (.fvpart) written by `fovea render --samples A..B`, in any order.
+    #[arg(required = true, value_name = "PARTS")]
+    pub parts: Vec<PathBuf>,
+    /// Output image: .png (tone-mapped sRGB) or .exr (linear HDR).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// Exposure compensation in EV (stops) before tone mapping (PNG only).
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "EV",
+        allow_hyphen_values = true
+    )]
+    pub exposure: f32,
+    /// No summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 /// `fovea bench`: build, traversal and scale benchmarks (see `crate::bench`).

@@ -411,6 +411,29 @@ impl Renderer {
         }
     }
 
+    /// Samples `range` of every block of `frame`, their sums and counts per pixel (a part of a render
+    /// split by samples, `fovea_cpu::render_sample_range`). The CPU backend only.
+    pub fn render_sample_range(
+        &mut self,
+        packed: &PackedScene,
+        frame: &FrameParams,
+        range: [u32; 2],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<(FrameImage, RenderStats)> {
+        match self {
+            Self::Cpu(cpu) => {
+                let view = packed.view().with_features(cpu.features);
+                Ok(cpu
+                    .pool
+                    .install(|| fovea_cpu::render_sample_range(&view, frame, range, progress)))
+            }
+            #[cfg(feature = "vulkan")]
+            Self::Vulkan(_) => Err(FoveaError::Backend(
+                "the Vulkan host cannot render a range of samples yet; use --backend cpu".into(),
+            )),
+        }
+    }
+
     /// The last frame rendered with [`FrameOutput::Present`]: on the CPU its RGBA8 pixels, width and
     /// height (for a presenting context to upload); `None` on Vulkan, where it stays on the device, or
     /// before the first such frame.

@@ -3,10 +3,13 @@ mod args;
 mod backend;
 mod bench;
 mod camera_path;
+mod content_hash;
 mod error;
 mod fixation;
 mod gaze;
+mod merge;
 mod output;
+mod partial;
 mod render;
 mod report;
 mod scene_setup;
@@ -20,6 +23,7 @@ fn main() -> std::process::ExitCode {
     let cli = args::Cli::parse();
     let result = match &cli.command {
         args::Command::Render(r) => render::run(r),
+        args::Command::Merge(m) => merge::run(m),
         args::Command::Report(r) => report::run(r),
         args::Command::Bench(b) => bench::run(b),
         args::Command::View(v) => view::run(v),

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use fovea_core::foveation::blocks::count_samples;
+use fovea_core::foveation::blocks::{block_sample_range, count_blocks, count_samples};
 use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
 use fovea_core::integrator::FrameParams;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -11,11 +11,13 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::args::RenderArgs;
 use crate::backend::{FrameOutput, FrameRequest, Renderer};
 use crate::camera_path::{read_camera_path, CameraKey};
+use crate::content_hash::{executable_hash, fnv1a64, packed_scene_hash};
 use crate::error::{FoveaError, Result};
 use crate::output::{
     check_json_path, check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png,
     ImageFormat,
 };
+use crate::partial::{Part, RenderIdentity};
 use crate::scene_setup::{choose_camera, prepare_scene, Lighting};
 use crate::stats::FrameStats;
 
@@ -25,7 +27,7 @@ struct GazeSample {
     frame: u32,
     gaze: [f32; 2],
 }
-use crate::values;
+use crate::values::{self, SampleSelection};
 
 /// Everything `render` needs, parsed and checked before any work starts.
 struct Plan {
@@ -37,6 +39,9 @@ struct Plan {
     cameras: Option<std::collections::HashMap<u32, CameraKey>>,
     output: PathBuf,
     output_format: ImageFormat,
+    /// `--samples`: this run renders one part of a split render, written to `output` (a .fvpart file):
+    /// its sample range, and its index and count for `--samples I/N`.
+    samples: Option<PartPlan>,
     /// `--keep-raw`: where the image before the denoiser goes.
     keep_raw: Option<(PathBuf, ImageFormat)>,
     per_frame_outputs: bool,
@@ -161,7 +166,14 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         ));
     }
 
-    let output_format = check_output_path(&args.output, "--output", true)?;
+    let samples = args
+        .samples
+        .map(|s| check_part_options(args, s, &foveation_template))
+        .transpose()?;
+    let output_format = match samples {
+        Some(_) => ImageFormat::Exr,
+        None => check_output_path(&args.output, "--output", true)?,
+    };
     refuse_overwriting_inputs(args)?;
     if let Some(p) = &args.regions_overlay {
         check_output_path(p, "--regions-overlay", false)?;
@@ -213,7 +225,9 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
     }
 
     let lighting = Lighting::from_args(&args.lighting)?;
-    let only_exr = output_format == ImageFormat::Exr && args.regions_overlay.is_none();
+    let only_exr = output_format == ImageFormat::Exr
+        && args.regions_overlay.is_none()
+        && args.samples.is_none();
     if args.image.exposure != 0.0 && only_exr {
         warnings.push(
             "--exposure applies to tone-mapped images (PNG, --regions-overlay); the --output EXR is linear"
@@ -230,11 +244,107 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         cameras,
         output: args.output.clone(),
         output_format,
+        samples,
         keep_raw,
         fill_mode: args.path.fill_mode(),
         lighting,
         warnings,
     })
+}
+
+/// A part of a split render (`--samples`): its sample range, and `[I, N]` for `--samples I/N`.
+#[derive(Clone, Copy, Debug)]
+struct PartPlan {
+    range: [u32; 2],
+    of: Option<[u32; 2]>,
+}
+
+/// `--samples`: one still frame on the CPU, written as a part (.fvpart) whose range lies within the
+/// frame's samples.
+fn check_part_options(
+    args: &RenderArgs,
+    selection: SampleSelection,
+    foveation: &FoveationParams,
+) -> Result<PartPlan> {
+    let refuse = |option: &'static str, why: &str| {
+        Err(FoveaError::option(
+            option,
+            format!("{why}; --samples renders one part of a single still frame"),
+        ))
+    };
+    if args.gaze_trace.is_some() {
+        return refuse("--gaze-trace", "renders a sequence");
+    }
+    if args.camera_path.is_some() {
+        return refuse("--camera-path", "renders a sequence");
+    }
+    if args.history {
+        return refuse("--history", "accumulates over a sequence");
+    }
+    if args.denoise {
+        return refuse(
+            "--denoise",
+            "filters a whole image (denoise the merged one)",
+        );
+    }
+    if args.regions_overlay.is_some() {
+        return refuse("--regions-overlay", "draws over a whole image");
+    }
+    let t = &args.target;
+    if t.backend == crate::args::Backend::Vulkan
+        || t.device.is_some()
+        || t.traversal == crate::args::Traversal::Hardware
+    {
+        return Err(FoveaError::option(
+            "--samples",
+            "renders on the CPU backend (--backend cpu or auto); the Vulkan host cannot render a range of samples yet",
+        ));
+    }
+    let largest = foveation.spp[..3].iter().copied().max().unwrap_or(0);
+    let range = selection.range(largest);
+    let of = match selection {
+        SampleSelection::Range(_) => None,
+        SampleSelection::Part { index, count } => Some([index, count]),
+    };
+    if let (Some([_, count]), true) = (of, range[0] == range[1]) {
+        return Err(FoveaError::option(
+            "--samples",
+            format!("{count} parts of the frame's {largest} samples leave this one empty; split into {largest} parts or fewer"),
+        ));
+    }
+    let end = range[1];
+    if end > largest {
+        return Err(FoveaError::option(
+            "--samples",
+            format!(
+                "ends at {end}, past the frame's {largest} samples per pixel or block (--spp); the parts of a split tile 0..{largest}"
+            ),
+        ));
+    }
+    let is_part = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("fvpart"));
+    if !is_part {
+        return Err(FoveaError::option(
+            "--output",
+            format!(
+                "'{}': with --samples the output is a part file (.fvpart), which `fovea merge` joins into the image",
+                args.output.display()
+            ),
+        ));
+    }
+    let dir = match args.output.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(FoveaError::option(
+            "--output",
+            crate::output::missing_folder(dir),
+        ));
+    }
+    Ok(PartPlan { range, of })
 }
 
 /// The frames of `--gaze-trace` (see [`crate::gaze`]): per-frame lines, or a timed trace sampled at
@@ -272,8 +382,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             eprintln!("warning: {w}");
         }
     }
-    // The backend first: a bad `--device` fails before the scene loads.
-    let mut renderer = Renderer::new(&args.target, args.quiet)?;
+    // The backend first: a bad `--device` fails before the scene loads. A part renders on the CPU.
+    let target = match plan.samples {
+        Some(_) => crate::args::BackendArgs {
+            backend: crate::args::Backend::Cpu,
+            ..args.target
+        },
+        None => args.target,
+    };
+    let mut renderer = Renderer::new(&target, args.quiet)?;
     let backend_name = renderer.name();
 
     let (eye, target, up) = args.camera.points();
@@ -361,7 +478,21 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             frame_index: g.frame,
             seed: args.image.seed,
         };
-        let total: u64 = count_samples(w, h, &foveation).iter().sum();
+        let total: u64 = match plan.samples {
+            Some(PartPlan {
+                range: [first, end],
+                ..
+            }) => {
+                let blocks = count_blocks(w, h, &foveation);
+                (0..3)
+                    .map(|r| {
+                        let [a, b] = block_sample_range(foveation.spp[r], first, end);
+                        blocks[r] * u64::from(b - a)
+                    })
+                    .sum()
+            }
+            None => count_samples(w, h, &foveation).iter().sum(),
+        };
         let bar = if args.quiet || total < 2_000_000 {
             ProgressBar::hidden()
         } else {
@@ -374,6 +505,40 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             );
             bar
         };
+        if let Some(part) = plan.samples {
+            let (sums, stats) =
+                renderer.render_sample_range(&scene.packed, &frame, part.range, &|n| bar.inc(n))?;
+            bar.finish_and_clear();
+            let scene_path = args
+                .scene
+                .clone()
+                .unwrap_or_else(crate::scene_setup::default_scene_path);
+            let scene_bytes =
+                std::fs::read(&scene_path).map_err(|e| FoveaError::file(&scene_path, e))?;
+            let identity = RenderIdentity {
+                scene_file_hash: fnv1a64(&scene_bytes),
+                scene_content_hash: packed_scene_hash(&scene.packed),
+                executable_hash: executable_hash(),
+            };
+            Part::new(
+                &identity,
+                &scene_path,
+                &frame,
+                plan.fill_mode,
+                part.range,
+                part.of,
+                sums.pixels,
+            )
+            .write(&plan.output)?;
+            frames.push(FrameStats {
+                frame: g.frame,
+                gaze: foveation.gaze,
+                output: plan.output.clone(),
+                render: stats,
+                extra: None,
+            });
+            continue;
+        }
         // The HDR image is needed for EXR output; PNG and the overlay use the backend's tone map.
         let want_hdr = plan.output_format == ImageFormat::Exr;
         let request = FrameRequest {

@@ -133,6 +133,56 @@ typed_value!(
     }
 );
 
+/// `--samples`: which of a frame's samples a part of a split render takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampleSelection {
+    /// `A..B`: sample indices `A` up to `B` (not included), `0 <= A < B <=` [`MAX_SPP`].
+    Range([u32; 2]),
+    /// `I/N`: part `I` of `N` equal parts (0-based), as a job array's task `I` of `N` takes it.
+    Part { index: u32, count: u32 },
+}
+
+impl SampleSelection {
+    /// The sample range of a frame whose blocks take at most `largest_spp` samples: part `I` of `N` is
+    /// `I·S/N .. (I+1)·S/N`, so the `N` parts tile `0..S`.
+    #[must_use]
+    pub fn range(self, largest_spp: u32) -> [u32; 2] {
+        match self {
+            Self::Range(r) => r,
+            Self::Part { index, count } => {
+                let at = |i: u32| (u64::from(i) * u64::from(largest_spp) / u64::from(count)) as u32;
+                [at(index), at(index + 1)]
+            }
+        }
+    }
+}
+
+impl FromStr for SampleSelection {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        if let Some((a, b)) = s.split_once("..") {
+            let [a, b]: [i64; 2] = split(&format!("{a},{b}"), ',')?;
+            if !(0 <= a && a < b && b <= i64::from(MAX_SPP)) {
+                return Err(format!("need 0 <= A < B <= {MAX_SPP}"));
+            }
+            return Ok(Self::Range([a as u32, b as u32]));
+        }
+        if let Some((i, n)) = s.split_once('/') {
+            let [i, n]: [i64; 2] = split(&format!("{i},{n}"), ',')?;
+            if !(0 <= i && i < n && n <= i64::from(MAX_SPP)) {
+                return Err(format!(
+                    "need 0 <= I < N <= {MAX_SPP} (part I of N, from 0)"
+                ));
+            }
+            return Ok(Self::Part {
+                index: i as u32,
+                count: n as u32,
+            });
+        }
+        Err("expected A..B (samples A up to B) or I/N (part I of N, from 0)".into())
+    }
+}
+
 typed_value!(
     /// `X,Y` in pixels (a gaze): finite, at most [`MAX_GAZE_OFFSET`] pixels from the origin.
     PixelPoint([f32; 2]) = |s| {
@@ -288,6 +338,26 @@ mod tests {
 
     #[test]
     fn parses_and_rejects() {
+        let samples = |s: &str| s.parse::<SampleSelection>();
+        assert_eq!(samples("8..24"), Ok(SampleSelection::Range([8, 24])));
+        for bad in [
+            "8..8",
+            "9..8",
+            "-1..4",
+            "0..",
+            "4",
+            "0..2000000",
+            "4/4",
+            "1/0",
+            "-1/3",
+        ] {
+            assert!(samples(bad).is_err(), "{bad}");
+        }
+        // Parts of 1000 samples in 3: 0..333, 333..666, 666..1000.
+        let parts: Vec<[u32; 2]> = (0..3)
+            .map(|i| samples(&format!("{i}/3")).unwrap().range(1000))
+            .collect();
+        assert_eq!(parts, [[0, 333], [333, 666], [666, 1000]]);
         assert_eq!("1920x1080".parse::<Resolution>().unwrap().0, [1920, 1080]);
         assert_eq!("64X32".parse::<Resolution>().unwrap().0, [64, 32]);
         assert!("0x10".parse::<Resolution>().is_err());

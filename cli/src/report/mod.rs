@@ -461,7 +461,7 @@ fn run_scene(
     let entry = CacheEntry::new(
         &plan.cache_dir,
         reference_cache::reference_key_text(
-            reference_cache::fnv1a64(&scene_bytes),
+            crate::content_hash::fnv1a64(&scene_bytes),
             &scene.packed,
             env_text,
             &reference_frame,
