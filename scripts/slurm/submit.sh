@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Renders one frame over a Slurm cluster: a job array of N tasks, each rendering 1/N of every pixel's
+# samples (`fovea render --samples I/N`), then a merge job (`fovea merge`) that depends on the array.
+# The merged image equals the single-machine render up to float rounding (docs/cluster.md).
+#
+#   scripts/slurm/submit.sh --parts N --out DIR [--image NAME.exr] [--fovea BIN] [--tasks LIST] \
+#       [--sbatch "OPTIONS"] -- RENDER_ARGS...
+#
+#   --parts N      the array's size (at most the frame's largest --spp)
+#   --out DIR      the folder for the parts, the logs and the image (every node must see it)
+#   --image NAME   the merged image in DIR (default image.exr; .png is tone-mapped)
+#   --fovea BIN    the fovea binary the nodes run (default: $FOVEA, else `fovea` on PATH); build a
+#                  portable one with scripts/slurm/build-portable.sh
+#   --tasks LIST   submit only these array tasks (e.g. 2 or 1,3), to complete a split a task died in
+#   --sbatch OPTS  extra sbatch options for both jobs, e.g. "--partition=cpu --account=lab --time=2:00:00
+#                  --cpus-per-task=32" (the SBATCH_* environment variables work too)
+# RENDER_ARGS are `fovea render`'s for the whole frame, without --samples and -o.
+# Prints the two job ids: "array JOBID" and "merge JOBID".
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+parts="" out="" image=image.exr fovea=${FOVEA:-} tasks="" extra=""
+while [ $# -gt 0 ]; do
+  case $1 in
+    --parts) parts=$2; shift 2 ;;
+    --out) out=$2; shift 2 ;;
+    --image) image=$2; shift 2 ;;
+    --fovea) fovea=$2; shift 2 ;;
+    --tasks) tasks=$2; shift 2 ;;
+    --sbatch) extra=$2; shift 2 ;;
+    --) shift; break ;;
+    *) echo "submit.sh: unknown option '$1' (render options go after --)" >&2; exit 2 ;;
+  esac
+done
+[[ $parts =~ ^[1-9][0-9]*$ ]] || { echo "submit.sh: --parts N (a positive whole number) is required" >&2; exit 2; }
+[ -n "$out" ] || { echo "submit.sh: --out DIR is required" >&2; exit 2; }
+[ -n "$fovea" ] || fovea=$(command -v fovea || true)
+[ -n "$fovea" ] && [ -x "$fovea" ] ||
+  { echo "submit.sh: no fovea binary: give --fovea BIN or set FOVEA (scripts/slurm/build-portable.sh builds one)" >&2; exit 2; }
+command -v sbatch >/dev/null || { echo "submit.sh: sbatch not found; run this on a Slurm login node" >&2; exit 2; }
+mkdir -p "$out"
+out=$(cd "$out" && pwd)
+fovea=$(cd "$(dirname "$fovea")" && pwd)/$(basename "$fovea")
+export FOVEA=$fovea FOVEA_PARTS=$parts FOVEA_OUT=$out FOVEA_IMAGE=$image
+read -r -a sbatch_extra <<<"$extra"
+array=${tasks:-0-$((parts - 1))}
+array_job=$(sbatch --parsable "${sbatch_extra[@]}" --array="$array" \
+  --output="$out/part-%a.log" "$here/render-part.sbatch" "$@")
+array_job=${array_job%%;*}
+merge_job=$(sbatch --parsable "${sbatch_extra[@]}" --dependency="afterany:$array_job" \
+  --output="$out/merge-%j.log" "$here/merge.sbatch")
+merge_job=${merge_job%%;*}
+echo "array $array_job"
+echo "merge $merge_job"
