@@ -81,6 +81,11 @@ if [ "$(printf '%s\n%s\n' "$MIN_RUST" "${cargo_version%%-*}" | sort -V | head -1
 fi
 
 # --- the kernel's nightly ---------------------------------------------------------------------------------
+# FOVEA_CPU_ONLY=1 (scripts/render-default.sh): a build without the Vulkan backend needs no nightly.
+if [ "${FOVEA_CPU_ONLY:-0}" = 1 ]; then
+  echo "setup: $(cargo --version); CPU only (FOVEA_CPU_ONLY=1): the kernel's nightly is not installed"
+  exit 0
+fi
 if command -v rustup >/dev/null 2>&1; then
   if ! rustup toolchain list | grep -q "^${NIGHTLY}"; then
     echo "setup: installing Rust ${NIGHTLY} (${NIGHTLY_COMPONENTS[*]}) for the GPU kernel"
