@@ -391,6 +391,15 @@ pub struct ReportArgs {
     /// Render the reference again even when a cached one exists (and replace it).
     #[arg(long)]
     pub no_cache: bool,
+    /// A folder of parts of the references (a split over machines, docs/cluster.md): with
+    /// --reference-part, where this run writes its part; without, where a reference that is not
+    /// cached is merged from (all its parts must be there) instead of being rendered.
+    #[arg(long, value_name = "DIR")]
+    pub reference_parts: Option<PathBuf>,
+    /// Render only part I of N of each scene's reference into --reference-parts, and no report (one
+    /// task of a job array; CPU backend).
+    #[arg(long, value_name = "I/N", allow_hyphen_values = true)]
+    pub reference_part: Option<SampleSelection>,
     /// Also judge a sequence: render this gaze trace frame by frame (the files `render` and `view`
     /// read: `t,x,y` or `frame,x,y`, pixels or --gaze-normalized) for uniform and the paper's
     /// foveated configurations, with and without history, and pool the error by eccentricity band

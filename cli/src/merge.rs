@@ -31,7 +31,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     let checked = check_parts(parts)?;
     let frame = *checked.frame();
-    let image = fovea_cpu::fill_from_sample_sums(&frame, &checked.summed(), checked.fill_mode());
+    let image = checked.merged();
     write_image(&args.output, format, &image, args.exposure)?;
     if !args.quiet {
         println!(

@@ -65,6 +65,19 @@ pub struct RenderIdentity {
     pub executable_hash: Option<u64>,
 }
 
+impl RenderIdentity {
+    /// The identity of a render of `packed`, loaded from a scene file whose bytes are `scene_bytes`, by
+    /// this executable.
+    #[must_use]
+    pub fn of(scene_bytes: &[u8], packed: &fovea_scene::pack::PackedScene) -> Self {
+        Self {
+            scene_file_hash: fnv1a64(scene_bytes),
+            scene_content_hash: crate::content_hash::packed_scene_hash(packed),
+            executable_hash: crate::content_hash::executable_hash(),
+        }
+    }
+}
+
 impl Part {
     /// A new part's header fields for `frame`; `sums` as `render_sample_range` wrote them.
     #[must_use]
@@ -77,42 +90,8 @@ impl Part {
         of: Option<[u32; 2]>,
         sums: Vec<[f32; 4]>,
     ) -> Self {
-        let f = &frame.foveation;
-        let hex = |bytes: &[u8]| bytes.iter().map(|b| format!("{b:02x}")).collect::<String>();
-        let executable = identity
-            .executable_hash
-            .map_or_else(|| "unknown".to_string(), |h| format!("{h:016x}"));
-        let lines = [
-            (
-                "fovea",
-                format!("{} executable {executable}", env!("CARGO_PKG_VERSION")),
-            ),
-            (
-                "scene-file",
-                format!("fnv1a64 {:016x}", identity.scene_file_hash),
-            ),
-            (
-                "scene-content",
-                format!("fnv1a64 {:016x}", identity.scene_content_hash),
-            ),
-            ("frame-params", hex(bytemuck::bytes_of(frame))),
-            ("fill", fill_mode.to_string()),
-            ("resolution", format!("{}x{}", frame.width, frame.height)),
-            ("gaze", format!("{},{}", f.gaze[0], f.gaze[1])),
-            ("spp", format!("{},{},{}", f.spp[0], f.spp[1], f.spp[2])),
-            (
-                "blocks",
-                format!(
-                    "{},{},{}",
-                    f.block_size[0], f.block_size[1], f.block_size[2]
-                ),
-            ),
-            ("frame", frame.frame_index.to_string()),
-            ("seed", frame.seed.to_string()),
-            ("largest-spp", largest_spp(frame).to_string()),
-        ];
         Self {
-            identity: lines.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+            identity: identity_lines(identity, frame, fill_mode),
             scene_path: scene_path.display().to_string(),
             frame: *frame,
             fill_mode,
@@ -258,6 +237,51 @@ impl Part {
     }
 }
 
+/// The identity lines of a part of `frame` (see the module's documentation): equal for every part of one
+/// render.
+#[must_use]
+pub fn identity_lines(
+    identity: &RenderIdentity,
+    frame: &FrameParams,
+    fill_mode: u32,
+) -> Vec<(String, String)> {
+    let f = &frame.foveation;
+    let hex = |bytes: &[u8]| bytes.iter().map(|b| format!("{b:02x}")).collect::<String>();
+    let executable = identity
+        .executable_hash
+        .map_or_else(|| "unknown".to_string(), |h| format!("{h:016x}"));
+    let lines = [
+        (
+            "fovea",
+            format!("{} executable {executable}", env!("CARGO_PKG_VERSION")),
+        ),
+        (
+            "scene-file",
+            format!("fnv1a64 {:016x}", identity.scene_file_hash),
+        ),
+        (
+            "scene-content",
+            format!("fnv1a64 {:016x}", identity.scene_content_hash),
+        ),
+        ("frame-params", hex(bytemuck::bytes_of(frame))),
+        ("fill", fill_mode.to_string()),
+        ("resolution", format!("{}x{}", frame.width, frame.height)),
+        ("gaze", format!("{},{}", f.gaze[0], f.gaze[1])),
+        ("spp", format!("{},{},{}", f.spp[0], f.spp[1], f.spp[2])),
+        (
+            "blocks",
+            format!(
+                "{},{},{}",
+                f.block_size[0], f.block_size[1], f.block_size[2]
+            ),
+        ),
+        ("frame", frame.frame_index.to_string()),
+        ("seed", frame.seed.to_string()),
+        ("largest-spp", largest_spp(frame).to_string()),
+    ];
+    lines.into_iter().map(|(k, v)| (k.to_string(), v)).collect()
+}
+
 /// The most samples any block of `frame` takes: the parts of a split must tile `0..` this.
 #[must_use]
 pub fn largest_spp(frame: &FrameParams) -> u32 {
@@ -385,6 +409,31 @@ pub fn check_parts(mut parts: Vec<(PathBuf, Part)>) -> Result<CheckedParts> {
 }
 
 impl CheckedParts {
+    /// Checks that these are parts of the render whose identity lines are `expected`
+    /// ([`identity_lines`]), naming the first line that differs.
+    pub fn expect_identity(&self, expected: &[(String, String)], what: &str) -> Result<()> {
+        let (path, part) = &self.parts[0];
+        match expected
+            .iter()
+            .zip(&part.identity)
+            .find(|(a, b)| a != b)
+            .map(|(a, _)| a.0.as_str())
+            .or((expected.len() != part.identity.len()).then_some("header"))
+        {
+            None => Ok(()),
+            Some(key) => Err(FoveaError::file(
+                path,
+                format!("is not a part of {what}: its '{key}' line differs"),
+            )),
+        }
+    }
+
+    /// The merged image: every block's samples added over the parts, then the frame's block fill.
+    #[must_use]
+    pub fn merged(&self) -> fovea_cpu::FrameImage {
+        fovea_cpu::fill_from_sample_sums(self.frame(), &self.summed(), self.fill_mode())
+    }
+
     /// Every pixel's sum and count over the parts, added in sample order.
     #[must_use]
     pub fn summed(&self) -> Vec<[f32; 4]> {

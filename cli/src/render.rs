@@ -11,7 +11,6 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::args::RenderArgs;
 use crate::backend::{FrameOutput, FrameRequest, Renderer};
 use crate::camera_path::{read_camera_path, CameraKey};
-use crate::content_hash::{executable_hash, fnv1a64, packed_scene_hash};
 use crate::error::{FoveaError, Result};
 use crate::output::{
     check_json_path, check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png,
@@ -515,13 +514,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 .unwrap_or_else(crate::scene_setup::default_scene_path);
             let scene_bytes =
                 std::fs::read(&scene_path).map_err(|e| FoveaError::file(&scene_path, e))?;
-            let identity = RenderIdentity {
-                scene_file_hash: fnv1a64(&scene_bytes),
-                scene_content_hash: packed_scene_hash(&scene.packed),
-                executable_hash: executable_hash(),
-            };
             Part::new(
-                &identity,
+                &RenderIdentity::of(&scene_bytes, &scene.packed),
                 &scene_path,
                 &frame,
                 plan.fill_mode,

@@ -415,3 +415,65 @@ fn a_slurm_job_array_renders_a_reference_that_equals_the_single_render() {
     drop(slurm);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `fovea report`'s references split over tasks: `--reference-part I/N` renders a part of each
+/// reference into `--reference-parts`, and a report given the folder merges the reference from it (all
+/// of its parts, or it names the missing ones) into the cache instead of rendering it.
+#[test]
+fn a_report_merges_its_reference_from_parts() {
+    let dir = temp_dir("report");
+    let parts = dir.join("parts");
+    std::fs::create_dir_all(&parts).unwrap();
+    let report = |cache: &str, out: &str, extra: &[&str]| {
+        let mut c = fovea();
+        c.arg("report")
+            .arg(cornell())
+            .args(["--eye", "0,1,3.9", "--target", "0,1,0", "--fov", "38"])
+            .args(["--quick", "--resolution", "64x36", "--reference-spp", "64"])
+            .args(["--backend", "cpu", "--cache-dir"])
+            .arg(dir.join(cache))
+            .arg("--out")
+            .arg(dir.join(out))
+            .args(extra);
+        c
+    };
+    let parts_dir = parts.to_str().unwrap();
+    run(&mut report(
+        "c1",
+        "o1",
+        &["--reference-part", "0/2", "--reference-parts", parts_dir],
+    ));
+    assert!(!dir.join("o1").exists(), "a part run writes no report");
+    assert_eq!(std::fs::read_dir(&parts).unwrap().count(), 1);
+    let e = failure(&mut report("c1", "o1", &["--reference-parts", parts_dir]));
+    assert!(
+        e.contains("samples 32..64 of 0..64 are missing") && e.contains("parts 1 of 2"),
+        "{e}"
+    );
+    let e = failure(&mut report("c1", "o1", &["--reference-part", "0/2"]));
+    assert!(e.contains("add --reference-parts"), "{e}");
+    run(&mut report(
+        "c1",
+        "o1",
+        &["--reference-part", "1/2", "--reference-parts", parts_dir],
+    ));
+    let out = run(&mut report("c1", "o1", &["--reference-parts", parts_dir]));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("merged from the parts"), "{stderr}");
+    assert!(dir.join("o1/report.json").is_file());
+
+    // The same report rendering its own reference: the same image within float rounding.
+    run(&mut report("c2", "o2", &[]));
+    let cached = |cache: &str| {
+        let exr: Vec<PathBuf> = std::fs::read_dir(dir.join(cache))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "exr"))
+            .collect();
+        assert_eq!(exr.len(), 1, "{exr:?}");
+        read_exr(&exr[0])
+    };
+    let worst = worst_relative(&cached("c2"), &cached("c1"));
+    assert!(worst < 1e-5, "merged reference against rendered: {worst:e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -29,8 +29,9 @@ use crate::args::ReportArgs;
 use crate::backend::{FrameOutput, FrameRequest, Renderer};
 use crate::error::{FoveaError, Result};
 use crate::output::{regions_overlay, tonemapped_rgb8, write_png};
+use crate::partial::{check_parts, identity_lines, Part, RenderIdentity};
 use crate::scene_setup::{choose_camera, default_scene_path, prepare_scene, Lighting};
-use crate::values::{self, MAX_SPP};
+use crate::values::{self, SampleSelection, MAX_SPP};
 
 use configs::{ConfigKind, ConfigSpec, UNIFORM_SPP};
 use metrics::{RegionMap, RegionMeans};
@@ -130,6 +131,11 @@ struct Plan {
     up: [f32; 3],
     cache_dir: PathBuf,
     sequence: Option<sequence::SequencePlan>,
+    /// `--reference-parts`: where references are merged from, or (with `reference_part`) where this
+    /// run writes its part of each.
+    reference_parts: Option<PathBuf>,
+    /// `--reference-part I/N`: render only this part of each reference, and no report.
+    reference_part: Option<SampleSelection>,
 }
 
 fn positive(option: &'static str, value: u32, max: u32) -> Result<u32> {
@@ -224,6 +230,24 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
         target,
         up,
         cache_dir: reference_cache::cache_dir(args.cache_dir.as_deref())?,
+        reference_parts: match &args.reference_parts {
+            Some(dir) if !dir.is_dir() => {
+                return Err(FoveaError::option(
+                    "--reference-parts",
+                    crate::output::missing_folder(dir),
+                ))
+            }
+            dir => dir.clone(),
+        },
+        reference_part: match (args.reference_part, &args.reference_parts) {
+            (Some(_), None) => {
+                return Err(FoveaError::option(
+                    "--reference-part",
+                    "writes its part into a folder: add --reference-parts DIR",
+                ))
+            }
+            (part, _) => part,
+        },
         sequence: match &args.gaze_trace {
             Some(path) => Some(sequence::read_trace(
                 path,
@@ -250,7 +274,11 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     let plan = plan(args)?;
     let mut renderer = Renderer::new(&args.target, args.quiet)?;
     let lighting = Lighting::from_args(&args.lighting)?;
-    create_dir(&args.out)?;
+    // A part of the references is all a `--reference-part` run writes.
+    let writes_report = plan.reference_part.is_none();
+    if writes_report {
+        create_dir(&args.out)?;
+    }
 
     // One entry per scene: its path (None: the bundled default) and its output folder.
     let scenes: Vec<(Option<PathBuf>, PathBuf)> = if args.scenes.len() <= 1 {
@@ -318,11 +346,13 @@ pub fn run(args: &ReportArgs) -> Result<()> {
 
     let mut markdown = Vec::new();
     for (scene_path, out_dir) in &scenes {
-        create_dir(out_dir)?;
+        if writes_report {
+            create_dir(out_dir)?;
+        }
         let environment = lighting.environment(scene_path.is_none());
         let env_text = lighting.environment_key(scene_path.is_none());
         let scene_start = Instant::now();
-        let mut report = run_scene(
+        let Some(mut report) = run_scene(
             args,
             &plan,
             &mut renderer,
@@ -332,7 +362,10 @@ pub fn run(args: &ReportArgs) -> Result<()> {
             &env_text,
             &lighting.point_lights,
             out_dir,
-        )?;
+        )?
+        else {
+            continue;
+        };
         report.wall_ms = scene_start.elapsed().as_secs_f64() * 1e3;
         let md = write::report_md(&report);
         write::write_text(
@@ -354,6 +387,9 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         markdown.push((out_dir.clone(), md));
     }
     bar.finish_and_clear();
+    if !writes_report {
+        return Ok(());
+    }
     if scenes.len() > 1 {
         let mut text = String::from("# Error against run time (`fovea report`)\n\n");
         for (dir, md) in &markdown {
@@ -378,6 +414,46 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     Ok(())
 }
 
+/// A reference merged from its parts in `dir` (`<name>.part-*.fvpart`, written by `--reference-part`),
+/// checked to be parts of exactly this reference (`expected`, its identity lines).
+fn merge_reference_parts(
+    dir: &Path,
+    name: &str,
+    scene_name: &str,
+    expected: &[(String, String)],
+) -> Result<FrameImage> {
+    let prefix = format!("{name}.part-");
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| FoveaError::file(dir, e))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with(&prefix) && n.ends_with(".fvpart"))
+        })
+        .collect();
+    paths.sort();
+    if paths.is_empty() {
+        return Err(FoveaError::option(
+            "--reference-parts",
+            format!(
+                "'{}' holds no part of {scene_name}'s reference ({prefix}*.fvpart): render them with \
+                 the same options plus --reference-part I/N --reference-parts {}, by the same fovea \
+                 binary",
+                dir.display(),
+                dir.display()
+            ),
+        ));
+    }
+    let parts = paths
+        .into_iter()
+        .map(|p| Part::read(&p).map(|part| (p, part)))
+        .collect::<Result<Vec<_>>>()?;
+    let checked = check_parts(parts)?;
+    checked.expect_identity(expected, &format!("{scene_name}'s reference"))?;
+    Ok(checked.merged())
+}
+
 /// Prints a status line above the progress bar (nothing with `--quiet`).
 fn note(bar: &ProgressBar, quiet: bool, message: &str) {
     if !quiet {
@@ -385,7 +461,8 @@ fn note(bar: &ProgressBar, quiet: bool, message: &str) {
     }
 }
 
-/// Renders and measures one scene; writes its images.
+/// Renders and measures one scene; writes its images. With `--reference-part`, renders only that part of
+/// its reference into `--reference-parts` and returns `None`.
 #[allow(clippy::too_many_arguments)]
 fn run_scene(
     args: &ReportArgs,
@@ -397,7 +474,7 @@ fn run_scene(
     env_text: &str,
     point_lights: &[crate::values::WorldPointLight],
     out_dir: &Path,
-) -> Result<SceneReport> {
+) -> Result<Option<SceneReport>> {
     let [w, h] = plan.resolution;
     let file = scene_path
         .map(Path::to_path_buf)
@@ -468,6 +545,51 @@ fn run_scene(
             plan.fill_mode,
         ),
     );
+    if let (Some(selection), Some(dir)) = (plan.reference_part, &plan.reference_parts) {
+        let range = selection.range(plan.reference_spp);
+        if range[0] == range[1] {
+            return Err(FoveaError::option(
+                "--reference-part",
+                format!(
+                    "leaves this part of the reference's {} samples empty; split into fewer parts",
+                    plan.reference_spp
+                ),
+            ));
+        }
+        let of = match selection {
+            SampleSelection::Part { index, count } => Some([index, count]),
+            SampleSelection::Range(_) => None,
+        };
+        bar.set_message(format!(
+            "{scene_name}: reference samples {}..{}",
+            range[0], range[1]
+        ));
+        let (sums, _) =
+            renderer
+                .render_sample_range(&scene.packed, &reference_frame, range, &|n| bar.inc(n))?;
+        let path = dir.join(format!("{}.part-{:08}.fvpart", entry.name(), range[0]));
+        Part::new(
+            &RenderIdentity::of(&scene_bytes, &scene.packed),
+            &file,
+            &reference_frame,
+            plan.fill_mode,
+            range,
+            of,
+            sums.pixels,
+        )
+        .write(&path)?;
+        note(
+            bar,
+            args.quiet,
+            &format!(
+                "{scene_name}: reference samples {}..{} -> {}",
+                range[0],
+                range[1],
+                path.display()
+            ),
+        );
+        return Ok(None);
+    }
     let cached = if args.no_cache {
         None
     } else {
@@ -481,6 +603,36 @@ fn run_scene(
                 args.quiet,
                 &format!("reference: cached {}", entry.image.display()),
             );
+            (image, None)
+        }
+        None if plan.reference_parts.is_some() => {
+            let dir = plan.reference_parts.as_deref().expect("matched");
+            let image = merge_reference_parts(
+                dir,
+                &entry.name(),
+                &scene_name,
+                &identity_lines(
+                    &RenderIdentity::of(&scene_bytes, &scene.packed),
+                    &reference_frame,
+                    plan.fill_mode,
+                ),
+            )?;
+            match entry.store(&image) {
+                Ok(()) => note(
+                    bar,
+                    args.quiet,
+                    &format!(
+                        "reference: merged from the parts in {} and cached {}",
+                        dir.display(),
+                        entry.image.display()
+                    ),
+                ),
+                Err(e) => note(
+                    bar,
+                    false,
+                    &format!("warning: the reference could not be cached: {e}"),
+                ),
+            }
             (image, None)
         }
         None => {
@@ -636,7 +788,7 @@ fn run_scene(
         r.sample_ratio = base_samples as f64 / r.primary_samples.max(1) as f64;
     }
 
-    Ok(SceneReport {
+    Ok(Some(SceneReport {
         scene: file.display().to_string(),
         scene_name,
         backend: renderer.name(),
@@ -661,7 +813,7 @@ fn run_scene(
         wall_ms: 0.0,
         configs: results,
         sequence,
-    })
+    }))
 }
 
 /// What measuring a configuration needs.

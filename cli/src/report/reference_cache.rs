@@ -109,6 +109,16 @@ impl CacheEntry {
         }
     }
 
+    /// The entry's file name without extension (`reference-<hash of the key text>`), which also names
+    /// the reference's parts in a `--reference-parts` folder.
+    #[must_use]
+    pub fn name(&self) -> String {
+        self.image
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    }
+
     /// The cached image, if there is one with the same key text and the expected size. A cache file that
     /// cannot be read is a miss (it is rendered again and replaced).
     #[must_use]
