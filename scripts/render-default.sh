@@ -4,8 +4,8 @@
 #
 # The binary is built without the Vulkan backend (`--no-default-features`), so the first run needs
 # neither the pinned nightly nor the rust-gpu kernel's build: on a fresh 2-core machine the build takes
-# about 4 minutes instead of 8 (docs/performance.md, "The first render"). `fovea view` and
-# `--backend vulkan` need the full build: `cargo build --release -p fovea-cli`.
+# about 5 minutes instead of 8 (docs/performance.md, "Split renders, a one-node Slurm, and the first
+# render"). `fovea view` and `--backend vulkan` need the full build: `cargo build --release -p fovea-cli`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FOVEA_CPU_ONLY=1 bash scripts/setup.sh
@@ -13,7 +13,7 @@ export PATH="$HOME/.cargo/bin:$PATH"
 mkdir -p out
 bin=target/cpu-only/release/fovea
 if [ ! -x "$bin" ]; then
-  echo "render-default: building fovea (release, CPU backend) for the first time: about 4 minutes on" \
+  echo "render-default: building fovea (release, CPU backend) for the first time: about 5 minutes on" \
     "2 cores; cargo shows its progress below"
 fi
 start=$(date +%s)

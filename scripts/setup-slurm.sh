@@ -15,6 +15,11 @@ for pkg in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
 done
 [ ${#missing[@]} -eq 0 ] && exit 0
+# The test starts slurmd, which needs root: a developer's own account (not root, not CI) is not changed.
+if [ "$(id -u)" -ne 0 ] && [ "${CI:-}" != true ]; then
+  echo "setup-slurm: not root, so the Slurm test will skip; to run it: sudo apt-get install ${missing[*]}"
+  exit 0
+fi
 if ! command -v apt-get >/dev/null 2>&1; then
   echo "setup-slurm: not a Debian-like system; install ${missing[*]} (Slurm and munge) to run the Slurm test" >&2
   exit 0
@@ -23,5 +28,8 @@ SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
 echo "setup-slurm: installing ${missing[*]}"
 # Where systemd runs, Debian enables the packages' services: slurmctld and slurmd find no
 # /etc/slurm/slurm.conf and stop; munged runs with its own key. The test uses none of them.
-$SUDO apt-get update -qq >/dev/null
-DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+# A failed install is a warning: the test then skips (and fails under CI=true, which names it).
+if ! { $SUDO apt-get update -qq >/dev/null &&
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null; }; then
+  echo "setup-slurm: warning: installing ${missing[*]} failed; the Slurm test will not run" >&2
+fi

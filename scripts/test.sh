@@ -12,6 +12,6 @@ rustfmt --edition 2021 --check gpu-kernel/src/*.rs gpu-builder/src/*.rs
 echo "== cargo clippy"
 cargo clippy --workspace --all-targets -q -- -D warnings
 # The CPU-only build (scripts/render-default.sh, scripts/slurm/build-portable.sh) has no Vulkan backend.
-cargo clippy -p fovea-cli --no-default-features -q -- -D warnings
+cargo clippy -p fovea-cli --no-default-features --all-targets -q -- -D warnings
 echo "== cargo test"
 cargo test --workspace

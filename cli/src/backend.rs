@@ -18,6 +18,8 @@ pub struct Rendered {
     pub stats: RenderStats,
     /// With history: this frame started every pixel's history afresh (the first frame, a reset, a
     /// new size).
+    #[cfg_attr(not(feature = "vulkan"), allow(dead_code))]
+    // the live view's, which needs Vulkan
     pub history_restarted: bool,
     /// Backend-specific figures for the stats JSON.
     pub extra: Option<serde_json::Value>,
@@ -87,6 +89,29 @@ pub(crate) fn auto_vulkan_refusal() -> Option<String> {
             }
         }
     }
+}
+
+/// The backend a part of a split render runs on (`render --samples`, `report --reference-part`): the CPU,
+/// the one host that renders a range of samples. `auto` becomes `cpu`; a Vulkan choice (`--backend
+/// vulkan`, `--device`, `--traversal hardware`) is refused, naming `option`.
+pub fn cpu_target_for_parts(
+    target: &crate::args::BackendArgs,
+    option: &'static str,
+) -> Result<crate::args::BackendArgs> {
+    if target.backend == Backend::Vulkan
+        || target.device.is_some()
+        || target.traversal == crate::args::Traversal::Hardware
+    {
+        return Err(FoveaError::option(
+            option,
+            "renders on the CPU backend (--backend cpu or auto); the Vulkan host cannot render a \
+             range of samples yet",
+        ));
+    }
+    Ok(crate::args::BackendArgs {
+        backend: Backend::Cpu,
+        ..*target
+    })
 }
 
 /// The CPU host's worker threads (`--threads`, default all cores).
@@ -437,6 +462,7 @@ impl Renderer {
     /// The last frame rendered with [`FrameOutput::Present`]: on the CPU its RGBA8 pixels, width and
     /// height (for a presenting context to upload); `None` on Vulkan, where it stays on the device, or
     /// before the first such frame.
+    #[cfg_attr(not(feature = "vulkan"), allow(dead_code))] // the live view's, which needs Vulkan
     pub fn presented_rgba8(&self) -> Option<(&[u32], u32, u32)> {
         match self {
             Self::Cpu(cpu) => cpu.presented.as_ref().and_then(|f| {
@@ -451,6 +477,7 @@ impl Renderer {
 
     /// The HDR image of the last frame rendered with [`FrameOutput::Present`] (with history, its mean),
     /// for a screenshot.
+    #[cfg_attr(not(feature = "vulkan"), allow(dead_code))] // the live view's, which needs Vulkan
     pub fn last_hdr(&mut self) -> Result<FrameImage> {
         match self {
             Self::Cpu(cpu) => cpu
@@ -467,6 +494,7 @@ impl Renderer {
     }
 
     /// Everything the Vulkan validation layer reported on the rendering device (none on the CPU).
+    #[cfg_attr(not(feature = "vulkan"), allow(dead_code))] // the live view's, which needs Vulkan
     pub fn validation_messages(&self) -> Vec<String> {
         match self {
             Self::Cpu(_) => Vec::new(),

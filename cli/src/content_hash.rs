@@ -59,11 +59,15 @@ pub fn packed_scene_hash(packed: &PackedScene) -> u64 {
     h.finish()
 }
 
-/// FNV-1a-64 of the running executable's bytes, or `None` when it cannot be read.
+/// FNV-1a-64 of the running executable's bytes, or `None` when it cannot be read. Hashed once per run
+/// (a test-profile binary is a few hundred MB), so a later rebuild of the file on disk does not change it.
 #[must_use]
 pub fn executable_hash() -> Option<u64> {
-    let path = std::env::current_exe().ok()?;
-    std::fs::read(path).ok().map(|bytes| fnv1a64(&bytes))
+    static HASH: std::sync::OnceLock<Option<u64>> = std::sync::OnceLock::new();
+    *HASH.get_or_init(|| {
+        let path = std::env::current_exe().ok()?;
+        std::fs::read(path).ok().map(|bytes| fnv1a64(&bytes))
+    })
 }
 
 #[cfg(test)]

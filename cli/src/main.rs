@@ -1,15 +1,16 @@
 //! `fovea`: the command line of the fovea foveated path tracer.
-// Without the Vulkan backend (`--no-default-features`, the CPU-only build scripts/render-default.sh and
-// the cluster's portable binary use) the live view cannot run, but its modules (fly camera, HUD, gaze
-// sources, budget) are still built and unit-tested: their items are unused there, not dead.
-#![cfg_attr(not(feature = "vulkan"), allow(dead_code))]
 mod args;
 mod backend;
 mod bench;
 mod camera_path;
 mod content_hash;
 mod error;
+// Without the Vulkan backend (`--no-default-features`: the CPU-only build of scripts/render-default.sh
+// and the cluster's portable binary) the live view cannot run, but its modules (fly camera, HUD, gaze
+// sources, fixation filter, budget) are still built and unit-tested: unused there, not dead.
+#[cfg_attr(not(feature = "vulkan"), allow(dead_code))]
 mod fixation;
+#[cfg_attr(not(feature = "vulkan"), allow(dead_code))]
 mod gaze;
 mod merge;
 mod output;
@@ -19,6 +20,7 @@ mod report;
 mod scene_setup;
 mod stats;
 mod values;
+#[cfg_attr(not(feature = "vulkan"), allow(dead_code))]
 mod view;
 
 use clap::Parser;

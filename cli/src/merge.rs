@@ -4,7 +4,7 @@
 use crate::args::MergeArgs;
 use crate::error::{FoveaError, Result};
 use crate::output::{check_output_path, write_image};
-use crate::partial::{check_parts, Part};
+use crate::partial::{check_parts, largest_spp, PartHeader};
 
 /// Runs `fovea merge`.
 pub fn run(args: &MergeArgs) -> Result<()> {
@@ -27,17 +27,17 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     let parts = args
         .parts
         .iter()
-        .map(|p| Part::read(p).map(|part| (p.clone(), part)))
+        .map(|p| PartHeader::read(p).map(|part| (p.clone(), part)))
         .collect::<Result<Vec<_>>>()?;
     let checked = check_parts(parts)?;
     let frame = *checked.frame();
-    let image = checked.merged();
+    let image = checked.merged()?;
     write_image(&args.output, format, &image, args.exposure)?;
     if !args.quiet {
         println!(
             "fovea: merged {} part(s), samples 0..{} of a {}x{} frame -> {}",
             checked.parts.len(),
-            crate::partial::largest_spp(&frame),
+            largest_spp(&frame.foveation),
             frame.width,
             frame.height,
             args.output.display()

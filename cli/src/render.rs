@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use fovea_core::foveation::blocks::{block_sample_range, count_blocks, count_samples};
+use fovea_core::foveation::blocks::count_samples;
 use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
 use fovea_core::integrator::FrameParams;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -16,7 +16,9 @@ use crate::output::{
     check_json_path, check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png,
     ImageFormat,
 };
-use crate::partial::{Part, RenderIdentity};
+use crate::partial::{
+    identity_lines, largest_spp, samples_in_part, write_part, PartSpec, RenderIdentity,
+};
 use crate::scene_setup::{choose_camera, prepare_scene, Lighting};
 use crate::stats::FrameStats;
 
@@ -40,7 +42,7 @@ struct Plan {
     output_format: ImageFormat,
     /// `--samples`: this run renders one part of a split render, written to `output` (a .fvpart file):
     /// its sample range, and its index and count for `--samples I/N`.
-    samples: Option<PartPlan>,
+    samples: Option<PartSpec>,
     /// `--keep-raw`: where the image before the denoiser goes.
     keep_raw: Option<(PathBuf, ImageFormat)>,
     per_frame_outputs: bool,
@@ -169,6 +171,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         .samples
         .map(|s| check_part_options(args, s, &foveation_template))
         .transpose()?;
+    // A part is neither image format; EXR stands in (linear, no tone map) and is never written.
     let output_format = match samples {
         Some(_) => ImageFormat::Exr,
         None => check_output_path(&args.output, "--output", true)?,
@@ -224,6 +227,12 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
     }
 
     let lighting = Lighting::from_args(&args.lighting)?;
+    if samples.is_some() && args.image.exposure != 0.0 {
+        warnings.push(
+            "--exposure does not apply to a part (linear sums); give it to `fovea merge` for a PNG"
+                .into(),
+        );
+    }
     let only_exr = output_format == ImageFormat::Exr
         && args.regions_overlay.is_none()
         && args.samples.is_none();
@@ -251,20 +260,13 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
     })
 }
 
-/// A part of a split render (`--samples`): its sample range, and `[I, N]` for `--samples I/N`.
-#[derive(Clone, Copy, Debug)]
-struct PartPlan {
-    range: [u32; 2],
-    of: Option<[u32; 2]>,
-}
-
 /// `--samples`: one still frame on the CPU, written as a part (.fvpart) whose range lies within the
 /// frame's samples.
 fn check_part_options(
     args: &RenderArgs,
     selection: SampleSelection,
     foveation: &FoveationParams,
-) -> Result<PartPlan> {
+) -> Result<PartSpec> {
     let refuse = |option: &'static str, why: &str| {
         Err(FoveaError::option(
             option,
@@ -289,37 +291,9 @@ fn check_part_options(
     if args.regions_overlay.is_some() {
         return refuse("--regions-overlay", "draws over a whole image");
     }
-    let t = &args.target;
-    if t.backend == crate::args::Backend::Vulkan
-        || t.device.is_some()
-        || t.traversal == crate::args::Traversal::Hardware
-    {
-        return Err(FoveaError::option(
-            "--samples",
-            "renders on the CPU backend (--backend cpu or auto); the Vulkan host cannot render a range of samples yet",
-        ));
-    }
-    let largest = foveation.spp[..3].iter().copied().max().unwrap_or(0);
-    let range = selection.range(largest);
-    let of = match selection {
-        SampleSelection::Range(_) => None,
-        SampleSelection::Part { index, count } => Some([index, count]),
-    };
-    if let (Some([_, count]), true) = (of, range[0] == range[1]) {
-        return Err(FoveaError::option(
-            "--samples",
-            format!("{count} parts of the frame's {largest} samples leave this one empty; split into {largest} parts or fewer"),
-        ));
-    }
-    let end = range[1];
-    if end > largest {
-        return Err(FoveaError::option(
-            "--samples",
-            format!(
-                "ends at {end}, past the frame's {largest} samples per pixel or block (--spp); the parts of a split tile 0..{largest}"
-            ),
-        ));
-    }
+    crate::backend::cpu_target_for_parts(&args.target, "--samples")?;
+    let spec = PartSpec::new(selection, largest_spp(foveation))
+        .map_err(|why| FoveaError::option("--samples", why))?;
     let is_part = args
         .output
         .extension()
@@ -343,7 +317,7 @@ fn check_part_options(
             crate::output::missing_folder(dir),
         ));
     }
-    Ok(PartPlan { range, of })
+    Ok(spec)
 }
 
 /// The frames of `--gaze-trace` (see [`crate::gaze`]): per-frame lines, or a timed trace sampled at
@@ -383,10 +357,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     // The backend first: a bad `--device` fails before the scene loads. A part renders on the CPU.
     let target = match plan.samples {
-        Some(_) => crate::args::BackendArgs {
-            backend: crate::args::Backend::Cpu,
-            ..args.target
-        },
+        Some(_) => crate::backend::cpu_target_for_parts(&args.target, "--samples")?,
         None => args.target,
     };
     let mut renderer = Renderer::new(&target, args.quiet)?;
@@ -438,6 +409,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         eprintln!("warning: {}", crate::scene_setup::NO_LIGHT_WARNING);
         run_warnings.push(crate::scene_setup::NO_LIGHT_WARNING.to_string());
     }
+    if args.path.integrator().texture_lod != fovea_core::integrator::path::TEXTURE_LOD_OFF
+        && scene.packed.stats.texture_count == 0
+    {
+        let warning = "the scene has no textures, so --texture-lod changes nothing";
+        if !args.quiet {
+            eprintln!("warning: {warning}");
+        }
+        run_warnings.push(warning.to_string());
+    }
 
     let [w, h] = plan.resolution;
     let camera = choose_camera(
@@ -478,18 +458,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             seed: args.image.seed,
         };
         let total: u64 = match plan.samples {
-            Some(PartPlan {
-                range: [first, end],
-                ..
-            }) => {
-                let blocks = count_blocks(w, h, &foveation);
-                (0..3)
-                    .map(|r| {
-                        let [a, b] = block_sample_range(foveation.spp[r], first, end);
-                        blocks[r] * u64::from(b - a)
-                    })
-                    .sum()
-            }
+            Some(spec) => samples_in_part(w, h, &foveation, spec.samples),
             None => count_samples(w, h, &foveation).iter().sum(),
         };
         let bar = if args.quiet || total < 2_000_000 {
@@ -504,26 +473,24 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             );
             bar
         };
-        if let Some(part) = plan.samples {
-            let (sums, stats) =
-                renderer.render_sample_range(&scene.packed, &frame, part.range, &|n| bar.inc(n))?;
-            bar.finish_and_clear();
+        if let Some(spec) = plan.samples {
+            // The identity first: the scene file and the executable as they are when the work starts.
             let scene_path = args
                 .scene
                 .clone()
                 .unwrap_or_else(crate::scene_setup::default_scene_path);
             let scene_bytes =
                 std::fs::read(&scene_path).map_err(|e| FoveaError::file(&scene_path, e))?;
-            Part::new(
+            let identity = identity_lines(
                 &RenderIdentity::of(&scene_bytes, &scene.packed),
-                &scene_path,
                 &frame,
                 plan.fill_mode,
-                part.range,
-                part.of,
-                sums.pixels,
-            )
-            .write(&plan.output)?;
+            );
+            let (sums, stats) =
+                renderer
+                    .render_sample_range(&scene.packed, &frame, spec.samples, &|n| bar.inc(n))?;
+            bar.finish_and_clear();
+            write_part(&plan.output, &identity, &scene_path, spec, &sums.pixels)?;
             frames.push(FrameStats {
                 frame: g.frame,
                 gaze: foveation.gaze,

@@ -160,15 +160,16 @@ impl SampleSelection {
 impl FromStr for SampleSelection {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
+        let number = |t: &str| t.trim().parse::<i64>().map_err(|_| not_a_number(t.trim()));
         if let Some((a, b)) = s.split_once("..") {
-            let [a, b]: [i64; 2] = split(&format!("{a},{b}"), ',')?;
+            let (a, b) = (number(a)?, number(b)?);
             if !(0 <= a && a < b && b <= i64::from(MAX_SPP)) {
                 return Err(format!("need 0 <= A < B <= {MAX_SPP}"));
             }
             return Ok(Self::Range([a as u32, b as u32]));
         }
         if let Some((i, n)) = s.split_once('/') {
-            let [i, n]: [i64; 2] = split(&format!("{i},{n}"), ',')?;
+            let (i, n) = (number(i)?, number(n)?);
             if !(0 <= i && i < n && n <= i64::from(MAX_SPP)) {
                 return Err(format!(
                     "need 0 <= I < N <= {MAX_SPP} (part I of N, from 0)"

@@ -216,6 +216,22 @@ fn parts_merge_to_the_single_render_and_bad_parts_are_refused() {
     );
     refused(&["--samples", "0..8"], "x.exr", "part file (.fvpart)");
     refused(&["--samples", "0..8", "--history"], "x.fvpart", "--history");
+    let trace = dir.join("trace.csv");
+    std::fs::write(&trace, "0,10,10\n1,20,20\n").unwrap();
+    let trace = trace.to_str().unwrap();
+    refused(
+        &["--samples", "0..8", "--gaze-trace", trace],
+        "x.fvpart",
+        "--gaze-trace",
+    );
+    let path = dir.join("camera.csv");
+    std::fs::write(&path, "0,0,1,3.9,0,1,0\n1,0,1,3.8,0,1,0\n").unwrap();
+    let path = path.to_str().unwrap();
+    refused(
+        &["--samples", "0..8", "--camera-path", path],
+        "x.fvpart",
+        "--camera-path",
+    );
     refused(&["--samples", "0..8", "--denoise"], "x.fvpart", "--denoise");
     refused(
         &["--samples", "0..8", "--backend", "vulkan"],
@@ -329,6 +345,10 @@ fn submit(slurm: &LocalSlurm, out: &Path, extra: &[&str], render: &[String]) -> 
 #[test]
 fn a_slurm_job_array_renders_a_reference_that_equals_the_single_render() {
     let dir = temp_dir("slurm");
+    if std::env::var("FOVEA_SKIP_SLURM").as_deref() == Ok("1") {
+        eprintln!("note: FOVEA_SKIP_SLURM=1: the Slurm recipe's test is skipped");
+        return;
+    }
     let slurm = match LocalSlurm::start(&dir.join("cluster")) {
         Ok(s) => s,
         Err(why) if std::env::var("CI").as_deref() != Ok("true") => {
@@ -355,8 +375,14 @@ fn a_slurm_job_array_renders_a_reference_that_equals_the_single_render() {
     ]
     .map(String::from)
     .to_vec();
+    // One thread per task, so that task 2 runs long enough to be killed on a machine of many cores.
+    let task_render: Vec<String> = render
+        .iter()
+        .cloned()
+        .chain(["--threads".into(), "1".into()])
+        .collect();
     let out = dir.join("out");
-    let [array, merge] = submit(&slurm, &out, &[], &render);
+    let [array, merge] = submit(&slurm, &out, &[], &task_render);
 
     // Kill task 2 while it runs (each task takes one of the node's CPUs).
     let task = format!("{array}_2");
@@ -395,12 +421,34 @@ fn a_slurm_job_array_renders_a_reference_that_equals_the_single_render() {
     assert!(!out.join("part-0002.fvpart").exists());
 
     // Resubmit only the task that died: its part, then the merge.
-    let [array, merge] = submit(&slurm, &out, &["--tasks", "2"], &render);
+    let [array, merge] = submit(&slurm, &out, &["--tasks", "2"], &task_render);
     slurm.wait(&[&array, &merge]);
     assert!(
         image.is_file(),
         "{}",
         std::fs::read_to_string(out.join(format!("merge-{merge}.log"))).unwrap_or_default()
+    );
+
+    // A whole new split into a folder that holds parts is refused before anything is submitted.
+    let refused = slurm
+        .command("bash")
+        .arg(repo().join("scripts/slurm/submit.sh"))
+        .args([
+            "--parts",
+            "4",
+            "--fovea",
+            env!("CARGO_BIN_EXE_fovea"),
+            "--out",
+        ])
+        .arg(&out)
+        .arg("--")
+        .args(&task_render)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        !refused.status.success() && stderr.contains("already holds parts"),
+        "{stderr}"
     );
 
     let single = dir.join("single.exr");

@@ -38,6 +38,22 @@ impl CpuFrame {
     }
 }
 
+/// The most memory the CPU host's frame holds per pixel, in bytes, with history and the denoiser on:
+/// the image and the one kept from before the denoiser, the RGBA8 image, the cell means (at most a third
+/// of a pixel's), two history images (this frame's and the last), two G-buffers and the denoiser's two
+/// halves. `fovea view` refuses a `--size` whose frames would not fit in memory (up front, rather than
+/// aborting on allocation).
+pub const FRAME_BYTES_PER_PIXEL: u64 = {
+    use fovea_core::temporal::{GBufferTexel, HistoryTexel};
+    let image = std::mem::size_of::<[f32; 4]>() as u64;
+    2 * image
+        + 4
+        + image.div_ceil(3)
+        + 2 * std::mem::size_of::<HistoryTexel>() as u64
+        + 2 * std::mem::size_of::<GBufferTexel>() as u64
+        + 2 * std::mem::size_of::<DenoiseTexel>() as u64
+};
+
 /// Renders one frame of `scene` by walking core's pass list ([`frame_passes`]) and running each pass's
 /// CPU step: one rayon loop over its core function. With `request.history` the frame joins `history`
 /// (kept from one call to the next; a frame of another size starts afresh) and the HDR image is the
@@ -138,15 +154,8 @@ pub fn render_frame_passes(
         passes.push((pass.name(), pass_start.elapsed().as_secs_f64() * 1e3));
     }
 
-    let loaded: Vec<u64> = counters.iter().map(|c| c.load(Ordering::Relaxed)).collect();
-    let stats = RenderStats {
-        render_ms: start.elapsed().as_secs_f64() * 1e3,
-        primary_samples: loaded[0] + loaded[1] + loaded[2],
-        samples_per_region: [loaded[0], loaded[1], loaded[2]],
-        blocks_per_region: [loaded[3], loaded[4], loaded[5]],
-        path_features: path_mask(scene.features.bits()),
-        passes,
-    };
+    let render_ms = start.elapsed().as_secs_f64() * 1e3;
+    let stats = render_stats(scene, &counters, render_ms, passes);
     let hdr = FrameImage {
         width,
         height,
@@ -160,6 +169,24 @@ pub fn render_frame_passes(
         },
         stats,
     )
+}
+
+/// A frame's statistics from the samples pass's counters (samples, then blocks, per region).
+fn render_stats(
+    scene: &SceneView,
+    counters: &[AtomicU64; 6],
+    render_ms: f64,
+    passes: Vec<(&'static str, f64)>,
+) -> RenderStats {
+    let loaded = counters.each_ref().map(|c| c.load(Ordering::Relaxed));
+    RenderStats {
+        render_ms,
+        primary_samples: loaded[0] + loaded[1] + loaded[2],
+        samples_per_region: [loaded[0], loaded[1], loaded[2]],
+        blocks_per_region: [loaded[3], loaded[4], loaded[5]],
+        path_features: path_mask(scene.features.bits()),
+        passes,
+    }
 }
 
 /// The cell-means pass: the cell-mean grids of every block size above 1, in one buffer, from the
@@ -200,6 +227,7 @@ fn fill_step(
 /// `first..end` (clipped to its own count, [`block_sample_range`]), their sum and count written to
 /// every pixel of the block as `[r, g, b, count]`. The parts of a split are merged by adding their
 /// sums and counts and calling [`fill_from_sample_sums`].
+#[must_use]
 pub fn render_sample_range(
     scene: &SceneView,
     frame: &FrameParams,
@@ -220,15 +248,8 @@ pub fn render_sample_range(
         },
     );
     let render_ms = start.elapsed().as_secs_f64() * 1e3;
-    let loaded: Vec<u64> = counters.iter().map(|c| c.load(Ordering::Relaxed)).collect();
-    let stats = RenderStats {
-        render_ms,
-        primary_samples: loaded[0] + loaded[1] + loaded[2],
-        samples_per_region: [loaded[0], loaded[1], loaded[2]],
-        blocks_per_region: [loaded[3], loaded[4], loaded[5]],
-        path_features: path_mask(scene.features.bits()),
-        passes: vec![(FramePass::Samples.name(), render_ms)],
-    };
+    let passes = vec![(FramePass::Samples.name(), render_ms)];
+    let stats = render_stats(scene, &counters, render_ms, passes);
     let image = FrameImage {
         width: frame.width,
         height: frame.height,
@@ -364,20 +385,17 @@ impl WithScene for SamplePass<'_> {
                 let y_band_end = y0 + rows_in_band;
                 for_each_block_in_rows(width, height, y0, y_band_end, foveation, |block| {
                     let spp = samples_in_block(&block, foveation);
-                    let [first, end] = match output {
-                        SampleOutput::Mean => [0, spp],
+                    let (value, traced) = match output {
+                        SampleOutput::Mean => {
+                            let sum = block_sample_range_sum(scene, frame, &block, 0, spp);
+                            (block_mean(sum, spp), spp)
+                        }
                         SampleOutput::RangeSum { first, end } => {
-                            block_sample_range(spp, first, end)
+                            let [first, end] = block_sample_range(spp, first, end);
+                            let sum = block_sample_range_sum(scene, frame, &block, first, end);
+                            ([sum.x, sum.y, sum.z, (end - first) as f32], end - first)
                         }
                     };
-                    let sum = block_sample_range_sum(scene, frame, &block, first, end);
-                    let value = match output {
-                        SampleOutput::Mean => block_mean(sum, spp),
-                        SampleOutput::RangeSum { .. } => {
-                            [sum.x, sum.y, sum.z, (end - first) as f32]
-                        }
-                    };
-                    let spp = end - first;
                     let x_end = (block.origin[0] + block.size).min(width);
                     let y_end = (block.origin[1] + block.size).min(y_band_end);
                     for by in block.origin[1]..y_end {
@@ -385,7 +403,7 @@ impl WithScene for SamplePass<'_> {
                         rows[row + block.origin[0] as usize..row + x_end as usize].fill(value);
                     }
                     let region = block.region.min(REGION_COUNT - 1) as usize;
-                    local[region] += spp as u64;
+                    local[region] += u64::from(traced);
                     local[3 + region] += 1;
                 });
                 // Once per band: a progress bar's update is an atomic read-modify-write (1 % of the

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the fovea binary for cluster nodes: release, for a portable x86-64 level (x86-64-v3: AVX2,
 # from 2013 on; the repository's `target-cpu=native` build may not run on another CPU), and without
-# the Vulkan backend, so a node needs no Rust, no nightly, no Vulkan loader and no GPU: only glibc.
+# the Vulkan backend, so a node needs no Rust, no nightly, no Vulkan loader and no GPU: only glibc and libstdc++.
 # Writes slurm-bin/fovea (git-ignored). Usage: scripts/slurm/build-portable.sh [--level x86-64-v2]
 set -euo pipefail
 cd "$(dirname "$0")/../.."

@@ -12,13 +12,15 @@
 #   --fovea BIN    the fovea binary the nodes run (default: $FOVEA, else `fovea` on PATH); build a
 #                  portable one with scripts/slurm/build-portable.sh
 #   --tasks LIST   submit only these array tasks (e.g. 2 or 1,3), to complete a split a task died in
+#   --after JOBID  with --tasks: the first array's job id, when it may still run; the new merge waits for
+#                  both arrays
 #   --sbatch OPTS  extra sbatch options for both jobs, e.g. "--partition=cpu --account=lab --time=2:00:00
 #                  --cpus-per-task=32" (the SBATCH_* environment variables work too)
 # RENDER_ARGS are `fovea render`'s for the whole frame, without --samples and -o.
 # Prints the two job ids: "array JOBID" and "merge JOBID".
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
-parts="" out="" image=image.exr fovea=${FOVEA:-} tasks="" extra=""
+parts="" out="" image=image.exr fovea=${FOVEA:-} tasks="" extra="" after=""
 while [ $# -gt 0 ]; do
   case $1 in
     --parts) parts=$2; shift 2 ;;
@@ -27,6 +29,7 @@ while [ $# -gt 0 ]; do
     --fovea) fovea=$2; shift 2 ;;
     --tasks) tasks=$2; shift 2 ;;
     --sbatch) extra=$2; shift 2 ;;
+    --after) after=$2; shift 2 ;;
     --) shift; break ;;
     *) echo "submit.sh: unknown option '$1' (render options go after --)" >&2; exit 2 ;;
   esac
@@ -37,17 +40,35 @@ done
 [ -n "$fovea" ] && [ -x "$fovea" ] ||
   { echo "submit.sh: no fovea binary: give --fovea BIN or set FOVEA (scripts/slurm/build-portable.sh builds one)" >&2; exit 2; }
 command -v sbatch >/dev/null || { echo "submit.sh: sbatch not found; run this on a Slurm login node" >&2; exit 2; }
+case $image in
+  *.exr|*.png) ;;
+  *) echo "submit.sh: --image $image: the merged image is .exr or .png" >&2; exit 2 ;;
+esac
+if [ -n "$tasks" ]; then
+  for t in ${tasks//,/ }; do
+    [[ $t =~ ^[0-9]+$ ]] && [ "$t" -lt "$parts" ] ||
+      { echo "submit.sh: --tasks $tasks: each task is a number below --parts $parts" >&2; exit 2; }
+  done
+fi
+[ -z "$after" ] || [[ $after =~ ^[0-9]+$ ]] || { echo "submit.sh: --after JOBID (a job id)" >&2; exit 2; }
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
 fovea=$(cd "$(dirname "$fovea")" && pwd)/$(basename "$fovea")
-export FOVEA=$fovea FOVEA_PARTS=$parts FOVEA_OUT=$out FOVEA_IMAGE=$image
+# A whole new split into a folder that holds parts would merge them with the new ones.
+if [ -z "$tasks" ] && compgen -G "$out/part-*.fvpart" >/dev/null; then
+  echo "submit.sh: $out already holds parts (part-*.fvpart); use an empty folder, or --tasks to complete that split" >&2
+  exit 2
+fi
 read -r -a sbatch_extra <<<"$extra"
+# The jobs' environment is given explicitly: some sites set SBATCH_EXPORT=NONE.
+export_env="--export=ALL,FOVEA=$fovea,FOVEA_PARTS=$parts,FOVEA_OUT=$out,FOVEA_IMAGE=$image"
 array=${tasks:-0-$((parts - 1))}
-array_job=$(sbatch --parsable "${sbatch_extra[@]}" --array="$array" \
+# ${a[@]+"${a[@]}"}: an empty array under `set -u` on bash before 4.4.
+array_job=$(sbatch --parsable ${sbatch_extra[@]+"${sbatch_extra[@]}"} "$export_env" --array="$array" \
   --output="$out/part-%a.log" "$here/render-part.sbatch" "$@")
 array_job=${array_job%%;*}
-merge_job=$(sbatch --parsable "${sbatch_extra[@]}" --dependency="afterany:$array_job" \
-  --output="$out/merge-%j.log" "$here/merge.sbatch")
+merge_job=$(sbatch --parsable ${sbatch_extra[@]+"${sbatch_extra[@]}"} "$export_env" \
+  --dependency="afterany:$array_job${after:+:$after}" --output="$out/merge-%j.log" "$here/merge.sbatch")
 merge_job=${merge_job%%;*}
 echo "array $array_job"
 echo "merge $merge_job"

@@ -29,7 +29,9 @@ use crate::args::ReportArgs;
 use crate::backend::{FrameOutput, FrameRequest, Renderer};
 use crate::error::{FoveaError, Result};
 use crate::output::{regions_overlay, tonemapped_rgb8, write_png};
-use crate::partial::{check_parts, identity_lines, Part, RenderIdentity};
+use crate::partial::{
+    check_parts, identity_lines, samples_in_part, write_part, PartHeader, PartSpec, RenderIdentity,
+};
 use crate::scene_setup::{choose_camera, default_scene_path, prepare_scene, Lighting};
 use crate::values::{self, SampleSelection, MAX_SPP};
 
@@ -272,7 +274,12 @@ fn create_dir(dir: &Path) -> Result<()> {
 pub fn run(args: &ReportArgs) -> Result<()> {
     let wall = Instant::now();
     let plan = plan(args)?;
-    let mut renderer = Renderer::new(&args.target, args.quiet)?;
+    // A part of the references renders on the CPU, the one host that renders a range of samples.
+    let target = match plan.reference_part {
+        Some(_) => crate::backend::cpu_target_for_parts(&args.target, "--reference-part")?,
+        None => args.target,
+    };
+    let mut renderer = Renderer::new(&target, args.quiet)?;
     let lighting = Lighting::from_args(&args.lighting)?;
     // A part of the references is all a `--reference-part` run writes.
     let writes_report = plan.reference_part.is_none();
@@ -334,6 +341,8 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     let bar = if args.quiet {
         ProgressBar::hidden()
     } else {
+        // A part of the references adds its own samples as it starts.
+        let per_scene = if writes_report { per_scene } else { 0 };
         let bar = ProgressBar::new(per_scene * scenes.len() as u64);
         bar.set_style(
             ProgressStyle::with_template(
@@ -344,7 +353,22 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         bar
     };
 
+    // Several scenes: each is loaded and checked before hours of measurement start.
+    if scenes.len() > 1 {
+        for (scene_path, _) in &scenes {
+            prepare_scene(
+                scene_path.as_deref(),
+                None,
+                args.mtl_diffuse.into(),
+                &lighting.environment(scene_path.is_none()),
+                &lighting.point_lights,
+                renderer.wants_wide_bvh(),
+            )?;
+        }
+    }
     let mut markdown = Vec::new();
+    // A scene that fails later is named in the report; the others' results are still written.
+    let mut failures: Vec<(String, FoveaError)> = Vec::new();
     for (scene_path, out_dir) in &scenes {
         if writes_report {
             create_dir(out_dir)?;
@@ -352,7 +376,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         let environment = lighting.environment(scene_path.is_none());
         let env_text = lighting.environment_key(scene_path.is_none());
         let scene_start = Instant::now();
-        let Some(mut report) = run_scene(
+        let result = run_scene(
             args,
             &plan,
             &mut renderer,
@@ -362,9 +386,23 @@ pub fn run(args: &ReportArgs) -> Result<()> {
             &env_text,
             &lighting.point_lights,
             out_dir,
-        )?
-        else {
-            continue;
+        );
+        let mut report = match result {
+            Ok(Some(report)) => report,
+            Ok(None) => continue,
+            Err(e) if scenes.len() > 1 => {
+                let name = scene_path
+                    .as_deref()
+                    .map_or_else(|| "the default scene".into(), |p| p.display().to_string());
+                note(
+                    &bar,
+                    false,
+                    &format!("error: {name}: {e}; going on with the others"),
+                );
+                failures.push((name, e));
+                continue;
+            }
+            Err(e) => return Err(e),
         };
         report.wall_ms = scene_start.elapsed().as_secs_f64() * 1e3;
         let md = write::report_md(&report);
@@ -400,7 +438,20 @@ pub fn run(args: &ReportArgs) -> Result<()> {
             ));
             text.push('\n');
         }
+        for (name, e) in &failures {
+            text.push_str(&format!("## {name}: failed\n\n{e}\n\n"));
+        }
         write::write_text(&args.out.join("report.md"), &text)?;
+    }
+    if !failures.is_empty() {
+        let names: Vec<&str> = failures.iter().map(|(n, _)| n.as_str()).collect();
+        return Err(FoveaError::Backend(format!(
+            "{} of {} scenes failed ({}); the others' results are in {}",
+            failures.len(),
+            scenes.len(),
+            names.join(", "),
+            args.out.join("report.md").display()
+        )));
     }
     if !args.quiet {
         eprintln!(
@@ -447,11 +498,11 @@ fn merge_reference_parts(
     }
     let parts = paths
         .into_iter()
-        .map(|p| Part::read(&p).map(|part| (p, part)))
+        .map(|p| PartHeader::read(&p).map(|part| (p, part)))
         .collect::<Result<Vec<_>>>()?;
     let checked = check_parts(parts)?;
     checked.expect_identity(expected, &format!("{scene_name}'s reference"))?;
-    Ok(checked.merged())
+    checked.merged()
 }
 
 /// Prints a status line above the progress bar (nothing with `--quiet`).
@@ -492,6 +543,15 @@ fn run_scene(
         point_lights,
         renderer.wants_wide_bvh(),
     )?;
+    if plan.integrator.texture_lod != fovea_core::integrator::path::TEXTURE_LOD_OFF
+        && scene.packed.stats.texture_count == 0
+    {
+        note(
+            bar,
+            false,
+            &format!("note: {scene_name} has no textures, so --texture-lod changes nothing"),
+        );
+    }
     if scene.packed.lights.list.is_empty() {
         note(
             bar,
@@ -546,45 +606,32 @@ fn run_scene(
         ),
     );
     if let (Some(selection), Some(dir)) = (plan.reference_part, &plan.reference_parts) {
-        let range = selection.range(plan.reference_spp);
-        if range[0] == range[1] {
-            return Err(FoveaError::option(
-                "--reference-part",
-                format!(
-                    "leaves this part of the reference's {} samples empty; split into fewer parts",
-                    plan.reference_spp
-                ),
-            ));
-        }
-        let of = match selection {
-            SampleSelection::Part { index, count } => Some([index, count]),
-            SampleSelection::Range(_) => None,
-        };
-        bar.set_message(format!(
-            "{scene_name}: reference samples {}..{}",
-            range[0], range[1]
-        ));
-        let (sums, _) =
-            renderer
-                .render_sample_range(&scene.packed, &reference_frame, range, &|n| bar.inc(n))?;
-        let path = dir.join(format!("{}.part-{:08}.fvpart", entry.name(), range[0]));
-        Part::new(
+        let spec = PartSpec::new(selection, plan.reference_spp)
+            .map_err(|why| FoveaError::option("--reference-part", why))?;
+        let [first, end] = spec.samples;
+        let identity = identity_lines(
             &RenderIdentity::of(&scene_bytes, &scene.packed),
-            &file,
             &reference_frame,
             plan.fill_mode,
-            range,
-            of,
-            sums.pixels,
-        )
-        .write(&path)?;
+        );
+        bar.inc_length(samples_in_part(
+            w,
+            h,
+            &reference_frame.foveation,
+            spec.samples,
+        ));
+        bar.set_message(format!("{scene_name}: reference samples {first}..{end}"));
+        let (sums, _) =
+            renderer.render_sample_range(&scene.packed, &reference_frame, spec.samples, &|n| {
+                bar.inc(n)
+            })?;
+        let path = dir.join(format!("{}.part-{first:08}-{end:08}.fvpart", entry.name()));
+        write_part(&path, &identity, &file, spec, &sums.pixels)?;
         note(
             bar,
             args.quiet,
             &format!(
-                "{scene_name}: reference samples {}..{} -> {}",
-                range[0],
-                range[1],
+                "{scene_name}: reference samples {first}..{end} -> {}",
                 path.display()
             ),
         );
