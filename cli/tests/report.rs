@@ -349,5 +349,24 @@ fn bad_options_fail_clearly() {
         .unwrap();
     assert!(!output.status.success());
     assert!(String::from_utf8_lossy(&output.stderr).contains("missing.obj"));
+    // Several scenes are all loaded before any is measured: a missing second one stops the report
+    // before the first one's reference is rendered.
+    let cache = dir.join("cache");
+    let output = Command::new(env!("CARGO_BIN_EXE_fovea"))
+        .arg("report")
+        .arg(cornell())
+        .arg(dir.join("missing.obj"))
+        .args(["--quick", "--backend", "cpu", "--cache-dir"])
+        .arg(&cache)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr).contains("missing.obj"));
+    assert!(
+        !cache.exists(),
+        "no reference rendered before every scene loaded"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -480,6 +480,18 @@ fn bad_input_fails_with_a_clear_message() {
     assert!(e.contains("mouse, udp:PORT or trace"), "{e}");
     let e = fails(&["--gaze-source", "trace"], |_| {});
     assert!(e.contains("--gaze-trace"), "{e}");
+    // A screenshot folder through a file, and a screenshot after the last frame, refused at start.
+    let shots = dir.join("trace.csv/shots");
+    let e = fails(&["--screenshot-dir", shots.to_str().unwrap()], |_| {});
+    assert!(
+        e.contains("--screenshot-dir") && e.contains("is a file"),
+        "{e}"
+    );
+    let e = fails(
+        &["--exit-after-frames", "5", "--screenshot-at-frame", "9"],
+        |_| {},
+    );
+    assert!(e.contains("9 comes after --exit-after-frames 5"), "{e}");
     // Nothing half-written.
     let mut leftovers = std::fs::read_dir(&dir)
         .unwrap()

@@ -202,6 +202,7 @@ pub fn load_gltf_from(
         light_positions: Vec::new(),
         camera_position: DVec3::ZERO,
         unsupported: std::collections::BTreeMap::new(),
+        replaced: std::collections::BTreeMap::new(),
     };
     loader.walk()?;
     let animations = document.animations().count();
@@ -215,7 +216,7 @@ pub fn load_gltf_from(
     // An optional extension fovea does not read changes how the asset should look: say so, once per
     // extension, naming the materials that use it (a required one is refused by the glTF validation
     // above).
-    for ((extension, what), materials) in &loader.unsupported {
+    let named = |materials: &[String]| {
         let names: Vec<String> = materials.iter().take(8).map(|m| format!("{m:?}")).collect();
         let more = materials.len().saturating_sub(names.len());
         let more = if more > 0 {
@@ -223,11 +224,21 @@ pub fn load_gltf_from(
         } else {
             String::new()
         };
+        format!("{} material(s) {}{more}", materials.len(), names.join(", "))
+    };
+    for ((extension, what), materials) in &loader.unsupported {
         scene.warnings.push(format!(
-            "{}: {extension} is not fully supported: {} material(s) {}{more}: {what}",
+            "{}: {extension} is not fully supported: {}: {what}",
             path.display(),
-            materials.len(),
-            names.join(", "),
+            named(materials),
+        ));
+    }
+    // A value outside its specification's range: the file's value and what fovea used instead.
+    for ((extension, what), materials) in &loader.replaced {
+        scene.warnings.push(format!(
+            "{}: {}: {extension} {what}",
+            path.display(),
+            named(materials),
         ));
     }
     let unsupported: Vec<&str> = document
@@ -469,6 +480,9 @@ struct Loader<'a> {
     /// What materials use and fovea leaves out, for one warning per extension: (extension, what is
     /// lost) → the materials.
     unsupported: std::collections::BTreeMap<(String, String), Vec<String>>,
+    /// (extension, what was replaced by what) → the materials whose file gave that value
+    /// (`gltf_pbr::ExtensionsApplied::replaced`).
+    replaced: std::collections::BTreeMap<(String, String), Vec<String>>,
 }
 
 impl Loader<'_> {
@@ -1229,7 +1243,11 @@ impl Loader<'_> {
                         extensions: Option<&serde_json::Map<String, gltf::json::Value>>,
                         srgb: bool|
          -> Result<u32, SceneError> {
-            let transform = crate::gltf_pbr::texture_transform(extensions);
+            let mut replaced = Vec::new();
+            let transform = crate::gltf_pbr::texture_transform(extensions, &mut replaced);
+            for what in replaced {
+                this.warn(format!("{label} {role}: KHR_texture_transform {what}"));
+            }
             sets.push((
                 role,
                 crate::gltf_pbr::coordinate_set(tex_coord, transform.as_ref()),
@@ -1284,6 +1302,12 @@ impl Loader<'_> {
             .map(|e| crate::gltf_pbr::apply_material_extensions(e, &mut out))
             .unwrap_or_default();
         let mut notes = applied.unsupported;
+        for note in applied.replaced {
+            self.replaced
+                .entry((note.extension, note.what))
+                .or_default()
+                .push(name.clone());
+        }
         for t in &applied.textures {
             let Some(texture) = self.document.textures().nth(t.index) else {
                 return Err(self.malformed(format!(

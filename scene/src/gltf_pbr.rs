@@ -25,6 +25,11 @@
 //! What a material asks for and fovea cannot render (`sheenRoughnessTexture`, `clearcoatNormalTexture`,
 //! the anisotropy direction, iridescence, dispersion) is returned as [`Unsupported`] notes: the loader
 //! warns once per extension, naming the materials.
+//!
+//! Every number is checked against its specification's range while it is still the file's own value
+//! ([`checked_number`]): a value outside it, one that is not a number, or one that single precision
+//! cannot hold (1e39, 1e-50) is replaced (clamped into the range, or the default) and returned as a
+//! note in [`ExtensionsApplied::replaced`] naming the field, the file's value and what fovea used.
 use fovea_core::bsdf::disney::SPECULAR_MAX;
 use fovea_core::scene::{Material, MATERIAL_LAMBERTIAN, MATERIAL_THIN_WALLED, MATERIAL_UNLIT};
 use gltf::json::Value;
@@ -70,29 +75,170 @@ fn consequence(extension: &str) -> &'static str {
     }
 }
 
-/// A number field of an extension object, or `default` (also for a non-finite or non-number value).
-fn number(ext: &Value, key: &str, default: f32) -> f32 {
-    match ext.get(key).and_then(Value::as_f64) {
-        Some(v) if v.is_finite() => v as f32,
-        _ => default,
+/// A specification's range for a number field.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpecRange {
+    pub min: f64,
+    pub max: f64,
+    /// The range is above `min`, not from it (`attenuationDistance`).
+    pub min_exclusive: bool,
+}
+
+impl SpecRange {
+    /// 0 to 1: factors, weights, colours.
+    pub const UNIT: Self = Self {
+        min: 0.0,
+        max: 1.0,
+        min_exclusive: false,
+    };
+    /// 0 or more: thickness, specular colour.
+    pub const NON_NEGATIVE: Self = Self {
+        min: 0.0,
+        max: f64::INFINITY,
+        min_exclusive: false,
+    };
+    /// Above 0: a distance.
+    pub const POSITIVE: Self = Self {
+        min: 0.0,
+        max: f64::INFINITY,
+        min_exclusive: true,
+    };
+    /// Any number: texture transforms.
+    pub const ANY: Self = Self {
+        min: f64::NEG_INFINITY,
+        max: f64::INFINITY,
+        min_exclusive: false,
+    };
+
+    /// Whether the file's value `v` lies in the range.
+    #[must_use]
+    pub fn contains(&self, v: f64) -> bool {
+        let above_min = if self.min_exclusive {
+            v > self.min
+        } else {
+            v >= self.min
+        };
+        above_min && v <= self.max
+    }
+
+    /// The range in words, for messages.
+    fn describe(&self) -> String {
+        match (
+            self.min_exclusive,
+            self.min.is_finite(),
+            self.max.is_finite(),
+        ) {
+            (_, false, false) => "any number".into(),
+            (true, _, false) => format!("above {}", self.min),
+            (false, _, false) => format!("{} or more", self.min),
+            _ => format!("{} to {}", self.min, self.max),
+        }
+    }
+
+    /// What fovea uses for the file's value `v` (a finite f64): `v` in f32, saturated to f32's largest
+    /// magnitude, then clamped into the range, or `default` below an exclusive minimum.
+    fn fix(&self, v: f64, default: f32) -> f32 {
+        if self.min_exclusive && v <= self.min {
+            return default;
+        }
+        let clamped = v.clamp(self.min, self.max);
+        clamped.clamp(-f64::from(f32::MAX), f64::from(f32::MAX)) as f32
     }
 }
 
-/// An RGB field, or `default`.
-fn rgb(ext: &Value, key: &str, default: [f32; 3]) -> [f32; 3] {
-    match ext.get(key).and_then(Value::as_array) {
-        Some(a) if a.len() == 3 => {
-            let mut out = default;
-            for (o, v) in out.iter_mut().zip(a) {
-                match v.as_f64() {
-                    Some(x) if x.is_finite() => *o = x as f32,
-                    _ => return default,
-                }
-            }
-            out
-        }
-        _ => default,
+/// `v` for a message: plain where that is short (`1`, `0.5`), else with an exponent (`3.4028235e38`).
+fn shown(v: f32) -> String {
+    if v == 0.0 || (v.is_finite() && (1e-4..1e16).contains(&v.abs())) {
+        format!("{v}")
+    } else {
+        format!("{v:?}")
     }
+}
+
+/// Several values for a message: `[1, 0.5, 1]`.
+fn shown_all(v: &[f32]) -> String {
+    let parts: Vec<String> = v.iter().map(|&x| shown(x)).collect();
+    format!("[{}]", parts.join(", "))
+}
+
+/// Whether `used` is the file's value `v` up to f32 rounding (which is not a change).
+fn same_value(used: f32, v: f64) -> bool {
+    (f64::from(used) - v).abs() <= 1e-6 * v.abs()
+}
+
+/// Number `key` of an extension object as fovea uses it: the file's value when it is a number in
+/// `range` that f32 holds; otherwise the value clamped into the range, or `default` (missing, not a
+/// number, or not above an exclusive minimum), with a note in `replaced` naming the field, the file's
+/// value, why and what is used.
+pub fn checked_number(
+    ext: &Value,
+    key: &str,
+    default: f32,
+    range: SpecRange,
+    replaced: &mut Vec<String>,
+) -> f32 {
+    let Some(raw) = ext.get(key) else {
+        return default;
+    };
+    let Some(v) = raw.as_f64().filter(|v| v.is_finite()) else {
+        replaced.push(format!(
+            "{key} {raw} is not a number; used the default {}",
+            shown(default)
+        ));
+        return default;
+    };
+    let used = range.fix(v, default);
+    if !same_value(used, v) {
+        let why = if range.contains(v) {
+            "is beyond single precision".to_string()
+        } else {
+            format!(
+                "is outside the specification's range ({})",
+                range.describe()
+            )
+        };
+        replaced.push(format!("{key} {raw} {why}; used {}", shown(used)));
+    }
+    used
+}
+
+/// An array field of `N` numbers (an RGB colour, a texture transform's pair), each checked as
+/// [`checked_number`] checks one (one note for the field); not `N` numbers is `default`, with a note.
+pub fn checked_array<const N: usize>(
+    ext: &Value,
+    key: &str,
+    default: [f32; N],
+    range: SpecRange,
+    replaced: &mut Vec<String>,
+) -> [f32; N] {
+    let Some(raw) = ext.get(key) else {
+        return default;
+    };
+    let values: Option<Vec<f64>> = raw.as_array().filter(|a| a.len() == N).and_then(|a| {
+        a.iter()
+            .map(|v| v.as_f64().filter(|x| x.is_finite()))
+            .collect()
+    });
+    let Some(v) = values else {
+        replaced.push(format!(
+            "{key} {raw} is not {N} numbers; used the default {}",
+            shown_all(&default)
+        ));
+        return default;
+    };
+    let used: [f32; N] = std::array::from_fn(|c| range.fix(v[c], default[c]));
+    if (0..N).any(|c| !same_value(used[c], v[c])) {
+        let why = if v.iter().all(|&x| range.contains(x)) {
+            "is beyond single precision".to_string()
+        } else {
+            format!(
+                "is outside the specification's range ({})",
+                range.describe()
+            )
+        };
+        replaced.push(format!("{key} {raw} {why}; used {}", shown_all(&used)));
+    }
+    used
 }
 
 /// A texture reference's `KHR_texture_transform`: `uv' = T R S uv` (the extension's offset, rotation in
@@ -106,20 +252,15 @@ pub struct TextureTransform {
 
 /// The `KHR_texture_transform` of a texture reference's `extensions` object, if it has one.
 #[must_use]
+/// Values it replaces (beyond single precision, or not numbers) are noted in `replaced`.
 pub fn texture_transform(
     extensions: Option<&serde_json::Map<String, Value>>,
+    replaced: &mut Vec<String>,
 ) -> Option<TextureTransform> {
     let e = extensions?.get("KHR_texture_transform")?;
-    let pair = |key: &str, default: [f32; 2]| match e.get(key).and_then(Value::as_array) {
-        Some(a) if a.len() == 2 => match (a[0].as_f64(), a[1].as_f64()) {
-            (Some(x), Some(y)) if x.is_finite() && y.is_finite() => [x as f32, y as f32],
-            _ => default,
-        },
-        _ => default,
-    };
-    let [ox, oy] = pair("offset", [0.0, 0.0]);
-    let [sx, sy] = pair("scale", [1.0, 1.0]);
-    let r = number(e, "rotation", 0.0);
+    let [ox, oy] = checked_array(e, "offset", [0.0, 0.0], SpecRange::ANY, replaced);
+    let [sx, sy] = checked_array(e, "scale", [1.0, 1.0], SpecRange::ANY, replaced);
+    let r = checked_number(e, "rotation", 0.0, SpecRange::ANY, replaced);
     let (sin, cos) = r.sin_cos();
     Some(TextureTransform {
         matrix: [cos * sx, sin * sy, -sin * sx, cos * sy, ox, oy],
@@ -202,6 +343,9 @@ pub struct ExtensionTexture {
 pub struct ExtensionsApplied {
     pub textures: Vec<ExtensionTexture>,
     pub unsupported: Vec<Unsupported>,
+    /// Values the file gave outside their specification's range (or not numbers, or beyond single
+    /// precision), each with what fovea used instead ([`checked_number`]).
+    pub replaced: Vec<Unsupported>,
 }
 
 /// The absorption coefficient σₐ = −ln(c) / d of `KHR_materials_volume`'s `attenuationColor` c and
@@ -225,17 +369,32 @@ pub fn apply_material_extensions(
     material: &mut Material,
 ) -> ExtensionsApplied {
     let mut out = ExtensionsApplied::default();
+    // The values an extension's object replaced, as notes for `out.replaced`.
+    let replaced = |name: &str, notes: Vec<String>, out: &mut ExtensionsApplied| {
+        out.replaced
+            .extend(notes.iter().map(|what| Unsupported::new(name, what)));
+    };
     let texture =
         |ext: &Value, name: &str, key: &'static str, slot, out: &mut ExtensionsApplied| {
             let Some(info) = ext.get(key) else { return };
             match info.get("index").and_then(Value::as_u64) {
-                Some(index) => out.textures.push(ExtensionTexture {
-                    slot,
-                    role: key,
-                    index: index as usize,
-                    tex_coord: info.get("texCoord").and_then(Value::as_u64).unwrap_or(0) as u32,
-                    transform: texture_transform(info.get("extensions").and_then(Value::as_object)),
-                }),
+                Some(index) => {
+                    let mut notes = Vec::new();
+                    let transform = texture_transform(
+                        info.get("extensions").and_then(Value::as_object),
+                        &mut notes,
+                    );
+                    out.replaced.extend(notes.iter().map(|what| {
+                        Unsupported::new("KHR_texture_transform", &format!("{key}: {what}"))
+                    }));
+                    out.textures.push(ExtensionTexture {
+                        slot,
+                        role: key,
+                        index: index as usize,
+                        tex_coord: info.get("texCoord").and_then(Value::as_u64).unwrap_or(0) as u32,
+                        transform,
+                    });
+                }
                 None => out.unsupported.push(Unsupported::new(
                     name,
                     &format!("{key} has no texture index; ignored"),
@@ -250,22 +409,35 @@ pub fn apply_material_extensions(
             }
         }
     };
-    let ior = extensions
-        .get("KHR_materials_ior")
-        .map_or(1.5, |e| number(e, "ior", 1.5));
-    // The spec allows 0 (an infinite index) and 1 upwards.
-    if ior != 0.0 && !(ior >= 1.0) {
-        out.unsupported.push(Unsupported::new(
-            "KHR_materials_ior",
-            &format!("ior {ior} is neither 0 nor at least 1 (the spec's values); read as 1"),
-        ));
-    }
+    let ior = match extensions.get("KHR_materials_ior") {
+        // The spec allows 0 (an infinite index, Fresnel 1) and 1 upwards.
+        Some(e) if e.get("ior").and_then(Value::as_f64) == Some(0.0) => 0.0,
+        Some(e) => {
+            let mut notes = Vec::new();
+            let from_one = SpecRange {
+                min: 1.0,
+                ..SpecRange::NON_NEGATIVE
+            };
+            let ior = checked_number(e, "ior", 1.5, from_one, &mut notes);
+            replaced("KHR_materials_ior", notes, &mut out);
+            ior
+        }
+        None => 1.5,
+    };
     let mut specular_weight = 1.0;
     if let Some(e) = extensions.get("KHR_materials_specular") {
-        let colour = rgb(e, "specularColorFactor", [1.0; 3]);
-        specular_weight = number(e, "specularFactor", 1.0).max(0.0)
-            * colour.iter().fold(0.0f32, |m, &c| m.max(c)).max(0.0);
         let name = "KHR_materials_specular";
+        let mut notes = Vec::new();
+        let colour = checked_array(
+            e,
+            "specularColorFactor",
+            [1.0; 3],
+            SpecRange::NON_NEGATIVE,
+            &mut notes,
+        );
+        specular_weight = checked_number(e, "specularFactor", 1.0, SpecRange::UNIT, &mut notes)
+            * colour.iter().fold(0.0f32, |m, &c| m.max(c));
+        replaced(name, notes, &mut out);
         texture(
             e,
             name,
@@ -287,12 +459,11 @@ pub fn apply_material_extensions(
         material.specular = specular_from_ior(ior, specular_weight);
     }
     if let Some(e) = extensions.get("KHR_materials_transmission") {
+        let mut notes = Vec::new();
+        let factor = checked_number(e, "transmissionFactor", 0.0, SpecRange::UNIT, &mut notes);
+        replaced("KHR_materials_transmission", notes, &mut out);
         // ior 0: Fresnel 1 reflects everything, so nothing is transmitted.
-        material.transmission = if ior == 0.0 {
-            0.0
-        } else {
-            number(e, "transmissionFactor", 0.0).clamp(0.0, 1.0)
-        };
+        material.transmission = if ior == 0.0 { 0.0 } else { factor };
         // glTF allows 1 (no refraction); the dielectric needs a little above it.
         material.ior = ior.max(1.01);
         texture(
@@ -302,22 +473,44 @@ pub fn apply_material_extensions(
             ExtensionTextureSlot::Transmission,
             &mut out,
         );
-        match extensions.get("KHR_materials_volume") {
-            Some(v) if number(v, "thicknessFactor", 0.0) > 0.0 => {
+        let volume = extensions.get("KHR_materials_volume").map(|v| {
+            let mut notes = Vec::new();
+            let range = SpecRange::NON_NEGATIVE;
+            let thickness = checked_number(v, "thicknessFactor", 0.0, range, &mut notes);
+            let colour =
+                checked_array(v, "attenuationColor", [1.0; 3], SpecRange::UNIT, &mut notes);
+            let distance = checked_number(
+                v,
+                "attenuationDistance",
+                f32::INFINITY,
+                SpecRange::POSITIVE,
+                &mut notes,
+            );
+            replaced("KHR_materials_volume", notes, &mut out);
+            (thickness, colour, distance)
+        });
+        match volume {
+            Some((thickness, colour, distance)) if thickness > 0.0 => {
                 // A closed volume: its inside may absorb.
-                material.absorption = absorption_coefficient(
-                    rgb(v, "attenuationColor", [1.0; 3]),
-                    number(v, "attenuationDistance", f32::INFINITY),
-                );
+                material.absorption = absorption_coefficient(colour, distance);
             }
             // No volume: glTF's thin wall, which light passes straight through.
             _ => material.flags |= MATERIAL_THIN_WALLED,
         }
     }
     if let Some(e) = extensions.get("KHR_materials_clearcoat") {
-        material.clearcoat = number(e, "clearcoatFactor", 0.0).clamp(0.0, 1.0);
-        material.clearcoat_gloss = 1.0 - number(e, "clearcoatRoughnessFactor", 0.0).clamp(0.0, 1.0);
         let name = "KHR_materials_clearcoat";
+        let mut notes = Vec::new();
+        material.clearcoat = checked_number(e, "clearcoatFactor", 0.0, SpecRange::UNIT, &mut notes);
+        material.clearcoat_gloss = 1.0
+            - checked_number(
+                e,
+                "clearcoatRoughnessFactor",
+                0.0,
+                SpecRange::UNIT,
+                &mut notes,
+            );
+        replaced(name, notes, &mut out);
         texture(
             e,
             name,
@@ -335,10 +528,12 @@ pub fn apply_material_extensions(
         texture_ignored(e, name, &["clearcoatNormalTexture"], &mut out);
     }
     if let Some(e) = extensions.get("KHR_materials_sheen") {
-        let colour = rgb(e, "sheenColorFactor", [0.0; 3]);
-        material.sheen = colour.iter().fold(0.0f32, |m, &c| m.max(c)).clamp(0.0, 1.0);
-        material.sheen_tint = 0.0;
         let name = "KHR_materials_sheen";
+        let mut notes = Vec::new();
+        let colour = checked_array(e, "sheenColorFactor", [0.0; 3], SpecRange::UNIT, &mut notes);
+        replaced(name, notes, &mut out);
+        material.sheen = colour.iter().fold(0.0f32, |m, &c| m.max(c));
+        material.sheen_tint = 0.0;
         texture(
             e,
             name,
@@ -349,8 +544,12 @@ pub fn apply_material_extensions(
         texture_ignored(e, name, &["sheenRoughnessTexture"], &mut out);
     }
     if let Some(e) = extensions.get("KHR_materials_anisotropy") {
-        material.anisotropic = number(e, "anisotropyStrength", 0.0).clamp(0.0, 1.0);
-        if number(e, "anisotropyRotation", 0.0) != 0.0 {
+        let mut notes = Vec::new();
+        material.anisotropic =
+            checked_number(e, "anisotropyStrength", 0.0, SpecRange::UNIT, &mut notes);
+        let rotation = checked_number(e, "anisotropyRotation", 0.0, SpecRange::ANY, &mut notes);
+        replaced("KHR_materials_anisotropy", notes, &mut out);
+        if rotation != 0.0 {
             out.unsupported.push(Unsupported::new(
                 "KHR_materials_anisotropy",
                 "anisotropyRotation is not read (the highlight follows the tangent)",
@@ -430,10 +629,13 @@ mod tests {
         );
         assert_eq!((m.specular, m.transmission), (SPECULAR_MAX, 0.0));
         assert!(notes.is_empty(), "{notes:?}");
-        // Between 0 and 1 the index is invalid: read as 1, with a warning naming it.
-        let (m, notes) = apply(r#"{"KHR_materials_ior":{"ior":0.5}}"#);
+        // Between 0 and 1 the index is invalid: read as 1, with a note naming it.
+        let (m, applied) = apply_all(r#"{"KHR_materials_ior":{"ior":0.5}}"#);
         assert_eq!(m.specular, 0.0);
-        assert!(notes.iter().any(|n| n.what.contains("0.5")), "{notes:?}");
+        assert_eq!(
+            applied.replaced[0].what,
+            "ior 0.5 is outside the specification's range (1 or more); used 1"
+        );
     }
 
     #[test]
@@ -520,11 +722,19 @@ mod tests {
         assert_eq!(m.anisotropic, 0.7);
         assert_eq!(notes.len(), 1, "{notes:?}");
         assert!(notes[0].what.contains("anisotropyRotation"));
-        // Out-of-range values are clamped; malformed ones take the default.
-        let (m, _) = apply(
+        // Out-of-range values are clamped and malformed ones take the default, each with a note.
+        let (m, applied) = apply_all(
             r#"{"KHR_materials_clearcoat":{"clearcoatFactor":7},"KHR_materials_sheen":{"sheenColorFactor":"red"}}"#,
         );
         assert_eq!((m.clearcoat, m.clearcoat_gloss, m.sheen), (1.0, 1.0, 0.0));
+        let notes: Vec<String> = applied.replaced.iter().map(|n| n.what.clone()).collect();
+        assert_eq!(
+            notes,
+            [
+                "clearcoatFactor 7 is outside the specification's range (0 to 1); used 1",
+                "sheenColorFactor \"red\" is not 3 numbers; used the default [0, 0, 0]"
+            ]
+        );
     }
 
     #[test]
@@ -577,6 +787,235 @@ mod tests {
         assert_eq!(absorption_coefficient([0.5; 3], f32::INFINITY), [0.0; 3]);
         assert_eq!(absorption_coefficient([0.5; 3], -1.0), [0.0; 3]);
         assert_eq!(absorption_coefficient([0.5; 3], 1e-45), [f32::MAX; 3]);
+    }
+
+    /// Whether no float parameter of `m` is NaN.
+    fn no_nan(m: &Material) -> bool {
+        let scalars = [
+            m.metallic,
+            m.roughness,
+            m.anisotropic,
+            m.specular,
+            m.sheen,
+            m.clearcoat,
+            m.clearcoat_gloss,
+            m.transmission,
+            m.ior,
+        ];
+        scalars
+            .iter()
+            .chain(&m.base_color)
+            .chain(&m.emission)
+            .chain(&m.absorption)
+            .all(|v| !v.is_nan())
+    }
+
+    #[test]
+    fn a_value_the_file_gives_out_of_range_is_named_with_what_fovea_used() {
+        let notes = |json: &str| -> Vec<String> {
+            let (m, applied) = apply_all(json);
+            assert!(no_nan(&m), "{json}: {m:?}");
+            applied
+                .replaced
+                .iter()
+                .map(|n| format!("{} {}", n.extension, n.what))
+                .collect()
+        };
+        let glass = r#""KHR_materials_transmission":{"transmissionFactor":1}"#;
+        // A volume's attenuation distance of 0 or less is not "clear glass" without a word.
+        assert_eq!(
+            notes(&format!(r#"{{{glass},"KHR_materials_volume":{{"thicknessFactor":1,"attenuationDistance":0}}}}"#)),
+            ["KHR_materials_volume attenuationDistance 0 is outside the specification's range (above 0); used inf"]
+        );
+        assert_eq!(
+            notes(&format!(r#"{{{glass},"KHR_materials_volume":{{"thicknessFactor":1,"attenuationColor":[2,0.5,1]}}}}"#)),
+            ["KHR_materials_volume attenuationColor [2,0.5,1] is outside the specification's range (0 to 1); used [1, 0.5, 1]"]
+        );
+        // Beyond single precision: overflow and underflow.
+        // (serde_json reads 1e-50 as 9.999999999999999e-51: the message shows the value as read.)
+        let underflow = notes(r#"{"KHR_materials_clearcoat":{"clearcoatFactor":1e-50}}"#);
+        assert!(
+            underflow.len() == 1
+                && underflow[0].starts_with("KHR_materials_clearcoat clearcoatFactor ")
+                && underflow[0].ends_with("e-51 is beyond single precision; used 0"),
+            "{underflow:?}"
+        );
+        let (m, applied) = apply_all(
+            r#"{"KHR_materials_clearcoat":{"clearcoatFactor":1,"clearcoatTexture":{"index":0,
+                "extensions":{"KHR_texture_transform":{"scale":[1e39,2],"rotation":"x"}}}}}"#,
+        );
+        let notes: Vec<&str> = applied.replaced.iter().map(|n| n.what.as_str()).collect();
+        assert_eq!(
+            notes,
+            [
+                "clearcoatTexture: scale [1e+39,2] is beyond single precision; used [3.4028235e38, 2]",
+                "clearcoatTexture: rotation \"x\" is not a number; used the default 0"
+            ]
+        );
+        assert!(applied.textures[0]
+            .transform
+            .unwrap()
+            .matrix
+            .iter()
+            .all(|v| v.is_finite()));
+        assert_eq!(m.clearcoat, 1.0);
+    }
+
+    /// Every number field of every mapped extension set to -1, 0, 2, 1e39, 1e-50 and a string: a value
+    /// outside the specification's range, or one single precision cannot hold, gets a note naming it
+    /// (no silent change), one inside gets none, and no material parameter is NaN.
+    #[test]
+    fn a_sweep_of_every_field_finds_no_silent_change() {
+        const IOR: &str = "ior";
+        // (extension, field, values per field, range; `IOR` also allows 0), and the extensions it
+        // needs beside it.
+        let fields: [(&str, &str, usize, SpecRange, &str); 12] = [
+            (
+                "KHR_materials_ior",
+                "ior",
+                1,
+                SpecRange {
+                    min: 1.0,
+                    ..SpecRange::NON_NEGATIVE
+                },
+                "",
+            ),
+            (
+                "KHR_materials_specular",
+                "specularFactor",
+                1,
+                SpecRange::UNIT,
+                "",
+            ),
+            (
+                "KHR_materials_specular",
+                "specularColorFactor",
+                3,
+                SpecRange::NON_NEGATIVE,
+                "",
+            ),
+            (
+                "KHR_materials_transmission",
+                "transmissionFactor",
+                1,
+                SpecRange::UNIT,
+                "",
+            ),
+            (
+                "KHR_materials_volume",
+                "thicknessFactor",
+                1,
+                SpecRange::NON_NEGATIVE,
+                "glass",
+            ),
+            (
+                "KHR_materials_volume",
+                "attenuationColor",
+                3,
+                SpecRange::UNIT,
+                "glass",
+            ),
+            (
+                "KHR_materials_volume",
+                "attenuationDistance",
+                1,
+                SpecRange::POSITIVE,
+                "glass",
+            ),
+            (
+                "KHR_materials_clearcoat",
+                "clearcoatFactor",
+                1,
+                SpecRange::UNIT,
+                "",
+            ),
+            (
+                "KHR_materials_clearcoat",
+                "clearcoatRoughnessFactor",
+                1,
+                SpecRange::UNIT,
+                "",
+            ),
+            (
+                "KHR_materials_sheen",
+                "sheenColorFactor",
+                3,
+                SpecRange::UNIT,
+                "",
+            ),
+            (
+                "KHR_materials_anisotropy",
+                "anisotropyStrength",
+                1,
+                SpecRange::UNIT,
+                "",
+            ),
+            (
+                "KHR_materials_anisotropy",
+                "anisotropyRotation",
+                1,
+                SpecRange::ANY,
+                "",
+            ),
+        ];
+        let values: [(&str, Option<f64>); 6] = [
+            ("-1", Some(-1.0)),
+            ("0", Some(0.0)),
+            ("2", Some(2.0)),
+            ("1e39", None),
+            ("1e-50", None),
+            ("\"NaN\"", None),
+        ];
+        let (mut cases, mut silent, mut spurious) = (0, Vec::new(), Vec::new());
+        let mut check = |json: String, field: &str, expect_note: bool| {
+            let (m, applied) = apply_all(&json);
+            assert!(no_nan(&m), "{json}: {m:?}");
+            let noted = applied.replaced.iter().any(|n| n.what.contains(field));
+            cases += 1;
+            if expect_note && !noted {
+                silent.push(json);
+            } else if !expect_note && !applied.replaced.is_empty() {
+                spurious.push(format!("{json}: {:?}", applied.replaced));
+            }
+        };
+        for (extension, field, n, range, needs) in fields {
+            for (text, value) in values {
+                let value_json = if n == 1 {
+                    text.to_string()
+                } else {
+                    format!("[{text},{text},{text}]")
+                };
+                let glass = if needs == "glass" {
+                    r#""KHR_materials_transmission":{"transmissionFactor":1},"#
+                } else {
+                    ""
+                };
+                let json = format!(r#"{{{glass}"{extension}":{{"{field}":{value_json}}}}}"#);
+                // Representable values keep their meaning; the others must be named.
+                let fine = value.is_some_and(|v| range.contains(v) || (field == IOR && v == 0.0));
+                check(json, field, !fine);
+            }
+        }
+        for (key, n) in [("offset", 2), ("scale", 2), ("rotation", 1)] {
+            for (text, value) in values {
+                let value_json = if n == 1 {
+                    text.to_string()
+                } else {
+                    format!("[{text},{text}]")
+                };
+                let json = format!(
+                    r#"{{"KHR_materials_clearcoat":{{"clearcoatTexture":{{"index":0,
+                        "extensions":{{"KHR_texture_transform":{{"{key}":{value_json}}}}}}}}}}}"#
+                );
+                check(json, key, value.is_none());
+            }
+        }
+        assert_eq!(cases, 15 * 6);
+        assert!(silent.is_empty(), "silent changes: {silent:#?}");
+        assert!(
+            spurious.is_empty(),
+            "notes for values in range: {spurious:#?}"
+        );
     }
 
     #[test]

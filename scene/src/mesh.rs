@@ -436,17 +436,22 @@ impl LoadedScene {
     }
 
     /// Replaces non-finite material parameters by defaults and clamps the others to their ranges (one
-    /// warning per material that needed it).
+    /// warning per material that needed it, naming each parameter's value and what replaced it).
     fn sanitize_materials(&mut self, file: &Path) {
         for (i, m) in self.materials.iter_mut().enumerate() {
-            let mut fixed: Vec<&str> = Vec::new();
+            // (parameter, its value, what fovea used): the first of each parameter's channels.
+            let mut fixed: Vec<(&str, f32, f32)> = Vec::new();
             let mut fix = |v: &mut f32, lo: f32, hi: f32, default: f32, what: &'static str| {
+                let was = *v;
                 if !v.is_finite() {
                     *v = default;
-                    fixed.push(what);
                 } else if *v < lo || *v > hi {
                     *v = v.clamp(lo, hi);
-                    fixed.push(what);
+                } else {
+                    return;
+                }
+                if !fixed.iter().any(|f| f.0 == what) {
+                    fixed.push((what, was, *v));
                 }
             };
             for c in 0..3 {
@@ -477,18 +482,16 @@ impl LoadedScene {
                 }
                 fix(&mut m.absorption[c], 0.0, f32::MAX, 0.0, "absorption");
             }
-            let mut seen = Vec::new();
-            fixed.retain(|w| {
-                let new = !seen.contains(w);
-                seen.push(*w);
-                new
-            });
             if !fixed.is_empty() {
                 let label = self.material_names.get(i).map_or("", String::as_str);
+                let list: Vec<String> = fixed
+                    .iter()
+                    .map(|(what, was, used)| format!("{what} {was} (used {used})"))
+                    .collect();
                 self.warnings.push(format!(
                     "{}: material {i} ({label:?}): invalid {}; replaced by defaults or clamped",
                     file.display(),
-                    fixed.join(", ")
+                    list.join(", ")
                 ));
             }
         }
@@ -715,8 +718,9 @@ mod tests {
         let all = s.warnings.join("\n");
         assert!(
             all.contains(
-                "q.obj: material 0 (\"m\"): invalid base colour, emission, opacity, roughness, \
-                 index of refraction, absorption"
+                "q.obj: material 0 (\"m\"): invalid base colour NaN (used 0.8), emission inf \
+                 (used 0), opacity 2 (used 1), roughness 7 (used 1), index of refraction NaN (used \
+                 1.5), absorption -2 (used 0)"
             ),
             "{all}"
         );

@@ -100,6 +100,72 @@ pub struct ViewOptions {
     pub quiet: bool,
 }
 
+/// `--screenshot-dir` must be a folder or a path one can be made at (not through a file), checked at
+/// start; a `--screenshot-at-frame` after `--exit-after-frames` would never come.
+fn check_screenshots(args: &ViewArgs) -> Result<()> {
+    let dir = &args.screenshot_dir;
+    if dir.exists() && !dir.is_dir() {
+        return Err(FoveaError::option(
+            "--screenshot-dir",
+            format!("'{}' is a file, not a folder", dir.display()),
+        ));
+    }
+    if let Some(file) = dir.ancestors().skip(1).find(|a| a.is_file()) {
+        return Err(FoveaError::option(
+            "--screenshot-dir",
+            format!(
+                "'{}' is a file, so '{}' cannot be a folder",
+                file.display(),
+                dir.display()
+            ),
+        ));
+    }
+    if let Some(exit) = args.exit_after_frames {
+        if let Some(k) = args.screenshot_at_frame.iter().find(|&&k| k > exit) {
+            return Err(FoveaError::option(
+                "--screenshot-at-frame",
+                format!("{k} comes after --exit-after-frames {exit}: the view ends first"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The memory the system can still give, from `/proc/meminfo`'s `MemAvailable` (Linux); `None`
+/// elsewhere.
+fn available_memory_bytes() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// The CPU backend's frames at `--size` × `--render-scale` must fit in `available` bytes: refused up
+/// front, with the memory they would need, rather than aborting on allocation.
+fn check_cpu_frame_memory(size: [u32; 2], render_scale: f32, available: Option<u64>) -> Result<()> {
+    let Some(available) = available else {
+        return Ok(());
+    };
+    let scaled = |e: u32| (f64::from(e) * f64::from(render_scale)).ceil().max(1.0) as u64;
+    let needed = scaled(size[0]) * scaled(size[1]) * fovea_cpu::FRAME_BYTES_PER_PIXEL;
+    if needed > available {
+        let gib = |b: u64| b as f64 / f64::from(1u32 << 30);
+        return Err(FoveaError::option(
+            "--size",
+            format!(
+                "{}x{} needs about {:.1} GiB for the CPU backend's frames (history and denoiser \
+                 included), and this machine has {:.1} GiB available: choose a smaller --size or \
+                 --render-scale, or --backend vulkan",
+                size[0],
+                size[1],
+                gib(needed),
+                gib(available)
+            ),
+        ));
+    }
+    Ok(())
+}
+
 impl ViewOptions {
     pub fn from_args(args: &ViewArgs) -> Result<Self> {
         let (spp, blocks) = (args.foveation.spp.0, args.foveation.blocks.0);
@@ -200,6 +266,10 @@ impl ViewOptions {
                 "must be at least 1",
             ));
         }
+        check_screenshots(args)?;
+        if args.target.backend != Backend::Vulkan {
+            check_cpu_frame_memory(args.size.0, args.render_scale, available_memory_bytes())?;
+        }
         let camera = args.camera.points();
         if let Some(f) = args.camera.fov {
             if !(f > 0.0 && f < 180.0) {
@@ -246,5 +316,30 @@ impl ViewOptions {
             stats: args.stats.clone(),
             quiet: args.quiet,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_size_whose_cpu_frames_do_not_fit_in_memory_is_refused_with_what_it_needs() {
+        let gib = 1u64 << 30;
+        assert!(check_cpu_frame_memory([1280, 720], 1.0, Some(gib)).is_ok());
+        assert!(
+            check_cpu_frame_memory([16384, 16384], 1.0, None).is_ok(),
+            "unknown: allowed"
+        );
+        let e = check_cpu_frame_memory([16384, 16384], 1.0, Some(4 * gib))
+            .unwrap_err()
+            .to_string();
+        let needed = 16384.0 * 16384.0 * fovea_cpu::FRAME_BYTES_PER_PIXEL as f64 / gib as f64;
+        assert!(
+            e.contains(&format!("needs about {needed:.1} GiB")) && e.contains("4.0 GiB available"),
+            "{e}"
+        );
+        // --render-scale renders fewer pixels.
+        assert!(check_cpu_frame_memory([16384, 16384], 0.1, Some(4 * gib)).is_ok());
     }
 }

@@ -357,8 +357,8 @@ fn parse_line(words: &[&str]) -> Result<(u64, ScriptEvent), String> {
         "mouse" => {
             expect_args(name, args, &["X", "Y"])?;
             ScriptEvent::Mouse {
-                x: parse_float(name, "x", args[0])?,
-                y: parse_float(name, "y", args[1])?,
+                x: parse_mouse(name, "x", args[0])?,
+                y: parse_mouse(name, "y", args[1])?,
             }
         }
         "press" => {
@@ -484,6 +484,19 @@ fn parse_gaze(event: &str, field: &str, word: &str) -> Result<f32, String> {
         ));
     }
     Ok(value as f32)
+}
+
+/// A scripted pointer position in window pixels, bounded as every gaze in pixels is
+/// ([`crate::values::MAX_GAZE_OFFSET`] off the window at most).
+fn parse_mouse(event: &str, field: &str, word: &str) -> Result<f64, String> {
+    let value = parse_float(event, field, word)?;
+    let limit = f64::from(crate::values::MAX_GAZE_OFFSET);
+    if value.abs() > limit {
+        return Err(format!(
+            "{event} {field} '{word}' is outside -{limit}..{limit} window pixels"
+        ));
+    }
+    Ok(value)
 }
 
 fn parse_key(word: &str) -> Result<ViewKey, String> {
@@ -720,6 +733,8 @@ mod tests {
             ("0 gaze inf 0.5", "'inf'"),
             ("0 mouse 1 -inf", "'-inf'"),
             ("0 mouse x 1", "'x'"),
+            ("0 mouse 1e300 1", "'1e300'"),
+            ("0 mouse 5 -2000000", "'-2000000'"),
             ("0 wheel two", "'two'"),
             ("0 wheel nan", "'nan'"),
             ("0 wheel 1e300", "'1e300'"),
