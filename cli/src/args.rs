@@ -403,9 +403,14 @@ pub struct ReportArgs {
     /// Also judge a sequence: render this gaze trace frame by frame (the files `render` and `view`
     /// read: `t,x,y` or `frame,x,y`, pixels or --gaze-normalized) for uniform and the paper's
     /// foveated configurations, with and without history, and pool the error by eccentricity band
-    /// and over time (flicker). The camera stays still.
+    /// and over time (flicker). The camera stays still unless --camera-path moves it.
     #[arg(long, value_name = "FILE.csv")]
     pub gaze_trace: Option<PathBuf>,
+    /// With --gaze-trace: each frame's camera, lines `frame,eye_x,eye_y,eye_z,target_x,target_y,target_z`
+    /// (as `render` reads them; every frame of the trace needs one). Each camera gets its own
+    /// converged reference (cached), and history follows the camera as in `view`.
+    #[arg(long, value_name = "FILE.csv")]
+    pub camera_path: Option<PathBuf>,
     /// Frames per second at which a timed gaze trace (`t,x,y`) is rendered.
     #[arg(
         long,

@@ -370,3 +370,99 @@ fn bad_options_fail_clearly() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--camera-path` with `--gaze-trace`: a path that holds the camera still gives exactly the still
+/// sequence's figures, and a moving one scores each frame against its own camera's reference (each
+/// rendered once and cached).
+#[test]
+fn a_camera_path_moves_the_sequence_and_each_camera_has_its_reference() {
+    let dir = temp_dir("camera-path");
+    let trace = dir.join("trace.csv");
+    std::fs::write(&trace, "frame,x,y\n0,60,34\n1,62,35\n2,40,30\n").unwrap();
+    let still = dir.join("still.csv");
+    std::fs::write(
+        &still,
+        "0,0,1,3.9,0,1,0\n1,0,1,3.9,0,1,0\n2,0,1,3.9,0,1,0\n",
+    )
+    .unwrap();
+    let moving = dir.join("moving.csv");
+    std::fs::write(
+        &moving,
+        "0,0,1,3.9,0,1,0\n1,0.05,1,3.9,0,1,0\n2,0.1,1,3.9,0,1,0\n",
+    )
+    .unwrap();
+    let sequence = |out: &str, camera_path: Option<&Path>| -> Value {
+        let mut args = vec![
+            "--gaze-trace".to_string(),
+            trace.to_string_lossy().into_owned(),
+            "--sweep-max".into(),
+            "1".into(),
+            "--no-fovvideovdp".into(),
+            "--resolution".into(),
+            "120x68".into(),
+            "--reference-spp".into(),
+            "64".into(),
+        ];
+        if let Some(p) = camera_path {
+            args.push("--camera-path".into());
+            args.push(p.to_string_lossy().into_owned());
+        }
+        let output = Command::new(env!("CARGO_BIN_EXE_fovea"))
+            .arg("report")
+            .arg(cornell())
+            .args(["--eye", "0,1,3.9", "--target", "0,1,0", "--fov", "38"])
+            .args(["--quick", "--backend", "cpu", "--out"])
+            .arg(dir.join(out))
+            .arg("--cache-dir")
+            .arg(dir.join("cache"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.success(), "{stderr}");
+        let json: Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(out).join("report.json")).unwrap(),
+        )
+        .unwrap();
+        json["sequence"].clone()
+    };
+    let plain = sequence("plain", None);
+    let held = sequence("held", Some(&still));
+    assert!(plain["camera_path"].is_null());
+    assert!(held["camera_path"].as_str().unwrap().ends_with("still.csv"));
+    for (a, b) in plain["configs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(held["configs"].as_array().unwrap())
+    {
+        assert_eq!(a["flip"], b["flip"], "{}", a["slug"]);
+        assert_eq!(a["flicker"], b["flicker"], "{}", a["slug"]);
+    }
+    let cached = || {
+        std::fs::read_dir(dir.join("cache"))
+            .unwrap()
+            .filter(|e| {
+                e.as_ref()
+                    .unwrap()
+                    .path()
+                    .extension()
+                    .is_some_and(|x| x == "exr")
+            })
+            .count()
+    };
+    assert_eq!(cached(), 1, "a still camera has one reference");
+    let moved = sequence("moved", Some(&moving));
+    assert_eq!(cached(), 3, "two more cameras, two more references");
+    for c in moved["configs"].as_array().unwrap() {
+        let flip = c["flip"]["all"].as_f64().unwrap();
+        assert!(
+            flip.is_finite() && flip > 0.0 && flip < 0.5,
+            "{}: {flip}",
+            c["slug"]
+        );
+    }
+    let md = std::fs::read_to_string(dir.join("moved/report.md")).unwrap();
+    assert!(md.contains("the camera moving along"), "{md}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

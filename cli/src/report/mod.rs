@@ -251,17 +251,53 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
             (part, _) => part,
         },
         sequence: match &args.gaze_trace {
-            Some(path) => Some(sequence::read_trace(
-                path,
-                args.trace_fps,
-                args.gaze_normalized,
-                resolution,
-                args.sequence_frames,
-                args.band_deg,
-            )?),
+            Some(path) => {
+                let mut seq = sequence::read_trace(
+                    path,
+                    args.trace_fps,
+                    args.gaze_normalized,
+                    resolution,
+                    args.sequence_frames,
+                    args.band_deg,
+                )?;
+                if let Some(camera_path) = &args.camera_path {
+                    seq.camera_path = Some((
+                        camera_path.display().to_string(),
+                        cameras_of_frames(camera_path, &seq.frames)?,
+                    ));
+                }
+                Some(seq)
+            }
+            None if args.camera_path.is_some() => {
+                return Err(FoveaError::option(
+                    "--camera-path",
+                    "moves the camera over a sequence; add --gaze-trace FILE.csv",
+                ))
+            }
             None => None,
         },
     })
+}
+
+/// Each trace frame's camera from `--camera-path`, which must give every frame the trace renders.
+fn cameras_of_frames(
+    path: &Path,
+    frames: &[(u32, [f32; 2])],
+) -> Result<Vec<crate::camera_path::CameraKey>> {
+    let keys = crate::camera_path::read_camera_path(path)?;
+    let by_frame: HashMap<u32, crate::camera_path::CameraKey> =
+        keys.iter().map(|k| (k.frame, *k)).collect();
+    frames
+        .iter()
+        .map(|(frame, _)| {
+            by_frame.get(frame).copied().ok_or_else(|| {
+                FoveaError::option(
+                    "--camera-path",
+                    format!("has no line for frame {frame}, which the --gaze-trace renders"),
+                )
+            })
+        })
+        .collect()
 }
 
 /// Creates `dir` (and its parents).
@@ -463,6 +499,51 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// A converged reference of `reference_frame`, rendered and stored in the cache as `entry`; its
+/// render time.
+#[allow(clippy::too_many_arguments)]
+fn render_reference(
+    args: &ReportArgs,
+    plan: &Plan,
+    renderer: &mut Renderer,
+    bar: &ProgressBar,
+    packed: &fovea_scene::pack::PackedScene,
+    entry: &CacheEntry,
+    reference_frame: &FrameParams,
+    what: &str,
+) -> Result<(FrameImage, Option<f64>)> {
+    let (w, h) = (reference_frame.width, reference_frame.height);
+    bar.inc_length(u64::from(w) * u64::from(h) * u64::from(plan.reference_spp));
+    bar.set_message(format!("{what}: reference ({} spp)", plan.reference_spp));
+    let request = FrameRequest {
+        fill_mode: plan.fill_mode,
+        exposure_ev: args.exposure,
+        history: false,
+        denoise: false,
+        output: FrameOutput::ReadBack {
+            want_hdr: true,
+            want_raw: false,
+        },
+    };
+    let rendered = renderer.render(packed, reference_frame, &request, &|n| bar.inc(n))?;
+    let image = rendered
+        .hdr
+        .ok_or_else(|| FoveaError::Backend("the backend returned no HDR image".into()))?;
+    match entry.store(&image) {
+        Ok(()) => note(
+            bar,
+            args.quiet,
+            &format!("reference: rendered and cached {}", entry.image.display()),
+        ),
+        Err(e) => note(
+            bar,
+            false,
+            &format!("warning: the reference could not be cached: {e}"),
+        ),
+    }
+    Ok((image, Some(rendered.stats.render_ms)))
 }
 
 /// A reference merged from its parts in `dir` (`<name>.part-*.fvpart`, written by `--reference-part`),
@@ -682,41 +763,16 @@ fn run_scene(
             }
             (image, None)
         }
-        None => {
-            bar.inc_length(u64::from(w) * u64::from(h) * u64::from(plan.reference_spp));
-            bar.set_message(format!(
-                "{scene_name}: reference ({} spp)",
-                plan.reference_spp
-            ));
-            let request = FrameRequest {
-                fill_mode: plan.fill_mode,
-                exposure_ev: args.exposure,
-                history: false,
-                denoise: false,
-                output: FrameOutput::ReadBack {
-                    want_hdr: true,
-                    want_raw: false,
-                },
-            };
-            let rendered =
-                renderer.render(&scene.packed, &reference_frame, &request, &|n| bar.inc(n))?;
-            let image = rendered
-                .hdr
-                .ok_or_else(|| FoveaError::Backend("the backend returned no HDR image".into()))?;
-            match entry.store(&image) {
-                Ok(()) => note(
-                    bar,
-                    args.quiet,
-                    &format!("reference: rendered and cached {}", entry.image.display()),
-                ),
-                Err(e) => note(
-                    bar,
-                    false,
-                    &format!("warning: the reference could not be cached: {e}"),
-                ),
-            }
-            (image, Some(rendered.stats.render_ms))
-        }
+        None => render_reference(
+            args,
+            plan,
+            renderer,
+            bar,
+            &scene.packed,
+            &entry,
+            &reference_frame,
+            &scene_name,
+        )?,
     };
     let reference_rgb8 = tonemapped_rgb8(&reference, args.exposure);
     write_png(&out_dir.join("reference.png"), w, h, &reference_rgb8)?;
@@ -809,14 +865,101 @@ fn run_scene(
                 .sum::<u64>()
                 * seq.frames.len() as u64;
             bar.inc_length(samples);
+            // Each moving camera's reference: from the cache, or rendered (a still camera shares
+            // the scene's).
+            let mut moving: Vec<(Camera, FrameImage, Vec<u8>)> = Vec::new();
+            if let Some((_, keys)) = &seq.camera_path {
+                for key in keys {
+                    let camera = choose_camera(
+                        &scene,
+                        Some(key.eye),
+                        Some(key.target),
+                        plan.up,
+                        args.camera.fov,
+                        w as f32 / h as f32,
+                    )?;
+                    if moving.iter().any(|(c, _, _)| c == &camera) {
+                        continue;
+                    }
+                    let frame_reference = FrameParams {
+                        camera,
+                        ..reference_frame
+                    };
+                    let entry = CacheEntry::new(
+                        &plan.cache_dir,
+                        reference_cache::reference_key_text(
+                            crate::content_hash::fnv1a64(&scene_bytes),
+                            &scene.packed,
+                            env_text,
+                            &frame_reference,
+                            plan.fill_mode,
+                        ),
+                    );
+                    let cached = if args.no_cache {
+                        None
+                    } else {
+                        entry.load(w, h)
+                    };
+                    let image = match cached {
+                        Some(image) => image,
+                        None => {
+                            let what = format!("{scene_name} frame {}", key.frame);
+                            render_reference(
+                                args,
+                                plan,
+                                renderer,
+                                bar,
+                                &scene.packed,
+                                &entry,
+                                &frame_reference,
+                                &what,
+                            )?
+                            .0
+                        }
+                    };
+                    let rgb8 = tonemapped_rgb8(&image, args.exposure);
+                    moving.push((camera, image, rgb8));
+                }
+            }
+            let views: Vec<sequence::FrameView> = match &seq.camera_path {
+                Some((_, keys)) => keys
+                    .iter()
+                    .map(|key| {
+                        let camera = choose_camera(
+                            &scene,
+                            Some(key.eye),
+                            Some(key.target),
+                            plan.up,
+                            args.camera.fov,
+                            w as f32 / h as f32,
+                        )?;
+                        let (camera, image, rgb8) = moving
+                            .iter()
+                            .find(|(c, _, _)| c == &camera)
+                            .expect("every camera has its reference");
+                        Ok(sequence::FrameView {
+                            camera: *camera,
+                            reference: image,
+                            reference_rgb8: rgb8,
+                        })
+                    })
+                    .collect::<Result<_>>()?,
+                None => vec![
+                    sequence::FrameView {
+                        camera,
+                        reference: &reference,
+                        reference_rgb8: &reference_rgb8,
+                    };
+                    seq.frames.len()
+                ],
+            };
             let inputs = sequence::SequenceInputs {
                 packed: &scene.packed,
                 base_frame: frame(paper, args.seed, None),
                 paper,
                 display: plan.display,
                 ppd: plan.ppd,
-                reference: &reference,
-                reference_rgb8: &reference_rgb8,
+                views,
                 fill_mode: plan.fill_mode,
                 exposure_ev: args.exposure,
                 scene_name: &scene_name,

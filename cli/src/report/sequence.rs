@@ -15,6 +15,7 @@
 //! twice its per-frame luminance variance here; temporal reuse and a denoiser lower it.
 use std::path::Path;
 
+use fovea_core::camera::Camera;
 use fovea_core::foveation::display::{radius_px_to_eccentricity_deg, DisplayGeometry};
 use fovea_core::foveation::regions::FoveationParams;
 use fovea_core::integrator::FrameParams;
@@ -28,6 +29,7 @@ use super::median;
 use super::metrics::{self, RegionMap, RegionMeans, REL_MSE_EPSILON};
 use super::saccades::{fovea_lag, saccade_frames, FoveaLag};
 use crate::backend::{FrameOutput, FrameRequest, Renderer};
+use crate::camera_path::CameraKey;
 use crate::error::{FoveaError, Result};
 
 /// The trace's frames and how to pool them.
@@ -41,6 +43,17 @@ pub struct SequencePlan {
     pub fps: f64,
     /// Width of an eccentricity band in degrees.
     pub band_deg: f32,
+    /// `--camera-path`: the file, and each frame's camera (in `frames`' order).
+    pub camera_path: Option<(String, Vec<CameraKey>)>,
+}
+
+/// One frame's camera and the converged reference it is scored against (shared by every frame while
+/// the camera is still).
+#[derive(Clone, Copy)]
+pub struct FrameView<'a> {
+    pub camera: Camera,
+    pub reference: &'a FrameImage,
+    pub reference_rgb8: &'a [u8],
 }
 
 /// One configuration of the sequence.
@@ -106,6 +119,8 @@ pub struct FovVideoVdpScore {
 #[derive(Clone, Debug)]
 pub struct SequenceReport {
     pub trace: String,
+    /// The `--camera-path` file, when the camera moved.
+    pub camera_path: Option<String>,
     pub frames: u32,
     pub fps: f64,
     pub band_deg: f32,
@@ -208,8 +223,8 @@ pub struct SequenceInputs<'a> {
     pub paper: FoveationParams,
     pub display: DisplayGeometry,
     pub ppd: f32,
-    pub reference: &'a FrameImage,
-    pub reference_rgb8: &'a [u8],
+    /// Each frame's camera and reference, in the plan's frame order.
+    pub views: Vec<FrameView<'a>>,
     pub fill_mode: u32,
     pub exposure_ev: f32,
     pub scene_name: &'a str,
@@ -241,12 +256,16 @@ pub fn eccentricity_map(
     out
 }
 
-/// Per-pixel flicker between two consecutive frames: `(Y_t − Y_{t−1})² / (Y_ref² + ε)`.
+/// Per-pixel flicker between two consecutive frames: the change of their error,
+/// `((Y_t − R_t) − (Y_{t−1} − R_{t−1}))² / (R_t² + ε)` for test luminance Y and reference luminance R.
+/// With a still camera the references are one image and this is `(Y_t − Y_{t−1})² / (R² + ε)`; with
+/// a moving one, what the scene itself does between frames is not counted as flicker.
 #[must_use]
 pub fn flicker_map(
     current: &FrameImage,
     previous: &FrameImage,
     reference: &FrameImage,
+    previous_reference: &FrameImage,
 ) -> Vec<f32> {
     let luminance = |p: &[f32; 4]| {
         0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
@@ -255,9 +274,9 @@ pub fn flicker_map(
         .pixels
         .iter()
         .zip(&previous.pixels)
-        .zip(&reference.pixels)
-        .map(|((c, p), r)| {
-            let d = luminance(c) - luminance(p);
+        .zip(reference.pixels.iter().zip(&previous_reference.pixels))
+        .map(|((c, p), (r, rp))| {
+            let d = (luminance(c) - luminance(r)) - (luminance(p) - luminance(rp));
             let y = luminance(r);
             (d * d / (y * y + REL_MSE_EPSILON)) as f32
         })
@@ -385,13 +404,23 @@ pub fn run_sequence(
             .collect()
     };
 
-    // FovVideoVDP's reference: one frame (the camera is still).
+    if inputs.views.len() != plan.frames.len() {
+        return Err(FoveaError::Backend(format!(
+            "{} frames but {} cameras and references",
+            plan.frames.len(),
+            inputs.views.len()
+        )));
+    }
+    // FovVideoVDP's reference: one frame while the camera is still, else each frame's.
+    let moving = plan.camera_path.is_some();
     let fvvdp_reference = match &inputs.fovvideovdp {
         Ok(_) => {
             let mut raw = RawFrames::create(inputs.scratch_dir.join("reference.rgb"))
                 .map_err(FoveaError::Backend)?;
-            raw.push(inputs.reference_rgb8)
-                .map_err(FoveaError::Backend)?;
+            let frames = if moving { inputs.views.len() } else { 1 };
+            for view in &inputs.views[..frames] {
+                raw.push(view.reference_rgb8).map_err(FoveaError::Backend)?;
+            }
             Some(raw.finish().map_err(FoveaError::Backend)?)
         }
         Err(_) => None,
@@ -434,6 +463,7 @@ pub fn run_sequence(
                 plan.frames.len()
             ));
             let (regions, band, paper_at_gaze) = &per_frame[i];
+            let view = inputs.views[i];
             let foveation = if spec.foveated {
                 let mut f = *paper_at_gaze;
                 f.spp = [spec.spp[0], spec.spp[1], spec.spp[2], 0];
@@ -442,6 +472,7 @@ pub fn run_sequence(
                 FoveationParams::uniform(spec.spp[0])
             };
             let frame = FrameParams {
+                camera: view.camera,
                 foveation,
                 frame_index: frame_number,
                 ..inputs.base_frame
@@ -470,8 +501,8 @@ pub fn run_sequence(
                 raw.push(&rgb8).map_err(FoveaError::Backend)?;
             }
             let evaluation = std::time::Instant::now();
-            let flip = metrics::flip_map(inputs.reference_rgb8, &rgb8, w, h, inputs.ppd);
-            let rel = metrics::rel_mse_map(&hdr, inputs.reference);
+            let flip = metrics::flip_map(view.reference_rgb8, &rgb8, w, h, inputs.ppd);
+            let rel = metrics::rel_mse_map(&hdr, view.reference);
             let flip_by_region = RegionMeans::of(&flip, regions);
             fovea_flip.push(flip_by_region.fovea);
             flip_regions.add(&region_array(flip_by_region));
@@ -479,7 +510,8 @@ pub fn run_sequence(
             flip_bands.add(&band_means(&flip, band, bands));
             rel_bands.add(&band_means(&rel, band, bands));
             if let Some(prev) = &previous {
-                let flicker = flicker_map(&hdr, prev, inputs.reference);
+                let prev_reference = inputs.views[i - 1].reference;
+                let flicker = flicker_map(&hdr, prev, view.reference, prev_reference);
                 flicker_regions.add(&region_array(RegionMeans::of(&flicker, regions)));
                 flicker_bands.add(&band_means(&flicker, band, bands));
             }
@@ -562,6 +594,7 @@ pub fn run_sequence(
     }
     Ok(SequenceReport {
         trace: plan.trace.clone(),
+        camera_path: plan.camera_path.as_ref().map(|(file, _)| file.clone()),
         frames: plan.frames.len() as u32,
         fps: plan.fps,
         band_deg,
@@ -626,6 +659,7 @@ pub fn read_trace(
         frames,
         fps,
         band_deg,
+        camera_path: None,
     })
 }
 
@@ -661,10 +695,18 @@ mod tests {
     #[test]
     fn a_still_image_does_not_flicker_and_a_change_does_by_its_relative_size() {
         let r = image(4, 2, 1.0);
-        assert!(flicker_map(&r, &r, &r).iter().all(|&f| f == 0.0));
+        assert!(flicker_map(&r, &r, &r, &r).iter().all(|&f| f == 0.0));
         let brighter = image(4, 2, 1.5);
-        let f = flicker_map(&brighter, &r, &r);
+        let f = flicker_map(&brighter, &r, &r, &r);
         let expect = (0.25 / (1.0 + REL_MSE_EPSILON)) as f32;
+        assert!(f.iter().all(|&v| (v - expect).abs() < 1e-6));
+        // A moving camera: when the scene itself brightens, a render that follows it exactly does not
+        // flicker; one that stays behind does, by how far it fell behind.
+        assert!(flicker_map(&brighter, &r, &brighter, &r)
+            .iter()
+            .all(|&f| f == 0.0));
+        let f = flicker_map(&r, &r, &brighter, &r);
+        let expect = (0.25 / (2.25 + REL_MSE_EPSILON)) as f32;
         assert!(f.iter().all(|&v| (v - expect).abs() < 1e-6));
     }
 

@@ -107,11 +107,12 @@ pub fn report_json(r: &SceneReport) -> Value {
 fn sequence_json(q: &SequenceReport) -> Value {
     json!({
         "trace": q.trace,
+        "camera_path": q.camera_path,
         "frames": q.frames,
         "fps": q.fps,
         "band_deg": q.band_deg,
         "region_bounds_deg": q.region_bounds_deg,
-        "flicker_definition": "mean over pixels and consecutive frame pairs of (Y_t - Y_{t-1})^2 / (Y_ref^2 + 0.01)",
+        "flicker_definition": "mean over pixels and consecutive frame pairs of ((Y_t - R_t) - (Y_{t-1} - R_{t-1}))^2 / (R_t^2 + 0.01), Y the frame's and R the reference's luminance (one reference while the camera is still)",
         "saccade_frames": q.saccades,
         "fovea_lag_definition": "per saccade (a gaze step beyond the fovea's radius), on the fovea's mean FLIP relative to uniform 32 spp without history on the same frame: frames until it is within 10 % of its mean over the 3 frames before; jump: the saccade frame's value over that mean",
         "configs": q.results.iter().map(|c| json!({
@@ -157,16 +158,21 @@ fn sequence_json(q: &SequenceReport) -> Value {
 fn sequence_md(s: &mut String, q: &SequenceReport) {
     let _ = writeln!(
         s,
-        "### Sequence: {} frames of `{}`
+        "### Sequence: {} frames of `{}`{}
 ",
-        q.frames, q.trace
+        q.frames,
+        q.trace,
+        q.camera_path.as_ref().map_or_else(String::new, |c| format!(
+            ", the camera moving along `{c}` (each camera scored against its own reference)"
+        ))
     );
     let _ = writeln!(
         s,
         "Each frame is scored against the reference and pooled around that frame's gaze: by the \
          32/16/8 regions at the gaze (their edges at {:.2}° and {:.2}° of eccentricity) and in {}° \
          bands of eccentricity (`sequence.svg`, `report.json` `sequence.configs[].eccentricity_bands`). \
-         Flicker: mean of (Y_t − Y_t−1)² / (Y_ref² + 0.01) over consecutive frames.\n",
+         Flicker: mean of ((Y_t − R_t) − (Y_t−1 − R_t−1))² / (R_t² + 0.01) over consecutive frames \
+         (Y the frame's, R the reference's luminance).\n",
         q.region_bounds_deg[0], q.region_bounds_deg[1], q.band_deg
     );
     s.push_str(
