@@ -867,17 +867,27 @@ fn run_scene(
             bar.inc_length(samples);
             // Each moving camera's reference: from the cache, or rendered (a still camera shares
             // the scene's).
+            // Each frame's camera, chosen once.
+            let frame_cameras: Option<Vec<Camera>> = match &seq.camera_path {
+                Some((_, keys)) => Some(
+                    keys.iter()
+                        .map(|key| {
+                            choose_camera(
+                                &scene,
+                                Some(key.eye),
+                                Some(key.target),
+                                plan.up,
+                                args.camera.fov,
+                                w as f32 / h as f32,
+                            )
+                        })
+                        .collect::<Result<_>>()?,
+                ),
+                None => None,
+            };
             let mut moving: Vec<(Camera, FrameImage, Vec<u8>)> = Vec::new();
-            if let Some((_, keys)) = &seq.camera_path {
-                for key in keys {
-                    let camera = choose_camera(
-                        &scene,
-                        Some(key.eye),
-                        Some(key.target),
-                        plan.up,
-                        args.camera.fov,
-                        w as f32 / h as f32,
-                    )?;
+            if let (Some((_, keys)), Some(cameras)) = (&seq.camera_path, &frame_cameras) {
+                for (key, &camera) in keys.iter().zip(cameras) {
                     if moving.iter().any(|(c, _, _)| c == &camera) {
                         continue;
                     }
@@ -921,29 +931,21 @@ fn run_scene(
                     moving.push((camera, image, rgb8));
                 }
             }
-            let views: Vec<sequence::FrameView> = match &seq.camera_path {
-                Some((_, keys)) => keys
+            let views: Vec<sequence::FrameView> = match &frame_cameras {
+                Some(cameras) => cameras
                     .iter()
-                    .map(|key| {
-                        let camera = choose_camera(
-                            &scene,
-                            Some(key.eye),
-                            Some(key.target),
-                            plan.up,
-                            args.camera.fov,
-                            w as f32 / h as f32,
-                        )?;
+                    .map(|camera| {
                         let (camera, image, rgb8) = moving
                             .iter()
-                            .find(|(c, _, _)| c == &camera)
+                            .find(|(c, _, _)| c == camera)
                             .expect("every camera has its reference");
-                        Ok(sequence::FrameView {
+                        sequence::FrameView {
                             camera: *camera,
                             reference: image,
                             reference_rgb8: rgb8,
-                        })
+                        }
                     })
-                    .collect::<Result<_>>()?,
+                    .collect(),
                 None => vec![
                     sequence::FrameView {
                         camera,
