@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
 """Writes two generated test scenes (CC0, like the rest of the repository's own assets):
 
-- assets/pbr_extensions/pbr_extensions.gltf: a floor and fourteen spheres, each with one glTF PBR extension
+- assets/pbr_extensions/pbr_extensions.gltf: a floor and fifteen spheres, each with one glTF PBR extension
   (KHR_materials_ior, _specular, _clearcoat, _sheen, _anisotropy, _unlit, _emissive_strength,
   _transmission + _volume with absorption, and KHR_texture_transform on a checker texture), one with the
   extensions' textures (clear coat, clear-coat roughness, sheen colour, specular), a thin glass whose
   transmission is textured, one whose texture reads TEXCOORD_1, and two normal-mapped ones (MikkTSpace
-  tangents, and the file's own TANGENT), a camera and a point light:
+  tangents, and the file's own TANGENT), one with COLOR_0 vertex colours whose alpha cuts out its bottom
+  cap, a camera and a point light:
   the test scene of the loader's extension mapping (scene/src/gltf_pbr.rs) and of tests/tests/pbr_scene.rs.
 - assets/pbr_extensions/checker_floor.gltf: a 400 x 400 floor under a 512 x 512 texture of one-texel
   checks repeated 40 times, seen from 1.7 units up towards the horizon, lit by a directional light: the
@@ -125,6 +126,12 @@ def main():
     f_pos = positions(floor_v)
     f_uv = add(b"".join(struct.pack("<2f", *t) for t in floor_uv), 4, "VEC2", 5126, 34962)
     f_idx = add(b"".join(struct.pack("<3H", *f) for f in floor_f), 6, "SCALAR", 5123, 34963)
+    # COLOR_0 as normalised unsigned bytes, RGBA: the colour follows the position, and the alpha is 0
+    # below y = -0.6, so that the cut-out opens the sphere's bottom cap.
+    def vertex_color(v):
+        return tuple(round(255 * (0.5 + 0.5 * c)) for c in v) + ((255 if v[1] > -0.6 else 0),)
+    s_col = add(b"".join(struct.pack("<4B", *vertex_color(v)) for v in sphere_v), len(sphere_v), "VEC4", 5121, 34962)
+    accessors[s_col]["normalized"] = True
 
     grey = {"baseColorFactor": [0.6, 0.6, 0.6, 1], "metallicFactor": 0, "roughnessFactor": 0.5}
     materials = [
@@ -161,6 +168,8 @@ def main():
          "normalTexture": {"index": 1}},
         {"name": "normal_map_tangents", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.4, 1], "metallicFactor": 0, "roughnessFactor": 0.3},
          "normalTexture": {"index": 1}},
+        {"name": "vertex_colors", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.9, 0.9, 1], "metallicFactor": 0, "roughnessFactor": 0.5},
+         "alphaMode": "MASK", "alphaCutoff": 0.5},
     ]
     meshes = [{"name": "floor", "primitives": [{"attributes": {"POSITION": f_pos, "TEXCOORD_0": f_uv}, "indices": f_idx, "material": 0}]}]
     nodes = [{"name": "floor", "mesh": 0}]
@@ -170,6 +179,8 @@ def main():
             attributes["TEXCOORD_1"] = s_uv1
         if m["name"] == "normal_map_tangents":
             attributes["TANGENT"] = s_tan
+        if m["name"] == "vertex_colors":
+            attributes["COLOR_0"] = s_col
         meshes.append({"name": m["name"], "primitives": [{"attributes": attributes, "indices": s_idx, "material": i}]})
         row, col = divmod(i - 1, 5)
         nodes.append({"name": m["name"], "mesh": i, "translation": [-4.4 + 2.2 * col, 1.0, -1.2 + 2.4 * row],

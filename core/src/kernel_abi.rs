@@ -17,6 +17,9 @@ pub const BINDING_TRIANGLE_INFO: u32 = 3;
 pub const BINDING_NORMALS: u32 = 4;
 /// Per-vertex texture coordinates `[f32; 2]`.
 pub const BINDING_UVS: u32 = 5;
+/// Per-vertex colours `[u32; 2]` (four unorm16, `crate::material::vertex_color`). Numbered after the
+/// frame's bindings because it came later; it belongs to the scene's geometry group.
+pub const BINDING_VERTEX_COLORS: u32 = 31;
 /// `Material` array.
 pub const BINDING_MATERIALS: u32 = 6;
 /// `TextureInfo` array.
@@ -77,7 +80,7 @@ pub const BINDING_TEMPORAL: u32 = 29;
 /// turn by its passes (step `k` reads half `k % 2` and writes the other; `denoise_input` writes half 0).
 pub const BINDING_DENOISE: u32 = 30;
 /// Number of bindings.
-pub const BINDING_COUNT: u32 = 31;
+pub const BINDING_COUNT: u32 = 32;
 
 /// Specialization constant id of `render_samples`' feature mask (`FEATURE_*` bits; default every
 /// feature). The host sets it per scene when it creates the pipeline.
@@ -186,7 +189,8 @@ pub const PROBE_TRANSCENDENTAL: u32 = 11;
 pub const PROBE_SELECTOR_COUNT: u32 = 12;
 
 // Scene probe selectors: the `probe_scene` entry point evaluates them over the scene bound at
-// `BINDING_GLOBALS ..= BINDING_ENVIRONMENT_CONDITIONAL` (with every feature on), reading
+// `BINDING_GLOBALS ..= BINDING_ENVIRONMENT_CONDITIONAL` and `BINDING_VERTEX_COLORS` (with every
+// feature on), reading
 // [`BINDING_PROBE_INPUT`] and writing [`BINDING_PROBE_OUTPUT`] with the same strides as `probe`
 // ([`probe_scene_eval`]).
 

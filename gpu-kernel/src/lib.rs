@@ -74,6 +74,7 @@ const _: () = {
     assert!(kernel_abi::BINDING_FRAME == 21);
     assert!(kernel_abi::BINDING_SCENE_TEXELS == 22);
     assert!(kernel_abi::BINDING_TRIANGLE_BLOCKS == 23);
+    assert!(kernel_abi::BINDING_VERTEX_COLORS == 31);
     assert!(kernel_abi::BINDING_HISTORY == 24);
     assert!(kernel_abi::BINDING_HARDWARE_TRAVERSAL == 25);
     assert!(kernel_abi::BINDING_PREVIOUS_HISTORY == 26);
@@ -86,13 +87,13 @@ const _: () = {
     assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
     // `render_samples`' specialization constant: id and default (every feature).
     assert!(kernel_abi::SPEC_CONSTANT_FEATURES == 0);
-    assert!(FEATURES_ALL == 0x7FFFF);
+    assert!(FEATURES_ALL == 0xFFFFF);
 };
 
 /// Declares a compute entry point that binds the whole scene, group by group as
 /// [`SceneView`] holds it, and runs `$body` with it as `$scene`: the one list of scene bindings
-/// (`BINDING_GLOBALS ..= BINDING_ENVIRONMENT_CONDITIONAL`, `BINDING_TRIANGLE_BLOCKS` and, in the
-/// ray-query module, `BINDING_HARDWARE_TRAVERSAL`) for every entry point that reads the scene. A new
+/// (`BINDING_GLOBALS ..= BINDING_ENVIRONMENT_CONDITIONAL`, `BINDING_TRIANGLE_BLOCKS`,
+/// `BINDING_VERTEX_COLORS` and, in the ray-query module, `BINDING_HARDWARE_TRAVERSAL`) for every entry point that reads the scene. A new
 /// scene array is one parameter and one field here. `$features` is the [`FeatureFlags`] the view
 /// carries.
 macro_rules! scene_entry_point {
@@ -123,6 +124,8 @@ macro_rules! scene_entry_point {
             environment_conditional_cdf: &[f32],
             #[spirv(storage_buffer, descriptor_set = 0, binding = 23)]
             triangle_blocks: &[TriangleBlock],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 31)]
+            vertex_colors: &[[u32; 2]],
             #[cfg(feature = "ray-query")]
             #[spirv(storage_buffer, descriptor_set = 0, binding = 25)]
             hardware: &[u32],
@@ -141,6 +144,7 @@ macro_rules! scene_entry_point {
                     triangle_info,
                     normals,
                     uvs,
+                    vertex_colors,
                 },
                 materials: MaterialArrays {
                     list: materials,
@@ -178,7 +182,7 @@ scene_entry_point! {
     /// the driver drops the code of absent features.
     #[spirv(compute(threads(64)))]
     pub fn render_samples(
-        #[spirv(spec_constant(id = 0, default = 524287))] features: u32,
+        #[spirv(spec_constant(id = 0, default = 1048575))] features: u32,
         #[spirv(global_invocation_id)] id: UVec3,
         #[spirv(num_workgroups)] num_workgroups: UVec3,
         #[spirv(push_constant)] pc: &KernelPushConstants,

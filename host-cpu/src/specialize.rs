@@ -4,7 +4,7 @@
 //! A path exists for every combination of three feature groups that scenes tend to have or lack together:
 //! textures and cut-outs; glossy reflection (the GGX specular lobe, metals); and the rarer features
 //! (environment maps, punctual lights, sheen, clearcoat, anisotropy, transmission, the glTF
-//! extensions' textures, volume absorption). Every path keeps the features
+//! extensions' textures, volume absorption, vertex colours). Every path keeps the features
 //! nearly every scene has (emissive triangles, a constant sky, shading normals). A scene runs the
 //! smallest path that covers its features, so only the groups it lacks are compiled out; eight copies of
 //! the integrator keep the build time and binary size in check. `FeatureFlags::ALL` (the
@@ -25,7 +25,7 @@ pub const GROUP_TEXTURES: u32 = FEATURE_BASE_COLOR_TEXTURE
 /// Glossy reflection: the GGX specular lobe and metals.
 pub const GROUP_GLOSSY: u32 = FEATURE_LOBE_SPECULAR | FEATURE_LOBE_METALLIC;
 /// The rarer features: environment maps, punctual lights, the sheen, clearcoat, anisotropy and
-/// transmission lobes, the glTF extensions' textures and volume absorption.
+/// transmission lobes, the glTF extensions' textures, volume absorption and vertex colours.
 pub const GROUP_RARE: u32 = FEATURE_ENVIRONMENT_MAP
     | FEATURE_PUNCTUAL_LIGHTS
     | FEATURE_LOBE_SHEEN
@@ -33,7 +33,8 @@ pub const GROUP_RARE: u32 = FEATURE_ENVIRONMENT_MAP
     | FEATURE_LOBE_ANISOTROPY
     | FEATURE_LOBE_TRANSMISSION
     | FEATURE_EXTENSION_TEXTURES
-    | FEATURE_VOLUME_ABSORPTION;
+    | FEATURE_VOLUME_ABSORPTION
+    | FEATURE_VERTEX_COLORS;
 
 const V0: u32 = GROUP_BASE;
 const V1: u32 = GROUP_BASE | GROUP_TEXTURES;

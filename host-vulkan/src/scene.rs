@@ -5,7 +5,7 @@ use ash::vk;
 use fovea_core::kernel_abi::{
     BINDING_GLOBALS, BINDING_HARDWARE_TRAVERSAL, BINDING_MATERIALS, BINDING_NODES, BINDING_NORMALS,
     BINDING_TEXELS, BINDING_TEXTURES, BINDING_TRIANGLE_BLOCKS, BINDING_TRIANGLE_INFO,
-    BINDING_TRIANGLE_LANES, BINDING_TRIANGLE_LIGHT, BINDING_UVS,
+    BINDING_TRIANGLE_LANES, BINDING_TRIANGLE_LIGHT, BINDING_UVS, BINDING_VERTEX_COLORS,
 };
 use fovea_core::scene::{FeatureFlags, SceneGlobals, TexelOffsets, INVALID_INDEX};
 use fovea_scene::pack::{ArrayRead, PackedScene};
@@ -169,6 +169,8 @@ impl GpuScene {
                 materials: texel_offset(BINDING_MATERIALS),
                 textures: texel_offset(BINDING_TEXTURES),
                 texels: texel_offset(BINDING_TEXELS),
+                vertex_colors: texel_offset(BINDING_VERTEX_COLORS),
+                _pad: [0; 3],
             },
             ..packed.globals
         }];

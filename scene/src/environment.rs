@@ -263,6 +263,7 @@ mod sampling_tests {
             normals: Vec::new(),
             uvs: Vec::new(),
             tangents: Vec::new(),
+            colors: Vec::new(),
             triangles: vec![[0, 1, 2]],
             triangle_materials: vec![0],
             materials: vec![fovea_core::scene::Material::default()],

@@ -26,7 +26,9 @@
 //! Morph targets (positions, normals, tangents) are applied with the node's `weights`, else the
 //! mesh's defaults, and skinned meshes are posed by their joints' node transforms (`JOINTS_0`,
 //! `WEIGHTS_0`, inverse bind matrices; the mesh node's own transform ignored): the static pose the
-//! file describes. `COLOR_0` and animations are not read; each gets a warning naming it.
+//! file describes. `COLOR_0` (float, normalised unsigned byte or short; RGB or RGBA) multiplies the base
+//! colour and its alpha; values outside 0..1 are clamped with a warning. Animations are not read, and
+//! get a warning naming them.
 //!
 //! Only `TEXCOORD_0` is read (a texture asking for another set gets a warning and uses set 0);
 //! `occlusionTexture` is ignored. Images are decoded by [`crate::texture`] with the option's limits: from a
@@ -172,12 +174,14 @@ pub fn load_gltf_from(
     };
     let gltf =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| malformed(e.to_string()))?;
+    let sampler_json = samplers_with_invalid_values(gltf.document.as_json(), &bytes);
     drop(bytes);
     let gltf::Gltf { document, blob } = gltf;
     // gltf 1.4.1 panics on some JSON its validation accepts (or, for POSITION, on a dangling index while
     // validating), so check those first, then validate.
     let mut root = document.into_json();
-    let early_warnings = check_json(&mut root).map_err(malformed)?;
+    let mut early_warnings = check_json(&mut root).map_err(malformed)?;
+    early_warnings.extend(replace_invalid_sampler_values(&mut root, &sampler_json));
     // The material extensions fovea maps itself (`crate::gltf_pbr`) are unknown to gltf's validation,
     // which refuses a file that requires one: they are taken off the required list it checks.
     root.extensions_required
@@ -358,6 +362,84 @@ fn check_json(root: &mut gltf::json::Root) -> Result<Vec<String>, String> {
         }
     }
     Ok(warnings)
+}
+
+/// Whether a sampler field holds a number the spec does not allow (gltf's parser keeps only that it is
+/// invalid).
+fn is_invalid_sampler(sampler: &gltf::json::texture::Sampler) -> bool {
+    use gltf::json::validation::Checked::Invalid;
+    matches!(sampler.mag_filter, Some(Invalid))
+        || matches!(sampler.min_filter, Some(Invalid))
+        || matches!(sampler.wrap_s, Invalid)
+        || matches!(sampler.wrap_t, Invalid)
+}
+
+/// The file's own `samplers` array, read again from its JSON (`bytes`: a `.gltf` or a `.glb`) when a
+/// sampler holds a value the spec does not allow, so that the warning can name the number; `Null`
+/// when none does (the usual case: no second parse).
+fn samplers_with_invalid_values(root: &gltf::json::Root, bytes: &[u8]) -> serde_json::Value {
+    if !root.samplers.iter().any(is_invalid_sampler) {
+        return serde_json::Value::Null;
+    }
+    let glb;
+    let json: &[u8] = if bytes.starts_with(b"glTF") {
+        glb = gltf::Glb::from_slice(bytes).ok();
+        match &glb {
+            Some(glb) => &glb.json,
+            None => return serde_json::Value::Null,
+        }
+    } else {
+        bytes
+    };
+    serde_json::from_slice::<serde_json::Value>(json)
+        .map(|mut value| value["samplers"].take())
+        .unwrap_or_default()
+}
+
+/// Replaces each sampler value the spec does not allow by glTF's default (linear magnification,
+/// mip-mapped minification, `REPEAT`), with a warning naming the sampler, the field, the file's
+/// value (from `file_samplers`, [`samplers_with_invalid_values`]) and what is used instead.
+fn replace_invalid_sampler_values(
+    root: &mut gltf::json::Root,
+    file_samplers: &serde_json::Value,
+) -> Vec<String> {
+    use gltf::json::texture::WrappingMode;
+    use gltf::json::validation::Checked::{Invalid, Valid};
+    let mut warnings = Vec::new();
+    for (i, sampler) in root.samplers.iter_mut().enumerate() {
+        let mut replaced = |field: &str, allowed: &str, used: &str| {
+            warnings.push(format!(
+                "samplers[{i}].{field} {} is not {allowed}; {used} used",
+                file_samplers[i][field]
+            ));
+        };
+        if matches!(sampler.mag_filter, Some(Invalid)) {
+            replaced(
+                "magFilter",
+                "9728 (NEAREST) or 9729 (LINEAR)",
+                "linear magnification",
+            );
+            sampler.mag_filter = None;
+        }
+        if matches!(sampler.min_filter, Some(Invalid)) {
+            replaced(
+                "minFilter",
+                "9728, 9729 or 9984 to 9987",
+                "mip-mapped linear minification",
+            );
+            sampler.min_filter = None;
+        }
+        let wrap_values = "33071 (CLAMP_TO_EDGE), 33648 (MIRRORED_REPEAT) or 10497 (REPEAT)";
+        if matches!(sampler.wrap_s, Invalid) {
+            replaced("wrapS", wrap_values, "REPEAT");
+            sampler.wrap_s = Valid(WrappingMode::Repeat);
+        }
+        if matches!(sampler.wrap_t, Invalid) {
+            replaced("wrapT", wrap_values, "REPEAT");
+            sampler.wrap_t = Valid(WrappingMode::Repeat);
+        }
+    }
+    warnings
 }
 
 /// Reads every buffer: the GLB `BIN` chunk, a data URI or an external file (relative to the glTF file).
@@ -990,6 +1072,25 @@ impl Loader<'_> {
                 ));
                 uv_set = 0;
             }
+            // Vertex colours are optional: a malformed accessor is a warning.
+            let mut color_acc = primitive.get(&gltf::Semantic::Colors(0));
+            if let Some(a) = color_acc.clone() {
+                let dims = if a.dimensions() == Dimensions::Vec3 {
+                    Dimensions::Vec3
+                } else {
+                    Dimensions::Vec4
+                };
+                let checked = self.check_accessor(
+                    &a,
+                    &format!("{label} COLOR_0"),
+                    dims,
+                    &[DataType::F32, DataType::U8, DataType::U16],
+                );
+                if let Err(e) = checked {
+                    self.warn(format!("{e}; its vertex colours are ignored"));
+                    color_acc = None;
+                }
+            }
             let uv_acc = primitive.get(&gltf::Semantic::TexCoords(uv_set));
             if let Some(a) = &uv_acc {
                 self.check_accessor(
@@ -1033,11 +1134,6 @@ impl Loader<'_> {
                 .ok_or_else(|| short("POSITION"))?
                 .collect();
             let vertex_count = positions.len();
-            if primitive.get(&gltf::Semantic::Colors(0)).is_some() {
-                self.warn(format!(
-                    "{label}: COLOR_0 vertex colours are not read; the material's colour is used"
-                ));
-            }
             let morph = self.morph_displacements(&primitive, &label, weights, vertex_count);
             for (p, d) in positions.iter_mut().zip(&morph.positions) {
                 *p = (Vec3::from(*p) + Vec3::from(*d)).to_array();
@@ -1093,15 +1189,19 @@ impl Loader<'_> {
             if let Some(acc) = tangent_acc.as_ref().filter(|_| normals_added) {
                 if acc.count() == vertex_count {
                     let mirror = if flip { -1.0 } else { 1.0 };
-                    let tangents = reader.read_tangents().ok_or_else(|| short("TANGENT"))?;
+                    let tangents: Vec<[f32; 4]> = reader
+                        .read_tangents()
+                        .ok_or_else(|| short("TANGENT"))?
+                        .collect();
+                    self.warn_about_tangents(&label, &tangents);
                     self.scene.tangents.resize(base, [0.0; 4]);
-                    self.scene
-                        .tangents
-                        .extend(tangents.enumerate().map(|(i, [x, y, z, w])| {
+                    self.scene.tangents.extend(tangents.iter().enumerate().map(
+                        |(i, &[x, y, z, w])| {
                             let t = (placement.linear(i) * (Vec3::new(x, y, z) + morph.tangent(i)))
                                 .normalize_or_zero();
                             [t.x, t.y, t.z, w * mirror]
-                        }));
+                        },
+                    ));
                     if self.scene.tangents.len() != base + vertex_count {
                         return Err(short("TANGENT"));
                     }
@@ -1138,6 +1238,43 @@ impl Loader<'_> {
             }
             if !uvs_added {
                 self.scene.uvs.resize(base + vertex_count, [0.0; 2]);
+            }
+            // Vertex colours multiply the base colour and its alpha (glTF 2.0 §3.7.2.1); the vertices
+            // of primitives without them are white.
+            let mut colors_added = false;
+            if let Some(acc) = &color_acc {
+                if acc.count() == vertex_count {
+                    let colors = reader
+                        .read_colors(0)
+                        .ok_or_else(|| short("COLOR_0"))?
+                        .into_rgba_f32();
+                    self.scene.colors.resize(base, [1.0; 4]);
+                    self.scene.colors.extend(colors);
+                    if self.scene.colors.len() != base + vertex_count {
+                        return Err(short("COLOR_0"));
+                    }
+                    let added = &mut self.scene.colors[base..];
+                    let first_outside = added
+                        .iter()
+                        .find(|c| !c.iter().all(|x| (0.0..=1.0).contains(x)))
+                        .copied();
+                    let outside = crate::mesh::clamp_colors(added);
+                    if let Some(first) = first_outside {
+                        self.warn(format!(
+                            "{label}: {outside} COLOR_0 values outside 0..1 (the first {first:?}); \
+                             clamped to 0..1, NaN read as 1"
+                        ));
+                    }
+                    colors_added = true;
+                } else {
+                    self.warn(format!(
+                        "{label}: {} vertex colours for {vertex_count} positions; ignored",
+                        acc.count()
+                    ));
+                }
+            }
+            if !colors_added && !self.scene.colors.is_empty() {
+                self.scene.colors.resize(base + vertex_count, [1.0; 4]);
             }
 
             let indices: Vec<u32> = match reader.read_indices() {
@@ -1193,6 +1330,33 @@ impl Loader<'_> {
                 .resize(before + added, material);
         }
         Ok(())
+    }
+
+    /// Warns about the file's `TANGENT` values of primitive `label` that break the spec (glTF 2.0
+    /// §3.7.2.1: a unit `xyz` and a `w` of ±1), naming what fovea uses instead: a zero or non-finite
+    /// `xyz` is no tangent (MikkTSpace makes one where a material needs it), and a `w` other than ±1 is
+    /// read by its sign (-1 below 0, +1 otherwise, NaN and 0 included).
+    fn warn_about_tangents(&mut self, label: &str, tangents: &[[f32; 4]]) {
+        let unusable = |t: &&[f32; 4]| {
+            let xyz = Vec3::new(t[0], t[1], t[2]);
+            !xyz.is_finite() || xyz == Vec3::ZERO
+        };
+        let bad_w = |t: &&[f32; 4]| t[3] != 1.0 && t[3] != -1.0;
+        if let Some(first) = tangents.iter().find(unusable) {
+            let n = tangents.iter().filter(unusable).count();
+            self.warn(format!(
+                "{label}: {n} TANGENT values have a zero or non-finite xyz (the first {first:?}); \
+                 MikkTSpace's tangents are used where a material needs one"
+            ));
+        }
+        if let Some(first) = tangents.iter().find(bad_w) {
+            let n = tangents.iter().filter(bad_w).count();
+            self.warn(format!(
+                "{label}: {n} TANGENT w values are not 1 or -1 (the first {}); read as -1 below 0 \
+                 and as 1 otherwise",
+                first[3]
+            ));
+        }
     }
 
     /// The `scene.materials` index of a glTF material, converting it on first use, and the texture
@@ -1733,7 +1897,7 @@ mod tests {
         format!(
             r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
             "nodes":[{{"mesh":0{node_extra}}}],
-            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":0}},
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},
                 "targets":[{{"POSITION":1}},{{"POSITION":2}}]}}],"weights":[0.5,0.25]}}],
             "accessors":[{a0},{a1},{a2},{{"bufferView":0,"componentType":5126,"count":3,"type":"SCALAR","min":[0],"max":[1]}}],
             "bufferViews":[{{"buffer":0,"byteLength":108}}],
@@ -1744,9 +1908,127 @@ mod tests {
         )
     }
 
+    /// `COLOR_0` as the spec allows it (normalised unsigned bytes RGBA, normalised unsigned shorts RGB
+    /// with a byte stride, floats RGB), each vertex's colour read in order; float values outside 0..1
+    /// clamped with a warning naming the primitive (NaN read as 1); a primitive without colours white.
+    /// A scene whose colours are all white packs none.
+    #[test]
+    fn vertex_colours_are_read_in_every_format_the_spec_allows() {
+        use fovea_core::scene::Features as _;
+        let mut bytes = Vec::new();
+        for p in TRI {
+            for c in p {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        // 36..48: RGBA8.
+        bytes.extend_from_slice(&[255, 0, 0, 255, 0, 255, 0, 128, 0, 0, 255, 0]);
+        // 48..72: RGB16, each element padded to 8 bytes (byteStride 8).
+        for rgb in [[65535u16, 32768, 0], [0, 65535, 1], [0, 0, 65535]] {
+            for c in rgb {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+            bytes.extend_from_slice(&[0, 0]);
+        }
+        // 72..108: float RGB, out of range in two vertices.
+        for rgb in [[2.0f32, 0.5, -1.0], [f32::NAN, 0.25, 1.0], [0.5, 0.5, 0.5]] {
+            for c in rgb {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        let b64 = base64_encode(&bytes);
+        let gltf = format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+            "nodes":[{{"mesh":0}}],
+            "meshes":[{{"primitives":[
+                {{"attributes":{{"POSITION":0,"COLOR_0":1}}}},
+                {{"attributes":{{"POSITION":0,"COLOR_0":2}}}},
+                {{"attributes":{{"POSITION":0,"COLOR_0":3}}}},
+                {{"attributes":{{"POSITION":0}}}}]}}],
+            "accessors":[
+                {{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                {{"bufferView":0,"byteOffset":36,"componentType":5121,"normalized":true,"count":3,"type":"VEC4"}},
+                {{"bufferView":1,"componentType":5123,"normalized":true,"count":3,"type":"VEC3"}},
+                {{"bufferView":0,"byteOffset":72,"componentType":5126,"count":3,"type":"VEC3"}}],
+            "bufferViews":[{{"buffer":0,"byteLength":108}},{{"buffer":0,"byteOffset":48,"byteLength":24,"byteStride":8}}],
+            "buffers":[{{"byteLength":108,"uri":"data:application/octet-stream;base64,{b64}"}}]}}"#
+        );
+        let dir = temp_dir("vertex-colours");
+        let file = dir.join("c.gltf");
+        std::fs::write(&file, gltf).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        assert_eq!(s.colors.len(), s.positions.len());
+        // Triangle k is primitive k; its colours by vertex (TRI order).
+        let colours_of = |k: usize| -> Vec<[f32; 4]> {
+            let mut by_vertex: Vec<([f32; 3], [f32; 4])> = s.triangles[k]
+                .iter()
+                .map(|&v| (s.positions[v as usize], s.colors[v as usize]))
+                .collect();
+            by_vertex.sort_by_key(|(p, _)| TRI.iter().position(|t| t == p));
+            by_vertex.into_iter().map(|(_, c)| c).collect()
+        };
+        let b = |n: u32| n as f32 / 255.0;
+        let h = |n: u32| n as f32 / 65535.0;
+        assert_eq!(
+            colours_of(0),
+            [
+                [1.0, 0.0, 0.0, 1.0],
+                [0.0, 1.0, 0.0, b(128)],
+                [0.0, 0.0, 1.0, 0.0]
+            ]
+        );
+        assert_eq!(
+            colours_of(1),
+            [
+                [1.0, h(32768), 0.0, 1.0],
+                [0.0, 1.0, h(1), 1.0],
+                [0.0, 0.0, 1.0, 1.0]
+            ]
+        );
+        assert_eq!(
+            colours_of(2),
+            [
+                [1.0, 0.5, 0.0, 1.0],
+                [1.0, 0.25, 1.0, 1.0],
+                [0.5, 0.5, 0.5, 1.0]
+            ]
+        );
+        assert_eq!(colours_of(3), [[1.0; 4]; 3]);
+        let clamped: Vec<&String> = s
+            .warnings
+            .iter()
+            .filter(|w| w.contains("COLOR_0 values outside 0..1"))
+            .collect();
+        assert!(
+            clamped.len() == 1 && clamped[0].contains("mesh 0 primitive 2: 2 COLOR_0"),
+            "{:?}",
+            s.warnings
+        );
+
+        let packed = crate::pack::pack_scene(
+            s,
+            &crate::environment::Environment::None,
+            &crate::bvh::BvhBuildOptions::default(),
+        );
+        assert!(packed
+            .features()
+            .has(fovea_core::scene::features::FEATURE_VERTEX_COLORS));
+        let mut white = load_scene(&file, &LoadOptions::default()).unwrap();
+        white.colors.iter_mut().for_each(|c| *c = [1.0; 4]);
+        let packed = crate::pack::pack_scene(
+            white,
+            &crate::environment::Environment::None,
+            &crate::bvh::BvhBuildOptions::default(),
+        );
+        assert!(packed.geometry.vertex_colors.is_empty());
+        assert!(!packed
+            .features()
+            .has(fovea_core::scene::features::FEATURE_VERTEX_COLORS));
+        std::fs::remove_dir_all(dir).ok();
+    }
+
     /// Morph targets move the vertices by their default weights (the mesh's, or the node's, which
-    /// override them), as glTF 2.0 §3.7.2.2 says; vertex colours and animations, not read, are warned
-    /// about.
+    /// override them), as glTF 2.0 §3.7.2.2 says; animations, not read, are warned about.
     #[test]
     fn morph_targets_apply_their_default_weights_and_what_is_not_read_is_named() {
         let dir = temp_dir("morph");
@@ -1766,11 +2048,6 @@ mod tests {
             ],
             "{:?}",
             s.positions
-        );
-        assert!(
-            s.warnings.iter().any(|w| w.contains("COLOR_0")),
-            "{:?}",
-            s.warnings
         );
         // The node's weights override them.
         let s = load(r#","weights":[1,0]"#, "");
@@ -1886,6 +2163,69 @@ mod tests {
         assert!(s.tangents.is_empty());
         assert!(
             s.warnings.iter().any(|w| w.contains("TANGENT")),
+            "{:?}",
+            s.warnings
+        );
+        // The spec's unit xyz and w of ±1 broken: each class named once, with what is used instead.
+        std::fs::write(&file, gltf("", "VEC4")).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        assert!(
+            s.warnings.iter().all(|w| !w.contains("TANGENT")),
+            "{:?}",
+            s.warnings
+        );
+        let mut broken = bytes.clone();
+        let mut put = |float: usize, value: f32| {
+            broken[4 * float..4 * float + 4].copy_from_slice(&value.to_le_bytes());
+        };
+        put(18 + 3, 0.0); // vertex 0: w = 0
+        put(18 + 4, f32::NAN); // vertex 1: x = NaN
+        put(18 + 11, 0.5); // vertex 2: w = 0.5
+        let text = gltf("", "VEC4").replace(&base64_encode(&bytes), &base64_encode(&broken));
+        std::fs::write(&file, text).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        let named = |what: &str| s.warnings.iter().filter(|w| w.contains(what)).count();
+        assert_eq!(
+            named(
+                "1 TANGENT values have a zero or non-finite xyz (the first [NaN, 1.0, 0.0, 1.0])"
+            ),
+            1,
+            "{:?}",
+            s.warnings
+        );
+        assert_eq!(named("2 TANGENT w values are not 1 or -1 (the first 0)"), 1);
+        assert_eq!(s.tangents[0], [0.0, 1.0, 0.0, 1.0]);
+        assert_eq!(s.tangents[1], [0.0; 4]);
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// Sampler values outside the spec's enums (which gltf's validation would refuse) are replaced by
+    /// glTF's defaults, each named with the file's number and what is used.
+    #[test]
+    fn sampler_values_outside_the_spec_are_named_and_replaced() {
+        let dir = temp_dir("samplers");
+        let file = dir.join("s.gltf");
+        let base = triangle_gltf(TRI, None, "");
+        let with_samplers = format!(
+            r#"{},"samplers":[{{"magFilter":1234,"minFilter":7,"wrapS":5,"wrapT":33648}}]}}"#,
+            &base[..base.len() - 1]
+        );
+        std::fs::write(&file, with_samplers).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        for want in [
+            "samplers[0].magFilter 1234 is not 9728 (NEAREST) or 9729 (LINEAR); linear magnification used",
+            "samplers[0].minFilter 7 is not 9728, 9729 or 9984 to 9987; mip-mapped linear minification used",
+            "samplers[0].wrapS 5 is not 33071 (CLAMP_TO_EDGE), 33648 (MIRRORED_REPEAT) or 10497 (REPEAT); REPEAT used",
+        ] {
+            assert_eq!(
+                s.warnings.iter().filter(|w| w.ends_with(want)).count(),
+                1,
+                "{want}: {:?}",
+                s.warnings
+            );
+        }
+        assert!(
+            s.warnings.iter().all(|w| !w.contains("wrapT")),
             "{:?}",
             s.warnings
         );

@@ -118,12 +118,25 @@ pub(crate) fn unit_tangent(tangent: [f32; 4]) -> Option<[f32; 4]> {
     (v != Vec3::ZERO).then_some([v.x, v.y, v.z, if w < 0.0 { -1.0 } else { 1.0 }])
 }
 
+/// Clamps each channel of `colors` to `[0, 1]`, a NaN to 1 (no change to the colour it multiplies),
+/// and returns how many colours had a channel outside.
+pub(crate) fn clamp_colors(colors: &mut [[f32; 4]]) -> usize {
+    let mut outside = 0;
+    for color in colors {
+        if !color.iter().all(|c| (0.0..=1.0).contains(c)) {
+            outside += 1;
+            *color = color.map(|c| if c.is_nan() { 1.0 } else { c.clamp(0.0, 1.0) });
+        }
+    }
+    outside
+}
+
 /// A scene as loaded from a file, before BVH construction and packing.
 ///
 /// Invariants after a successful load: every triangle index is `< positions.len()`, every material index
 /// is `< materials.len()`, `triangle_materials.len() == triangles.len()`, every position, normal and UV is
-/// finite, `normals`, `uvs` and `tangents` are empty or as long as `positions`, non-zero normals and
-/// tangents are unit length, and
+/// finite, `normals`, `uvs`, `tangents` and `colors` are empty or as long as `positions`, non-zero
+/// normals and tangents are unit length, colours are within `[0, 1]`, and
 /// every texture index in a material is `< textures.len()` or `INVALID_INDEX`.
 #[derive(Clone, Debug, Default)]
 pub struct LoadedScene {
@@ -141,6 +154,9 @@ pub struct LoadedScene {
     /// `w · (n × t)`); `[0, 0, 0, 0]` = "no tangent here". The file's own, or MikkTSpace's for the
     /// normal-mapped and anisotropic triangles that lack one ([`crate::tangents`]).
     pub tangents: Vec<[f32; 4]>,
+    /// Per vertex or empty: linear RGBA in `[0, 1]` that multiplies the base colour and its alpha
+    /// (glTF `COLOR_0`; an RGB colour has alpha 1, a vertex without one is white).
+    pub colors: Vec<[f32; 4]>,
     /// Vertex indices, counter-clockwise = front.
     pub triangles: Vec<[u32; 3]>,
     /// Per triangle, index into `materials`.
@@ -260,6 +276,21 @@ impl LoadedScene {
                 self.uvs.len()
             ));
             self.uvs.clear();
+        }
+        if !self.colors.is_empty() && self.colors.len() != n {
+            self.warnings.push(format!(
+                "{name}: {} vertex colours for {n} vertices; vertex colours ignored",
+                self.colors.len()
+            ));
+            self.colors.clear();
+        }
+        // The loaders clamp the file's colours with a warning that names the mesh; this keeps the
+        // invariant for scenes built in code.
+        let outside = clamp_colors(&mut self.colors);
+        if outside > 0 {
+            self.warnings.push(format!(
+                "{name}: {outside} vertex colours outside 0..1; clamped (NaN read as 1)"
+            ));
         }
         if !self.tangents.is_empty() && self.tangents.len() != n {
             self.warnings.push(format!(

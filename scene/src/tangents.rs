@@ -131,6 +131,9 @@ pub fn generate_missing_tangents(scene: &mut LoadedScene) -> usize {
                 scene.positions.push(scene.positions[vi]);
                 scene.normals.push(scene.normals[vi]);
                 scene.uvs.push(scene.uvs[vi]);
+                if !scene.colors.is_empty() {
+                    scene.colors.push(scene.colors[vi]);
+                }
                 scene.tangents.push(t);
                 (scene.positions.len() - 1) as u32
             });

@@ -139,6 +139,67 @@ fn extension_textures_multiply_their_factors() {
     }
 }
 
+/// glTF `COLOR_0` (normalised bytes, RGBA, 0.5 + 0.5 · the sphere's unit position) multiplies the base
+/// colour (0.9) where a ray hits, and its alpha (0 below a local y of -0.6) cuts the sphere's bottom
+/// cap out under `MASK`: a ray from just above the floor passes it and hits the top from inside.
+#[test]
+fn vertex_colours_multiply_the_base_colour_and_cut_out_by_their_alpha() {
+    use fovea_core::bvh::closest_hit;
+    use fovea_core::geometry::Ray;
+    use fovea_core::material::surface_point;
+    use fovea_core::scene::features::FEATURE_VERTEX_COLORS;
+    use fovea_core::scene::{Features, SceneSlices, SceneSource};
+
+    let s = load();
+    assert!(
+        s.warnings.iter().all(|w| !w.contains("COLOR_0")),
+        "{:?}",
+        s.warnings
+    );
+    let names = s.material_names.clone();
+    let centre = sphere_centre(&s, "vertex_colors");
+    let eye = Vec3::from(s.camera.expect("camera").position);
+    let packed = fovea_tests::stability::pack(s, &Environment::None);
+    assert!(packed.features().has(FEATURE_VERTEX_COLORS));
+    let view = packed.view();
+    let mut hits = 0;
+    for k in 0..400 {
+        let offset = Vec3::new(
+            (k % 20) as f32 / 10.0 - 0.95,
+            (k / 20) as f32 / 10.0 - 0.95,
+            0.0,
+        ) * 0.8;
+        let hit = closest_hit(&view, &Ray::new(eye, centre + offset - eye), f32::INFINITY);
+        if !hit.is_hit()
+            || names[SceneSlices.triangle_info(&view, hit.triangle).material as usize]
+                != "vertex_colors"
+        {
+            continue;
+        }
+        let p = surface_point(&view, &SceneSlices, &hit);
+        // The colour is linear in the position, so interpolating it over a flat triangle gives the
+        // same function of the hit point (up to the bytes' rounding); the node scales the sphere by 0.9.
+        let want = 0.9 * (Vec3::splat(0.5) + 0.5 * (p.position - centre) / 0.9);
+        assert!(
+            (p.params.base_color - want).abs().max_element() < 0.01,
+            "{} at {}: want {want}",
+            p.params.base_color,
+            p.position
+        );
+        hits += 1;
+    }
+    assert!(hits > 100, "{hits} hits");
+    let below = centre - Vec3::Y * 0.85;
+    let hit = closest_hit(&view, &Ray::new(below, Vec3::Y), f32::INFINITY);
+    assert!(hit.is_hit());
+    assert!(
+        below.y + hit.t > centre.y + 0.8,
+        "the ray up stopped at y = {} (centre {})",
+        below.y + hit.t,
+        centre.y
+    );
+}
+
 /// A texture that names `TEXCOORD_1` reads that set: the sphere's coordinates are its TEXCOORD_1
 /// (twice its TEXCOORD_0, which the other spheres read).
 #[test]

@@ -2,6 +2,7 @@
 use glam::Vec2;
 
 use super::texture::sample_texture;
+use super::vertex_color::interpolate_vertex_color;
 use crate::scene::features::{FEATURE_ALPHA_CUTOUT, FEATURE_UVS};
 use crate::scene::{Features, SceneSource, SceneView, INVALID_INDEX, MATERIAL_ALPHA_CUTOUT};
 
@@ -27,7 +28,8 @@ pub fn interpolate_uv<F: Features, S: SceneSource>(
 }
 
 /// Whether the point at barycentrics (`b1`, `b2`) of `triangle` is cut out (its opacity is below the
-/// material's cutoff). Materials without [`MATERIAL_ALPHA_CUTOUT`] are never cut out.
+/// material's cutoff): the base colour's alpha times the texture's and the vertex colours' (glTF
+/// `COLOR_0`). Materials without [`MATERIAL_ALPHA_CUTOUT`] are never cut out.
 #[must_use]
 pub fn is_cut_out<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
@@ -50,5 +52,6 @@ pub fn is_cut_out<F: Features, S: SceneSource>(
         };
         alpha *= sample_texture(scene, source, texture, uv).w;
     }
+    alpha *= interpolate_vertex_color(scene, source, triangle, b1, b2).w;
     alpha < material.alpha_cutoff
 }

@@ -5,6 +5,7 @@ use glam::{Vec2, Vec3};
 use super::alpha::interpolate_uv;
 use super::tangent::{decode_tangent, has_tangent, NO_TANGENT};
 use super::texture::sample_texture_lod;
+use super::vertex_color::interpolate_vertex_color;
 use crate::bsdf::DisneyParams;
 use crate::bvh::traverse::Hit;
 use crate::lights::triangle::{scaled_geometric_normal, triangle_vertices};
@@ -197,6 +198,7 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
             sample_texture_lod(scene, source, material.base_color_texture, uv, footprint_uv)
                 .truncate();
     }
+    base_color *= interpolate_vertex_color(scene, source, triangle, b1, b2).truncate();
     let mut metallic = material.metallic;
     let mut roughness = material.roughness;
     if scene.features.has(FEATURE_METALLIC_ROUGHNESS_TEXTURE)

@@ -56,12 +56,15 @@ pub const FEATURE_LOBE_TRANSMISSION: u32 = 1 << 16;
 pub const FEATURE_EXTENSION_TEXTURES: u32 = 1 << 17;
 /// Some transmissive material's inside absorbs (`Material::absorption`, glTF `KHR_materials_volume`).
 pub const FEATURE_VOLUME_ABSORPTION: u32 = 1 << 18;
+/// Per-vertex colours (glTF `COLOR_0`), which multiply the base colour and opacity
+/// ([`crate::material::vertex_color`]).
+pub const FEATURE_VERTEX_COLORS: u32 = 1 << 19;
 
 /// Every feature: the general render path (`--no-specialize`).
-pub const FEATURES_ALL: u32 = (1 << 19) - 1;
+pub const FEATURES_ALL: u32 = (1 << 20) - 1;
 
 /// Names of the feature bits, bit `i` at index `i` (for `--verbose` and `--stats`).
-pub const FEATURE_NAMES: [&str; 19] = [
+pub const FEATURE_NAMES: [&str; 20] = [
     "base_color_texture",
     "metallic_roughness_texture",
     "normal_texture",
@@ -81,7 +84,19 @@ pub const FEATURE_NAMES: [&str; 19] = [
     "lobe_transmission",
     "extension_textures",
     "volume_absorption",
+    "vertex_colors",
 ];
+
+/// Which per-vertex arrays a scene has (each empty or one entry per vertex).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VertexAttributes {
+    /// Shading normals ([`FEATURE_SHADING_NORMALS`]).
+    pub normals: bool,
+    /// Texture coordinates ([`FEATURE_UVS`]).
+    pub uvs: bool,
+    /// Colours ([`FEATURE_VERTEX_COLORS`]).
+    pub colors: bool,
+}
 
 /// A set of features to test against; see the module documentation.
 pub trait Features: Copy {
@@ -138,8 +153,7 @@ impl FeatureFlags {
         globals: &SceneGlobals,
         materials: &[Material],
         lights: &[Light],
-        has_normals: bool,
-        has_uvs: bool,
+        vertices: VertexAttributes,
     ) -> Self {
         let mut bits = 0u32;
         for i in 0..materials.len() {
@@ -158,11 +172,14 @@ impl FeatureFlags {
         } else if globals.environment_kind == ENVIRONMENT_MAP {
             bits |= FEATURE_ENVIRONMENT_MAP;
         }
-        if has_normals {
+        if vertices.normals {
             bits |= FEATURE_SHADING_NORMALS;
         }
-        if has_uvs {
+        if vertices.uvs {
             bits |= FEATURE_UVS;
+        }
+        if vertices.colors {
+            bits |= FEATURE_VERTEX_COLORS;
         }
         Self(bits)
     }
@@ -265,7 +282,12 @@ mod tests {
             base_color_texture: 0,
             ..Material::default()
         }];
-        let f = FeatureFlags::of_scene(&globals, &materials, &lights, true, false);
+        let vertices = VertexAttributes {
+            normals: true,
+            uvs: false,
+            colors: true,
+        };
+        let f = FeatureFlags::of_scene(&globals, &materials, &lights, vertices);
         let want = FEATURE_EMISSIVE_TRIANGLES
             | FEATURE_PUNCTUAL_LIGHTS
             | FEATURE_ENVIRONMENT_MAP
@@ -273,7 +295,8 @@ mod tests {
             | FEATURE_LOBE_SPECULAR
             | FEATURE_ALPHA_CUTOUT
             | FEATURE_BASE_COLOR_TEXTURE
-            | FEATURE_SHADING_NORMALS;
+            | FEATURE_SHADING_NORMALS
+            | FEATURE_VERTEX_COLORS;
         assert_eq!(f.0, want);
         assert!(f.has(FEATURE_ENVIRONMENT_MAP));
         assert!(!StaticFeatures::<0>.has(FEATURE_ENVIRONMENT_MAP));

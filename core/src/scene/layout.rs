@@ -730,7 +730,7 @@ pub const ENVIRONMENT_CONSTANT: u32 = 1;
 /// [`SceneGlobals::environment_kind`]: an equirectangular HDR map scaled by `environment_radiance`.
 pub const ENVIRONMENT_MAP: u32 = 2;
 
-/// Scene-wide constants (80 bytes).
+/// Scene-wide constants (96 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct SceneGlobals {
@@ -765,6 +765,8 @@ pub struct TexelOffsets {
     pub textures: u32,
     pub texels: u32,
     pub blocks: u32,
+    pub vertex_colors: u32,
+    pub _pad: [u32; 3],
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ pub mod layout;
 pub mod source;
 pub mod view;
 
-pub use features::{FeatureFlags, Features, StaticFeatures};
+pub use features::{FeatureFlags, Features, StaticFeatures, VertexAttributes};
 pub use layout::*;
 #[cfg(target_arch = "spirv")]
 pub use source::SceneTexels;

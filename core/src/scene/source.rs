@@ -1,6 +1,6 @@
 //! Where core reads the scene's large arrays: the BVH nodes and triangle blocks traversal tests, and
-//! what shading reads at a hit (triangle positions, from the blocks, and info, materials, vertex normals
-//! and texture coordinates, texture infos and texels).
+//! what shading reads at a hit (triangle positions, from the blocks, and info, materials, vertex normals,
+//! texture coordinates and colours, texture infos and texels).
 //!
 //! On the CPU from the [`SceneView`]'s slices ([`SceneSlices`]). On the GPU from one storage texel
 //! buffer that holds all of them (`SceneTexels`, `R32G32B32A32_UINT`): each array starts at the texel
@@ -58,6 +58,9 @@ pub trait SceneSource {
     fn normal<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 4];
     /// Texture coordinates of vertex `index` (the scene must have them).
     fn uv<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 2];
+    /// The encoded colour of vertex `index` (the scene must have vertex colours;
+    /// [`crate::material::vertex_color`]).
+    fn vertex_color<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [u32; 2];
     /// Texture `index`'s record.
     fn texture<F: Features>(&self, scene: &SceneView<F>, index: u32) -> TextureInfo;
     /// Word `index` of the packed texture texels.
@@ -113,6 +116,11 @@ impl SceneSource for SceneSlices {
     #[inline(always)]
     fn uv<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [f32; 2] {
         scene.geometry.uvs[index as usize]
+    }
+
+    #[inline(always)]
+    fn vertex_color<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [u32; 2] {
+        scene.geometry.vertex_colors[index as usize]
     }
 
     #[inline(always)]
@@ -238,6 +246,16 @@ mod texels {
                 (w.z, w.w)
             };
             [f32::from_bits(u), f32::from_bits(v)]
+        }
+
+        #[inline(always)]
+        fn vertex_color<F: Features>(&self, scene: &SceneView<F>, index: u32) -> [u32; 2] {
+            let w: UVec4 = self.read(scene.globals.texel_offsets.vertex_colors + index / 2);
+            if index & 1 == 0 {
+                [w.x, w.y]
+            } else {
+                [w.z, w.w]
+            }
         }
 
         #[inline(always)]

@@ -41,6 +41,9 @@ pub struct GeometryArrays<'a> {
     pub normals: &'a [[f32; 4]],
     /// Per-vertex texture coordinates. Empty when no material has a texture.
     pub uvs: &'a [[f32; 2]],
+    /// Per-vertex colours (glTF `COLOR_0`), RGBA as four 16-bit unsigned normalised numbers
+    /// ([`crate::material::vertex_color`]). Empty when no vertex has a colour other than white.
+    pub vertex_colors: &'a [[u32; 2]],
 }
 
 /// The materials and the textures they read.

@@ -1,12 +1,13 @@
 //! The geometry group: the BVH over the triangles, their positions in four-wide blocks, and the
-//! per-vertex normals and texture coordinates shading reads
+//! per-vertex normals, texture coordinates and colours shading reads
 //! ([`fovea_core::scene::GeometryArrays`]).
 use fovea_core::bvh::wide::Bvh8Node;
 use fovea_core::kernel_abi::{
     BINDING_NODES, BINDING_NORMALS, BINDING_TRIANGLE_BLOCKS, BINDING_TRIANGLE_INFO,
-    BINDING_TRIANGLE_LANES, BINDING_UVS,
+    BINDING_TRIANGLE_LANES, BINDING_UVS, BINDING_VERTEX_COLORS,
 };
 use fovea_core::material::tangent::{encode_tangent, NO_TANGENT};
+use fovea_core::material::vertex_color::encode_vertex_color;
 use fovea_core::scene::{
     Bvh4Node, GeometryArrays, Material, TriangleBlock, TriangleInfo, TrianglePositions,
     MATERIAL_ALPHA_CUTOUT,
@@ -29,6 +30,8 @@ pub struct PackedGeometry {
     pub triangle_info: Vec<TriangleInfo>,
     pub normals: Vec<[f32; 4]>,
     pub uvs: Vec<[f32; 2]>,
+    /// Encoded vertex colours ([`GeometryArrays::vertex_colors`]).
+    pub vertex_colors: Vec<[u32; 2]>,
 }
 
 impl PackedGeometry {
@@ -43,12 +46,13 @@ impl PackedGeometry {
             triangle_info: &self.triangle_info,
             normals: &self.normals,
             uvs: &self.uvs,
+            vertex_colors: &self.vertex_colors,
         }
     }
 
     /// The arrays the GPU receives, each with its binding (all read through the scene texel buffer).
     #[must_use]
-    pub fn gpu_arrays(&self) -> [PackedArray<'_>; 6] {
+    pub fn gpu_arrays(&self) -> [PackedArray<'_>; 7] {
         use ArrayRead::Texels;
         [
             PackedArray::new(BINDING_NODES, "BVH nodes", Texels, &self.nodes),
@@ -72,6 +76,12 @@ impl PackedGeometry {
             ),
             PackedArray::new(BINDING_NORMALS, "normals", Texels, &self.normals),
             PackedArray::new(BINDING_UVS, "texture coordinates", Texels, &self.uvs),
+            PackedArray::new(
+                BINDING_VERTEX_COLORS,
+                "vertex colours",
+                Texels,
+                &self.vertex_colors,
+            ),
         ]
     }
 
@@ -94,6 +104,7 @@ pub(super) struct GeometryInput {
     pub normals: Vec<[f32; 3]>,
     pub uvs: Vec<[f32; 2]>,
     pub tangents: Vec<[f32; 4]>,
+    pub colors: Vec<[f32; 4]>,
     pub triangles: Vec<[u32; 3]>,
     pub triangle_materials: Vec<u32>,
 }
@@ -108,7 +119,7 @@ pub(super) struct GeometryOutput {
 
 /// Builds the BVH over `input`'s triangles and packs them in its leaf order; texture coordinates are
 /// kept only when a material reads a texture, normals only when one is not zero, tangents (in the
-/// normals' `w`) only when a material reads them.
+/// normals' `w`) only when a material reads them, colours only when one is not white.
 pub(super) fn pack_geometry(
     input: GeometryInput,
     materials: &[Material],
@@ -119,6 +130,7 @@ pub(super) fn pack_geometry(
         normals,
         uvs,
         tangents,
+        colors,
         triangles,
         triangle_materials,
     } = input;
@@ -176,6 +188,13 @@ pub(super) fn pack_geometry(
         Vec::new()
     };
 
+    // White multiplies nothing.
+    let vertex_colors = if colors.iter().any(|c| *c != [1.0; 4]) {
+        colors.iter().map(|&c| encode_vertex_color(c)).collect()
+    } else {
+        Vec::new()
+    };
+
     GeometryOutput {
         geometry: PackedGeometry {
             nodes: bvh.nodes,
@@ -185,6 +204,7 @@ pub(super) fn pack_geometry(
             triangle_info,
             normals,
             uvs,
+            vertex_colors,
         },
         bvh: bvh.stats,
         bounds_min,

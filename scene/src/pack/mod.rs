@@ -10,7 +10,9 @@ pub mod materials;
 
 use std::time::Instant;
 
-use fovea_core::scene::{positions_at, FeatureFlags, SceneGlobals, SceneView, TrianglePositions};
+use fovea_core::scene::{
+    positions_at, FeatureFlags, SceneGlobals, SceneView, TrianglePositions, VertexAttributes,
+};
 use glam::Vec3;
 
 pub use self::environment::PackedEnvironment;
@@ -95,8 +97,11 @@ impl PackedScene {
             &self.globals,
             &self.materials.list,
             &self.lights.list,
-            !self.geometry.normals.is_empty(),
-            !self.geometry.uvs.is_empty(),
+            VertexAttributes {
+                normals: !self.geometry.normals.is_empty(),
+                uvs: !self.geometry.uvs.is_empty(),
+                colors: !self.geometry.vertex_colors.is_empty(),
+            },
         )
     }
 
@@ -170,6 +175,7 @@ pub fn pack_scene(
         normals,
         uvs,
         tangents,
+        colors,
         triangles,
         triangle_materials,
         materials,
@@ -189,6 +195,7 @@ pub fn pack_scene(
             normals,
             uvs,
             tangents,
+            colors,
             triangles,
             triangle_materials,
         },
