@@ -4,8 +4,8 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::values::{
-    whole_number, BlockTriple, DisplayCm, Eccentricity, PixelPoint, Point3, PointLight, RadiiPx,
-    Resolution, Rgb, SampleSelection, SppTriple,
+    whole_number, ArrayTask, BlockTriple, DisplayCm, Eccentricity, PixelPoint, Point3, PointLight,
+    RadiiPx, Resolution, Rgb, SampleSelection, SppTriple,
 };
 
 /// fovea: a foveated real-time path tracer (after Mohanto, Kluge and Staadt 2023).
@@ -400,6 +400,16 @@ pub struct ReportArgs {
     /// task of a job array; CPU backend).
     #[arg(long, value_name = "I/N", allow_hyphen_values = true)]
     pub reference_part: Option<SampleSelection>,
+    /// Measure only the scenes of task I of N (every N-th scene from the I-th, counted from 0), each
+    /// into its folder under --out, and write no combined report.md: one task of a job array over the
+    /// scenes (docs/cluster.md). Each scene's configurations stay on one machine, so that their
+    /// speed-ups compare run times of the same hardware.
+    #[arg(long, value_name = "I/N", allow_hyphen_values = true)]
+    pub task: Option<ArrayTask>,
+    /// Render nothing: write the combined report.md of several scenes from their folders under
+    /// --out, which --task runs wrote.
+    #[arg(long)]
+    pub combine: bool,
     /// Also judge a sequence: render this gaze trace frame by frame (the files `render` and `view`
     /// read: `t,x,y` or `frame,x,y`, pixels or --gaze-normalized) for uniform and the paper's
     /// foveated configurations, with and without history, and pool the error by eccentricity band

@@ -168,19 +168,40 @@ impl FromStr for SampleSelection {
             }
             return Ok(Self::Range([a as u32, b as u32]));
         }
-        if let Some((i, n)) = s.split_once('/') {
-            let (i, n) = (number(i)?, number(n)?);
-            if !(0 <= i && i < n && n <= i64::from(MAX_SPP)) {
-                return Err(format!(
-                    "need 0 <= I < N <= {MAX_SPP} (part I of N, from 0)"
-                ));
-            }
-            return Ok(Self::Part {
-                index: i as u32,
-                count: n as u32,
-            });
+        if s.contains('/') {
+            let [index, count] = part_of(s, MAX_SPP)?;
+            return Ok(Self::Part { index, count });
         }
         Err("expected A..B (samples A up to B) or I/N (part I of N, from 0)".into())
+    }
+}
+
+/// `I/N` with `0 <= I < N <= max`: part `I` of `N`, counted from 0 as a job array's task ids are.
+fn part_of(s: &str, max: u32) -> Result<[u32; 2], String> {
+    let number = |t: &str| t.trim().parse::<i64>().map_err(|_| not_a_number(t.trim()));
+    let Some((i, n)) = s.split_once('/') else {
+        return Err("expected I/N (part I of N, from 0)".into());
+    };
+    let (i, n) = (number(i)?, number(n)?);
+    if !(0 <= i && i < n && n <= i64::from(max)) {
+        return Err(format!("need 0 <= I < N <= {max} (part I of N, from 0)"));
+    }
+    Ok([i as u32, n as u32])
+}
+
+/// The most tasks a report's scenes are split into.
+pub const MAX_TASKS: u32 = 10_000;
+
+typed_value!(
+    /// `I/N`: task `I` of `N` (from 0, as `SLURM_ARRAY_TASK_ID`), `N` at most [`MAX_TASKS`].
+    ArrayTask([u32; 2]) = |s| part_of(s, MAX_TASKS)
+);
+
+impl ArrayTask {
+    /// Whether item `i` of a list belongs to this task: every `N`-th item from the `I`-th.
+    #[must_use]
+    pub fn takes(self, i: usize) -> bool {
+        i % self.0[1] as usize == self.0[0] as usize
     }
 }
 

@@ -466,3 +466,93 @@ fn a_camera_path_moves_the_sequence_and_each_camera_has_its_reference() {
     assert!(md.contains("the camera moving along"), "{md}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--task I/N` measures every N-th scene into its folder and writes no combined report;
+/// `--combine` refuses while a scene has no report (naming it, writing nothing), then joins the
+/// tasks' folders into the report a single run writes.
+#[test]
+fn scenes_split_over_tasks_are_combined() {
+    let dir = temp_dir("tasks");
+    // A second scene: the Cornell box under another name (its MTL beside it).
+    let assets = cornell().parent().unwrap().to_owned();
+    std::fs::copy(
+        assets.join("CornellBox-Original.mtl"),
+        dir.join("CornellBox-Original.mtl"),
+    )
+    .unwrap();
+    let second = dir.join("second.obj");
+    std::fs::copy(cornell(), &second).unwrap();
+    let out = dir.join("out");
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_fovea"))
+            .arg("report")
+            .arg(cornell())
+            .arg(&second)
+            .args(["--eye", "0,1,3.9", "--target", "0,1,0", "--fov", "38"])
+            .args(["--quick", "--resolution", "96x54", "--reference-spp", "16"])
+            .args(["--backend", "cpu", "--cache-dir"])
+            .arg(dir.join("cache"))
+            .arg("--out")
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let expect_failure = |extra: &[&str], want: &str| {
+        let output = run(extra);
+        let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+        assert!(
+            !output.status.success() && stderr.contains(want),
+            "{extra:?}: {stderr}"
+        );
+    };
+    expect_failure(&["--task", "0/3"], "there are 2 scene(s)");
+    expect_failure(&["--task", "0/2", "--combine"], "run it without --task");
+
+    let output = run(&["--task", "0/2"]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(out.join("CornellBox-Original/report.md").is_file());
+    assert!(!out.join("second").exists(), "task 0 measured only scene 0");
+    assert!(
+        !out.join("report.md").exists(),
+        "a task writes no combined report"
+    );
+    expect_failure(&["--combine"], "1 of 2 scenes have no report yet: scene 1");
+    assert!(
+        !out.join("report.md").exists(),
+        "nothing written on refusal"
+    );
+
+    let output = run(&["--task", "1/2"]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let output = run(&["--combine"]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let combined = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for (folder, name) in [
+        ("CornellBox-Original", "## CornellBox-Original"),
+        ("second", "## second"),
+    ] {
+        let section = std::fs::read_to_string(out.join(folder).join("report.md")).unwrap();
+        assert!(combined.contains(name), "{name} missing: {combined}");
+        assert!(combined.contains(&format!("`{folder}/reference.png`")));
+        // Every line of the scene's own section is in the combined report (the reference paths
+        // named by folder).
+        for line in section.lines().skip(2) {
+            let line = line.replace("`reference.png`", &format!("`{folder}/reference.png`"));
+            assert!(combined.contains(&line), "{folder}: {line:?} missing");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

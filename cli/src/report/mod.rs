@@ -10,6 +10,7 @@ mod plot;
 mod reference_cache;
 mod saccades;
 mod sequence;
+mod tasks;
 mod write;
 
 use std::collections::HashMap;
@@ -138,6 +139,8 @@ struct Plan {
     reference_parts: Option<PathBuf>,
     /// `--reference-part I/N`: render only this part of each reference, and no report.
     reference_part: Option<SampleSelection>,
+    /// `--task I/N`: measure only this task's scenes, and write no combined report.
+    task: Option<values::ArrayTask>,
 }
 
 fn positive(option: &'static str, value: u32, max: u32) -> Result<u32> {
@@ -250,6 +253,25 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
             }
             (part, _) => part,
         },
+        task: match (args.task, args.reference_part.is_some(), args.combine) {
+            (Some(_), true, _) => return Err(FoveaError::option(
+                "--task",
+                "splits the scenes and --reference-part their references: use one of them per run",
+            )),
+            (Some(_), _, true) => {
+                return Err(FoveaError::option(
+                    "--combine",
+                    "writes the combined report after every --task run: run it without --task",
+                ))
+            }
+            (None, true, true) => {
+                return Err(FoveaError::option(
+                    "--combine",
+                    "renders nothing, and --reference-part renders only a part: use one of them",
+                ))
+            }
+            (task, ..) => task,
+        },
         sequence: match &args.gaze_trace {
             Some(path) => {
                 let mut seq = sequence::read_trace(
@@ -310,21 +332,9 @@ fn create_dir(dir: &Path) -> Result<()> {
 pub fn run(args: &ReportArgs) -> Result<()> {
     let wall = Instant::now();
     let plan = plan(args)?;
-    // A part of the references renders on the CPU, the one host that renders a range of samples.
-    let target = match plan.reference_part {
-        Some(_) => crate::backend::cpu_target_for_parts(&args.target, "--reference-part")?,
-        None => args.target,
-    };
-    let mut renderer = Renderer::new(&target, args.quiet)?;
-    let lighting = Lighting::from_args(&args.lighting)?;
-    // A part of the references is all a `--reference-part` run writes.
-    let writes_report = plan.reference_part.is_none();
-    if writes_report {
-        create_dir(&args.out)?;
-    }
 
     // One entry per scene: its path (None: the bundled default) and its output folder.
-    let scenes: Vec<(Option<PathBuf>, PathBuf)> = if args.scenes.len() <= 1 {
+    let all_scenes: Vec<tasks::SceneEntry> = if args.scenes.len() <= 1 {
         vec![(args.scenes.first().cloned(), args.out.clone())]
     } else {
         let mut used = std::collections::HashSet::new();
@@ -345,6 +355,26 @@ pub fn run(args: &ReportArgs) -> Result<()> {
             })
             .collect()
     };
+    if args.combine {
+        return combine_tasks(args, &all_scenes);
+    }
+    let scenes = match plan.task {
+        Some(task) => tasks::scenes_of_task(&all_scenes, task)?,
+        None => all_scenes.clone(),
+    };
+
+    // A part of the references renders on the CPU, the one host that renders a range of samples.
+    let target = match plan.reference_part {
+        Some(_) => crate::backend::cpu_target_for_parts(&args.target, "--reference-part")?,
+        None => args.target,
+    };
+    let mut renderer = Renderer::new(&target, args.quiet)?;
+    let lighting = Lighting::from_args(&args.lighting)?;
+    // A part of the references is all a `--reference-part` run writes.
+    let writes_report = plan.reference_part.is_none();
+    if writes_report {
+        create_dir(&args.out)?;
+    }
 
     let [w, h] = plan.resolution;
     let paper = FoveationParams::paper(plan.gaze, plan.radii_px[0], plan.radii_px[1]);
@@ -444,7 +474,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         let md = write::report_md(&report);
         write::write_text(
             &out_dir.join("report.md"),
-            &format!("# Error against run time (`fovea report`)\n\n{md}"),
+            &format!("{}{md}", tasks::HEADING),
         )?;
         let json = write::report_json(&report);
         crate::stats::write_json(&out_dir.join("report.json"), &json)?;
@@ -464,38 +494,72 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     if !writes_report {
         return Ok(());
     }
-    if scenes.len() > 1 {
-        let mut text = String::from("# Error against run time (`fovea report`)\n\n");
-        for (dir, md) in &markdown {
-            let rel = dir.strip_prefix(&args.out).unwrap_or(dir);
-            text.push_str(&md.replace(
-                "`reference.png`",
-                &format!("`{}/reference.png`", rel.display()),
-            ));
-            text.push('\n');
-        }
-        for (name, e) in &failures {
-            text.push_str(&format!("## {name}: failed\n\n{e}\n\n"));
-        }
+    // A task's scenes are combined with the other tasks' by `--combine`.
+    if all_scenes.len() > 1 && plan.task.is_none() {
+        let failed: Vec<(String, String)> = failures
+            .iter()
+            .map(|(name, e)| (name.clone(), e.to_string()))
+            .collect();
+        let text = tasks::combined_markdown(&args.out, &markdown, &failed);
         write::write_text(&args.out.join("report.md"), &text)?;
     }
+    // Where the results are: the combined report, or a task's scene folders.
+    let results = match plan.task {
+        Some(_) => {
+            let dirs: Vec<String> = markdown
+                .iter()
+                .map(|(dir, _)| dir.display().to_string())
+                .collect();
+            format!("{} (combine the tasks with --combine)", dirs.join(", "))
+        }
+        None => args.out.join("report.md").display().to_string(),
+    };
     if !failures.is_empty() {
         let names: Vec<&str> = failures.iter().map(|(n, _)| n.as_str()).collect();
         return Err(FoveaError::Backend(format!(
-            "{} of {} scenes failed ({}); the others' results are in {}",
+            "{} of {} scenes failed ({}); the others' results are in {results}",
             failures.len(),
             scenes.len(),
             names.join(", "),
-            args.out.join("report.md").display()
         )));
     }
-    if !args.quiet {
+    if let (Some(task), false) = (plan.task, args.quiet) {
+        eprintln!(
+            "fovea: report task {}/{}: {} scene(s) in {:.1} s -> {results}",
+            task.0[0],
+            task.0[1],
+            scenes.len(),
+            wall.elapsed().as_secs_f64(),
+        );
+    } else if !args.quiet {
         eprintln!(
             "fovea: report of {} scene{} in {:.1} s -> {}",
             scenes.len(),
             if scenes.len() == 1 { "" } else { "s" },
             wall.elapsed().as_secs_f64(),
             args.out.join("report.md").display()
+        );
+    }
+    Ok(())
+}
+
+/// `--combine`: the combined report.md of several scenes from their folders, which `--task` runs
+/// wrote; nothing is rendered.
+fn combine_tasks(args: &ReportArgs, scenes: &[tasks::SceneEntry]) -> Result<()> {
+    if scenes.len() < 2 {
+        return Err(FoveaError::option(
+            "--combine",
+            "joins the reports of several scenes: give the SCENE list the --task runs were given",
+        ));
+    }
+    let sections = tasks::read_sections(scenes)?;
+    let path = args.out.join("report.md");
+    write::write_text(&path, &tasks::combined_markdown(&args.out, &sections, &[]))?;
+    if !args.quiet {
+        eprintln!(
+            "fovea: combined the reports of {} scenes -> {}",
+            scenes.len(),
+            path.display()
         );
     }
     Ok(())
