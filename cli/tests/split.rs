@@ -523,5 +523,50 @@ fn a_report_merges_its_reference_from_parts() {
     };
     let worst = worst_relative(&cached("c2"), &cached("c1"));
     assert!(worst < 1e-5, "merged reference against rendered: {worst:e}");
+
+    // A moving camera's sequence: each camera's reference splits too (frame 0's camera is the
+    // scene's, so three references in all), and the report merges every one of them.
+    let trace = dir.join("trace.csv");
+    std::fs::write(&trace, "frame,x,y\n0,30,18\n1,31,18\n2,32,19\n").unwrap();
+    let path = dir.join("path.csv");
+    std::fs::write(
+        &path,
+        "0,0,1,3.9,0,1,0\n1,0.05,1,3.9,0,1,0\n2,0.1,1,3.9,0,1,0\n",
+    )
+    .unwrap();
+    let moving_parts = dir.join("moving-parts");
+    std::fs::create_dir_all(&moving_parts).unwrap();
+    let sequence = [
+        "--gaze-trace",
+        trace.to_str().unwrap(),
+        "--camera-path",
+        path.to_str().unwrap(),
+        "--sweep-max",
+        "1",
+        "--no-fovvideovdp",
+        "--reference-parts",
+        moving_parts.to_str().unwrap(),
+    ];
+    for part in ["0/2", "1/2"] {
+        let mut extra = sequence.to_vec();
+        extra.extend(["--reference-part", part]);
+        let out = run(&mut report("c3", "o3", &extra));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(stderr.matches("reference samples").count(), 3, "{stderr}");
+    }
+    assert_eq!(
+        std::fs::read_dir(&moving_parts).unwrap().count(),
+        6,
+        "two parts of each of three references"
+    );
+    let out = run(&mut report("c3", "o3", &sequence));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        stderr.matches("merged from the parts").count(),
+        3,
+        "{stderr}"
+    );
+    assert!(!stderr.contains("rendered and cached"), "{stderr}");
+    assert!(dir.join("o3/report.json").is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -610,6 +610,122 @@ fn render_reference(
     Ok((image, Some(rendered.stats.render_ms)))
 }
 
+/// What a scene's references are keyed and identified by.
+struct ReferenceScene<'a> {
+    /// The scene file, named in parts.
+    file: &'a Path,
+    /// The scene file's, packed scene's and executable's hashes.
+    identity: &'a RenderIdentity,
+    packed: &'a fovea_scene::pack::PackedScene,
+    /// The lighting's part of the cache key.
+    env_text: &'a str,
+}
+
+/// A reference as [`obtain_reference`] got it.
+struct Obtained {
+    image: FrameImage,
+    /// The render's time, when this run rendered it.
+    render_ms: Option<f64>,
+    /// Whether it came from the cache.
+    cached: bool,
+    /// Where it is cached.
+    cache_path: PathBuf,
+}
+
+/// The converged reference of `frame` (`what` names it in messages). With `--reference-part`: renders
+/// that part of it into `--reference-parts` on the CPU and returns `None`. Otherwise: the cached image,
+/// else one merged from all of its parts in `--reference-parts`, else rendered; a merged or rendered
+/// one is cached.
+#[allow(clippy::too_many_arguments)]
+fn obtain_reference(
+    args: &ReportArgs,
+    plan: &Plan,
+    renderer: &mut Renderer,
+    bar: &ProgressBar,
+    scene: &ReferenceScene,
+    frame: &FrameParams,
+    what: &str,
+) -> Result<Option<Obtained>> {
+    let (w, h) = (frame.width, frame.height);
+    let entry = CacheEntry::new(
+        &plan.cache_dir,
+        reference_cache::reference_key_text(
+            scene.identity.scene_file_hash,
+            scene.packed,
+            scene.env_text,
+            frame,
+            plan.fill_mode,
+        ),
+    );
+    let identity = identity_lines(scene.identity, frame, plan.fill_mode);
+    if let (Some(selection), Some(dir)) = (plan.reference_part, &plan.reference_parts) {
+        let spec = PartSpec::new(selection, plan.reference_spp)
+            .map_err(|why| FoveaError::option("--reference-part", why))?;
+        let [first, end] = spec.samples;
+        bar.inc_length(samples_in_part(w, h, &frame.foveation, spec.samples));
+        bar.set_message(format!("{what}: reference samples {first}..{end}"));
+        let (sums, _) =
+            renderer.render_sample_range(scene.packed, frame, spec.samples, &|n| bar.inc(n))?;
+        let path = dir.join(format!("{}.part-{first:08}-{end:08}.fvpart", entry.name()));
+        write_part(&path, &identity, scene.file, spec, &sums.pixels)?;
+        note(
+            bar,
+            args.quiet,
+            &format!(
+                "{what}: reference samples {first}..{end} -> {}",
+                path.display()
+            ),
+        );
+        return Ok(None);
+    }
+    if let Some(image) = (!args.no_cache).then(|| entry.load(w, h)).flatten() {
+        note(
+            bar,
+            args.quiet,
+            &format!("reference: cached {} ({what})", entry.image.display()),
+        );
+        return Ok(Some(Obtained {
+            image,
+            render_ms: None,
+            cached: true,
+            cache_path: entry.image,
+        }));
+    }
+    if let Some(dir) = &plan.reference_parts {
+        let image = merge_reference_parts(dir, &entry.name(), what, &identity)?;
+        match entry.store(&image) {
+            Ok(()) => note(
+                bar,
+                args.quiet,
+                &format!(
+                    "reference: merged from the parts in {} and cached {} ({what})",
+                    dir.display(),
+                    entry.image.display()
+                ),
+            ),
+            Err(e) => note(
+                bar,
+                false,
+                &format!("warning: the reference could not be cached: {e}"),
+            ),
+        }
+        return Ok(Some(Obtained {
+            image,
+            render_ms: None,
+            cached: false,
+            cache_path: entry.image,
+        }));
+    }
+    let (image, render_ms) =
+        render_reference(args, plan, renderer, bar, scene.packed, &entry, frame, what)?;
+    Ok(Some(Obtained {
+        image,
+        render_ms,
+        cached: false,
+        cache_path: entry.image,
+    }))
+}
+
 /// A reference merged from its parts in `dir` (`<name>.part-*.fvpart`, written by `--reference-part`),
 /// checked to be parts of exactly this reference (`expected`, its identity lines).
 fn merge_reference_parts(
@@ -740,103 +856,91 @@ fn run_scene(
         args.seed ^ REFERENCE_SEED_XOR,
         Some(fovea_core::integrator::path::TEXTURE_LOD_OFF),
     );
-    let entry = CacheEntry::new(
-        &plan.cache_dir,
-        reference_cache::reference_key_text(
-            crate::content_hash::fnv1a64(&scene_bytes),
-            &scene.packed,
-            env_text,
-            &reference_frame,
-            plan.fill_mode,
-        ),
-    );
-    if let (Some(selection), Some(dir)) = (plan.reference_part, &plan.reference_parts) {
-        let spec = PartSpec::new(selection, plan.reference_spp)
-            .map_err(|why| FoveaError::option("--reference-part", why))?;
-        let [first, end] = spec.samples;
-        let identity = identity_lines(
-            &RenderIdentity::of(&scene_bytes, &scene.packed),
-            &reference_frame,
-            plan.fill_mode,
-        );
-        bar.inc_length(samples_in_part(
-            w,
-            h,
-            &reference_frame.foveation,
-            spec.samples,
-        ));
-        bar.set_message(format!("{scene_name}: reference samples {first}..{end}"));
-        let (sums, _) =
-            renderer.render_sample_range(&scene.packed, &reference_frame, spec.samples, &|n| {
-                bar.inc(n)
-            })?;
-        let path = dir.join(format!("{}.part-{first:08}-{end:08}.fvpart", entry.name()));
-        write_part(&path, &identity, &file, spec, &sums.pixels)?;
-        note(
-            bar,
-            args.quiet,
-            &format!(
-                "{scene_name}: reference samples {first}..{end} -> {}",
-                path.display()
-            ),
-        );
-        return Ok(None);
-    }
-    let cached = if args.no_cache {
-        None
-    } else {
-        entry.load(w, h)
+    let identity = RenderIdentity::of(&scene_bytes, &scene.packed);
+    let references = ReferenceScene {
+        file: &file,
+        identity: &identity,
+        packed: &scene.packed,
+        env_text,
     };
-    let reference_cached = cached.is_some();
-    let (reference, reference_render_ms) = match cached {
-        Some(image) => {
-            note(
-                bar,
-                args.quiet,
-                &format!("reference: cached {}", entry.image.display()),
-            );
-            (image, None)
+    let reference = obtain_reference(
+        args,
+        plan,
+        renderer,
+        bar,
+        &references,
+        &reference_frame,
+        &scene_name,
+    )?;
+    // A --camera-path sequence: each frame's camera, chosen once, and each moving camera's
+    // reference (a still one shares the scene's), or with --reference-part a part of it.
+    let frame_cameras: Option<Vec<Camera>> = match plan
+        .sequence
+        .as_ref()
+        .and_then(|seq| seq.camera_path.as_ref())
+    {
+        Some((_, keys)) => Some(
+            keys.iter()
+                .map(|key| {
+                    choose_camera(
+                        &scene,
+                        Some(key.eye),
+                        Some(key.target),
+                        plan.up,
+                        args.camera.fov,
+                        w as f32 / h as f32,
+                    )
+                })
+                .collect::<Result<_>>()?,
+        ),
+        None => None,
+    };
+    let mut moving: Vec<(Camera, FrameImage, Vec<u8>)> = Vec::new();
+    if let (Some((_, keys)), Some(cameras)) = (
+        plan.sequence
+            .as_ref()
+            .and_then(|seq| seq.camera_path.as_ref()),
+        &frame_cameras,
+    ) {
+        // A part of the scene's own camera's reference is written above already (without parts, a
+        // camera equal to the scene's finds its reference in the cache).
+        let mut done: Vec<Camera> = Vec::new();
+        if plan.reference_part.is_some() {
+            done.push(camera);
         }
-        None if plan.reference_parts.is_some() => {
-            let dir = plan.reference_parts.as_deref().expect("matched");
-            let image = merge_reference_parts(
-                dir,
-                &entry.name(),
-                &scene_name,
-                &identity_lines(
-                    &RenderIdentity::of(&scene_bytes, &scene.packed),
-                    &reference_frame,
-                    plan.fill_mode,
-                ),
-            )?;
-            match entry.store(&image) {
-                Ok(()) => note(
-                    bar,
-                    args.quiet,
-                    &format!(
-                        "reference: merged from the parts in {} and cached {}",
-                        dir.display(),
-                        entry.image.display()
-                    ),
-                ),
-                Err(e) => note(
-                    bar,
-                    false,
-                    &format!("warning: the reference could not be cached: {e}"),
-                ),
+        for (key, &camera) in keys.iter().zip(cameras) {
+            if done.contains(&camera) {
+                continue;
             }
-            (image, None)
+            done.push(camera);
+            let frame_reference = FrameParams {
+                camera,
+                ..reference_frame
+            };
+            let what = format!("{scene_name} frame {}", key.frame);
+            if let Some(obtained) = obtain_reference(
+                args,
+                plan,
+                renderer,
+                bar,
+                &references,
+                &frame_reference,
+                &what,
+            )? {
+                let rgb8 = tonemapped_rgb8(&obtained.image, args.exposure);
+                moving.push((camera, obtained.image, rgb8));
+            }
         }
-        None => render_reference(
-            args,
-            plan,
-            renderer,
-            bar,
-            &scene.packed,
-            &entry,
-            &reference_frame,
-            &scene_name,
-        )?,
+    }
+    // With --reference-part, the parts are all this run makes.
+    let Some(Obtained {
+        image: reference,
+        render_ms: reference_render_ms,
+        cached: reference_cached,
+        cache_path: reference_cache_path,
+    }) = reference
+    else {
+        return Ok(None);
     };
     let reference_rgb8 = tonemapped_rgb8(&reference, args.exposure);
     write_png(&out_dir.join("reference.png"), w, h, &reference_rgb8)?;
@@ -929,72 +1033,6 @@ fn run_scene(
                 .sum::<u64>()
                 * seq.frames.len() as u64;
             bar.inc_length(samples);
-            // Each moving camera's reference: from the cache, or rendered (a still camera shares
-            // the scene's).
-            // Each frame's camera, chosen once.
-            let frame_cameras: Option<Vec<Camera>> = match &seq.camera_path {
-                Some((_, keys)) => Some(
-                    keys.iter()
-                        .map(|key| {
-                            choose_camera(
-                                &scene,
-                                Some(key.eye),
-                                Some(key.target),
-                                plan.up,
-                                args.camera.fov,
-                                w as f32 / h as f32,
-                            )
-                        })
-                        .collect::<Result<_>>()?,
-                ),
-                None => None,
-            };
-            let mut moving: Vec<(Camera, FrameImage, Vec<u8>)> = Vec::new();
-            if let (Some((_, keys)), Some(cameras)) = (&seq.camera_path, &frame_cameras) {
-                for (key, &camera) in keys.iter().zip(cameras) {
-                    if moving.iter().any(|(c, _, _)| c == &camera) {
-                        continue;
-                    }
-                    let frame_reference = FrameParams {
-                        camera,
-                        ..reference_frame
-                    };
-                    let entry = CacheEntry::new(
-                        &plan.cache_dir,
-                        reference_cache::reference_key_text(
-                            crate::content_hash::fnv1a64(&scene_bytes),
-                            &scene.packed,
-                            env_text,
-                            &frame_reference,
-                            plan.fill_mode,
-                        ),
-                    );
-                    let cached = if args.no_cache {
-                        None
-                    } else {
-                        entry.load(w, h)
-                    };
-                    let image = match cached {
-                        Some(image) => image,
-                        None => {
-                            let what = format!("{scene_name} frame {}", key.frame);
-                            render_reference(
-                                args,
-                                plan,
-                                renderer,
-                                bar,
-                                &scene.packed,
-                                &entry,
-                                &frame_reference,
-                                &what,
-                            )?
-                            .0
-                        }
-                    };
-                    let rgb8 = tonemapped_rgb8(&image, args.exposure);
-                    moving.push((camera, image, rgb8));
-                }
-            }
             let views: Vec<sequence::FrameView> = match &frame_cameras {
                 Some(cameras) => cameras
                     .iter()
@@ -1057,7 +1095,7 @@ fn run_scene(
         ppd: plan.ppd,
         reference: "reference.png".into(),
         reference_spp: plan.reference_spp,
-        reference_cache: entry.image.clone(),
+        reference_cache: reference_cache_path,
         reference_cached,
         reference_render_ms,
         regions: "regions.png".into(),
