@@ -221,12 +221,13 @@ fn a_gaze_trace_is_judged_by_eccentricity_and_over_time() {
     assert_eq!(seq["frames"], 5);
     let configs = seq["configs"].as_array().unwrap();
     // Uniform and three foveated, each without and with history, the sweep's uniform 1 and 2 without
-    // and with history, then the denoiser on 32/16/8 alone, after 32/16/8's history and after 32/2/1's.
+    // and with history, then the denoiser on 32/16/8 alone, after 32/16/8's history and after 32/2/1's,
+    // and after uniform 1's history (equal time).
     let slugs: Vec<&str> = configs
         .iter()
         .map(|c| c["slug"].as_str().unwrap())
         .collect();
-    assert_eq!(slugs.len(), 15, "{slugs:?}");
+    assert_eq!(slugs.len(), 16, "{slugs:?}");
     let by_slug = |slug: &str| {
         configs
             .iter()

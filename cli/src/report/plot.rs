@@ -142,6 +142,7 @@ fn sequence_colour(c: &SequenceResult, index: usize) -> RGBColor {
     let base = match c.spec.kind {
         ConfigKind::Uniform => RGBColor(20, 20, 20),
         ConfigKind::Sweep => RGBColor(40, 90, 200),
+        ConfigKind::EqualTime => RGBColor(20, 150, 60),
         _ => [
             RGBColor(210, 50, 40),
             RGBColor(220, 130, 20),

@@ -210,6 +210,17 @@ pub fn sequence_specs(sweep: &[u32]) -> Vec<SequenceSpec> {
             denoise: true,
         });
     }
+    // Uniform 1 spp after its history, denoised: about the frame time of 32/16/8 + history + denoiser,
+    // so that foveation meets uniform at equal time with the denoiser on both sides.
+    specs.push(SequenceSpec {
+        name: "uniform 1 + history + denoiser".into(),
+        slug: "uniform-1-history-denoised".into(),
+        kind: ConfigKind::EqualTime,
+        spp: [1; 3],
+        foveated: false,
+        history: true,
+        denoise: true,
+    });
     specs
 }
 
