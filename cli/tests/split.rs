@@ -4,6 +4,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
+mod support;
+use support::read_exr;
+
 fn fovea() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fovea"))
 }
@@ -43,27 +46,6 @@ fn failure(command: &mut Command) -> String {
     assert!(!out.status.success(), "{command:?} should fail");
     assert!(!stderr.contains("panicked"), "{stderr}");
     stderr
-}
-
-/// The RGB pixels of an EXR file, row by row.
-fn read_exr(path: &Path) -> Vec<[f32; 3]> {
-    struct Pixels {
-        width: usize,
-        data: Vec<[f32; 3]>,
-    }
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |size, _| Pixels {
-            width: size.width(),
-            data: vec![[0.0; 3]; size.width() * size.height()],
-        },
-        |p: &mut Pixels, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            let i = pos.y() * p.width + pos.x();
-            p.data[i] = [r, g, b];
-        },
-    )
-    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    image.layer_data.channel_data.pixels.data
 }
 
 /// The largest difference between two images relative to the first's value (at least 1e-3).

@@ -14,6 +14,9 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
+mod support;
+use support::read_exr;
+
 /// One Xvfb at a time (and the CPU is shared anyway).
 static DISPLAY_LOCK: Mutex<()> = Mutex::new(());
 
@@ -111,27 +114,6 @@ fn frames(json: &Value) -> &Vec<Value> {
 fn gaze(frame: &Value) -> [f64; 2] {
     let g = frame["gaze"].as_array().unwrap();
     [g[0].as_f64().unwrap(), g[1].as_f64().unwrap()]
-}
-
-/// The RGB pixels of an EXR file, row by row.
-fn read_exr(path: &Path) -> Vec<[f32; 3]> {
-    struct Pixels {
-        width: usize,
-        data: Vec<[f32; 3]>,
-    }
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |size, _| Pixels {
-            width: size.width(),
-            data: vec![[0.0; 3]; size.width() * size.height()],
-        },
-        |p: &mut Pixels, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            let i = pos.y() * p.width + pos.x();
-            p.data[i] = [r, g, b];
-        },
-    )
-    .unwrap();
-    image.layer_data.channel_data.pixels.data
 }
 
 fn mse(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {

@@ -55,7 +55,6 @@ fn khr_materials_volume_sets_the_absorption() {
 /// texture channels read at the point's coordinates, and the checker makes them vary.
 #[test]
 fn extension_textures_multiply_their_factors() {
-    use fovea_core::bvh::closest_hit;
     use fovea_core::material::surface_point;
     use fovea_core::material::texture::sample_texture;
     use fovea_core::scene::{SceneSlices, SceneSource, INVALID_INDEX};
@@ -88,22 +87,8 @@ fn extension_textures_multiply_their_factors() {
         (textured, "extension_textures"),
         (glass_centre, "textured_glass"),
     ] {
-        for k in 0..400 {
-            // Points over the sphere's visible disc (radius 0.9).
-            let offset = Vec3::new(
-                (k % 20) as f32 / 10.0 - 0.95,
-                (k / 20) as f32 / 10.0 - 0.95,
-                0.0,
-            ) * 0.8;
-            let ray = fovea_core::geometry::Ray::new(eye, target + offset - eye);
-            let hit = closest_hit(&view, &ray, f32::INFINITY);
-            if !hit.is_hit() {
-                continue;
-            }
+        for hit in hits_on_sphere(&view, &names, eye, target, name) {
             let info = SceneSlices.triangle_info(&view, hit.triangle);
-            if names[info.material as usize] != name {
-                continue;
-            }
             let mat = view.materials.list[info.material as usize];
             let p = surface_point(&view, &SceneSlices, &hit);
             let tex = |t: u32| sample_texture(&view, &SceneSlices, t, p.uv);
@@ -148,7 +133,7 @@ fn vertex_colours_multiply_the_base_colour_and_cut_out_by_their_alpha() {
     use fovea_core::geometry::Ray;
     use fovea_core::material::surface_point;
     use fovea_core::scene::features::FEATURE_VERTEX_COLORS;
-    use fovea_core::scene::{Features, SceneSlices, SceneSource};
+    use fovea_core::scene::{Features, SceneSlices};
 
     let s = load();
     assert!(
@@ -163,19 +148,7 @@ fn vertex_colours_multiply_the_base_colour_and_cut_out_by_their_alpha() {
     assert!(packed.features().has(FEATURE_VERTEX_COLORS));
     let view = packed.view();
     let mut hits = 0;
-    for k in 0..400 {
-        let offset = Vec3::new(
-            (k % 20) as f32 / 10.0 - 0.95,
-            (k / 20) as f32 / 10.0 - 0.95,
-            0.0,
-        ) * 0.8;
-        let hit = closest_hit(&view, &Ray::new(eye, centre + offset - eye), f32::INFINITY);
-        if !hit.is_hit()
-            || names[SceneSlices.triangle_info(&view, hit.triangle).material as usize]
-                != "vertex_colors"
-        {
-            continue;
-        }
+    for hit in hits_on_sphere(&view, &names, eye, centre, "vertex_colors") {
         let p = surface_point(&view, &SceneSlices, &hit);
         // The colour is linear in the position, so interpolating it over a flat triangle gives the
         // same function of the hit point (up to the bytes' rounding); the node scales the sphere by 0.9.
@@ -235,6 +208,33 @@ fn a_texture_reads_the_coordinate_set_it_names() {
         "{:?}",
         s.warnings
     );
+}
+
+/// The hits on material `name` of rays from `eye` through a 20 × 20 grid of points over the visible disc
+/// of the sphere at `centre` (radius 0.9).
+fn hits_on_sphere(
+    view: &fovea_core::scene::SceneView,
+    names: &[String],
+    eye: Vec3,
+    centre: Vec3,
+    name: &str,
+) -> Vec<fovea_core::bvh::traverse::Hit> {
+    use fovea_core::scene::{SceneSlices, SceneSource};
+    (0..400)
+        .filter_map(|k| {
+            let offset = Vec3::new(
+                (k % 20) as f32 / 10.0 - 0.95,
+                (k / 20) as f32 / 10.0 - 0.95,
+                0.0,
+            ) * 0.8;
+            let ray = fovea_core::geometry::Ray::new(eye, centre + offset - eye);
+            let hit = fovea_core::bvh::closest_hit(view, &ray, f32::INFINITY);
+            let material = |hit: &fovea_core::bvh::traverse::Hit| {
+                SceneSlices.triangle_info(view, hit.triangle).material as usize
+            };
+            (hit.is_hit() && names[material(&hit)] == name).then_some(hit)
+        })
+        .collect()
 }
 
 /// The mean of a material's vertices (a sphere's centre), in the scene's coordinates.
