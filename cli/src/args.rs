@@ -174,7 +174,9 @@ pub struct ViewArgs {
     /// Folder for screenshots (P key): fovea_view_FRAME.png, .exr, _regions.png and .json.
     #[arg(long, default_value = "screenshots", value_name = "DIR")]
     pub screenshot_dir: PathBuf,
-    /// Write every frame's figures (time, samples, gaze, accumulation, latency) as JSON at exit.
+    /// Write every frame's figures (time, samples, gaze, accumulation, latency) as JSON at exit, and
+    /// every few seconds while the view runs ("complete": false), so that a run ended by Ctrl-C or
+    /// SIGTERM keeps its figures up to the last few seconds.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
     /// No summary line at exit.

@@ -80,6 +80,10 @@ fn run_ok(mut c: Command, stats: &Path) -> Value {
     let json: Value = serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap();
     let validation = json["validation_messages"].as_array().unwrap();
     assert!(validation.is_empty(), "validation: {validation:?}");
+    assert_eq!(
+        json["run"]["complete"], true,
+        "a run that ended writes it whole"
+    );
     json
 }
 
@@ -507,4 +511,73 @@ fn no_vulkan_driver_is_a_clear_error() {
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert!(stderr.contains("needs a Vulkan driver"), "{stderr}");
+}
+
+/// `--stats` is written every few seconds while the view runs (`"complete": false`), so that a run
+/// ended by SIGTERM, which the view cannot catch, keeps its figures up to the last snapshot.
+#[test]
+fn a_terminated_view_keeps_its_last_stats_snapshot() {
+    let _guard = DISPLAY_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut c) = view_under_xvfb() else {
+        return;
+    };
+    let dir = temp_dir("snapshot");
+    let stats = dir.join("stats.json");
+    c.arg(cornell())
+        .args(CAMERA)
+        .args(["--backend", "cpu", "--size", "160x120", "-q"])
+        .args(["--budget-ms", "0", "--exit-after-frames", "1000000"])
+        .arg("--stats")
+        .arg(&stats)
+        // Validation is the other tests' concern; it adds half a minute to the start here.
+        .env_remove("FOVEA_VULKAN_VALIDATION")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null());
+    let mut child = c.spawn().unwrap();
+    let read =
+        || -> Option<Value> { serde_json::from_str(&std::fs::read_to_string(&stats).ok()?).ok() };
+    // The first frame's snapshot, then one at least 5 s later with more frames.
+    let start = Instant::now();
+    let mut first: Option<usize> = None;
+    let mut second: Option<Value> = None;
+    while start.elapsed() < Duration::from_secs(120) && second.is_none() {
+        if let Some(v) = read() {
+            let n = frames(&v).len();
+            match first {
+                None => first = Some(n),
+                Some(f) if n > f => second = Some(v),
+                _ => {}
+            }
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    // SIGTERM to the fovea process itself (xvfb-run is its parent).
+    let pid = std::fs::read_dir("/proc")
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .find(|e| {
+            std::fs::read(e.path().join("cmdline")).is_ok_and(|cmd| {
+                let args: Vec<&[u8]> = cmd.split(|&b| b == 0).collect();
+                args.first().is_some_and(|a| a.ends_with(b"fovea"))
+                    && args
+                        .iter()
+                        .any(|a| *a == stats.to_str().unwrap().as_bytes())
+            })
+        })
+        .map(|e| e.file_name().to_string_lossy().into_owned());
+    if let Some(pid) = &pid {
+        let _ = Command::new("kill").args(["-TERM", pid]).status();
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    let second = second.expect("a second --stats snapshot within 2 minutes");
+    assert!(pid.is_some(), "the fovea process was found");
+    assert_eq!(second["run"]["complete"], false, "a snapshot is marked so");
+    let last = read().expect("the last snapshot is a whole JSON file");
+    assert_eq!(
+        last["run"]["complete"], false,
+        "the run never ended normally"
+    );
+    assert!(frames(&last).len() >= frames(&second).len());
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -47,6 +47,8 @@ const MAX_ACCUMULATED_FRAMES: u32 = 4096;
 const SCRIPT_DT: f32 = 1.0 / 30.0;
 /// How often a minimised or paused scripted run advances its frame clock.
 const IDLE_TICK: Duration = Duration::from_millis(15);
+/// The shortest time between two snapshots of `--stats` while the view runs.
+const STATS_SNAPSHOT_MIN_INTERVAL: Duration = Duration::from_secs(5);
 /// Where the on-screen figures go.
 const HUD_CORNER: [u32; 2] = [8, 8];
 
@@ -155,6 +157,8 @@ struct Viewer {
     frame_index_key: u32,
     next_idle_tick: Instant,
     records: Vec<FrameRecord>,
+    /// When `--stats` is next written while the run goes on ([`Self::snapshot_stats`]).
+    next_stats_snapshot: Instant,
     last_foveation: Option<fovea_core::foveation::regions::FoveationParams>,
     screenshot_requested: bool,
     screenshots: Vec<String>,
@@ -231,6 +235,7 @@ impl Viewer {
             frame_index_key: 0,
             next_idle_tick: now,
             records: Vec::new(),
+            next_stats_snapshot: now,
             last_foveation: None,
             screenshot_requested: false,
             screenshots: Vec::new(),
@@ -690,7 +695,68 @@ impl Viewer {
         if self.records.len() < 1_000_000 {
             self.records.push(record);
         }
+        self.snapshot_stats();
         Ok(())
+    }
+
+    /// Writes `--stats` while the run goes on, marked `"complete": false`: after the first frame, then at
+    /// most every [`STATS_SNAPSHOT_MIN_INTERVAL`] and no more than 5 % of the time (the file grows with
+    /// the frames). A run ended by Ctrl-C or SIGTERM, which Rust's standard library cannot catch, keeps
+    /// the stats up to its last snapshot; one that ends normally overwrites it with the complete file.
+    fn snapshot_stats(&mut self) {
+        let now = Instant::now();
+        if self.options.stats.is_none() || now < self.next_stats_snapshot {
+            return;
+        }
+        match self.write_stats(false) {
+            Ok(()) => {
+                let took = now.elapsed();
+                self.next_stats_snapshot =
+                    Instant::now() + STATS_SNAPSHOT_MIN_INTERVAL.max(took * 20);
+            }
+            Err(e) => {
+                eprintln!("warning: --stats snapshot: {e}; the file is written at the end only");
+                self.next_stats_snapshot = now + Duration::from_secs(u64::from(u32::MAX));
+            }
+        }
+    }
+
+    /// Writes the `--stats` file: the run's settings, every frame and a summary; `complete` says
+    /// whether the run has ended.
+    fn write_stats(&self, complete: bool) -> Result<()> {
+        let Some(path) = &self.options.stats else {
+            return Ok(());
+        };
+        let validation = self
+            .renderer
+            .as_ref()
+            .map(|r| r.validation_messages())
+            .unwrap_or_default();
+        let renderer = self.renderer.as_ref();
+        let malformed = match &self.options.gaze {
+            GazeInput::Udp(u) => u.malformed_count(),
+            _ => 0,
+        };
+        let header = json!({
+            "complete": complete,
+            "backend": renderer.map(|r| r.backend_name),
+            "device": renderer.map(|r| r.device.clone()),
+            "present_device": renderer.map(|r| r.present_device.clone()),
+            "present_mode": self.present_mode,
+            "upload_ms": renderer.map(|r| r.upload_ms),
+            "scene": self.options.scene,
+            "traversal": self.options.traversal.to_possible_value().map(|v| v.get_name().to_string()),
+            "warnings": self.scene.warnings,
+            "triangles": self.scene.triangle_count,
+            "gaze_source": self.options.gaze.describe(),
+            "malformed_gaze_datagrams": malformed,
+            "malformed_gaze_messages": self.malformed_gaze,
+            "budget_ms": self.options.budget_ms,
+            "configurations": self.options.configs.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
+            "screenshots": self.screenshots,
+            "ticks": self.frame,
+        });
+        crate::stats::write_json(path, &stats_document(header, &self.records, &validation))
     }
 
     fn hud_lines(
@@ -814,37 +880,7 @@ impl Viewer {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
-        let validation = self
-            .renderer
-            .as_ref()
-            .map(|r| r.validation_messages())
-            .unwrap_or_default();
-        if let Some(path) = &self.options.stats {
-            let renderer = self.renderer.as_ref();
-            let malformed = match &self.options.gaze {
-                GazeInput::Udp(u) => u.malformed_count(),
-                _ => 0,
-            };
-            let header = json!({
-                "backend": renderer.map(|r| r.backend_name),
-                "device": renderer.map(|r| r.device.clone()),
-                "present_device": renderer.map(|r| r.present_device.clone()),
-                "present_mode": self.present_mode,
-                "upload_ms": renderer.map(|r| r.upload_ms),
-                "scene": self.options.scene,
-                "traversal": self.options.traversal.to_possible_value().map(|v| v.get_name().to_string()),
-                "warnings": self.scene.warnings,
-                "triangles": self.scene.triangle_count,
-                "gaze_source": self.options.gaze.describe(),
-                "malformed_gaze_datagrams": malformed,
-                "malformed_gaze_messages": self.malformed_gaze,
-                "budget_ms": self.options.budget_ms,
-                "configurations": self.options.configs.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
-                "screenshots": self.screenshots,
-                "ticks": self.frame,
-            });
-            crate::stats::write_json(path, &stats_document(header, &self.records, &validation))?;
-        }
+        self.write_stats(true)?;
         if !self.options.quiet {
             let frame_ms: Vec<f64> = self.records.iter().map(|r| r.frame_ms).collect();
             if let Some(m) = median(&frame_ms) {
