@@ -735,10 +735,14 @@ mod tests {
     #[test]
     fn specs_pair_each_configuration_with_and_without_history_then_sweep() {
         let specs = sequence_specs(&[1, 2, 32]);
-        assert_eq!(specs.len(), 8 + 4 + 3);
-        assert_eq!(specs.iter().filter(|s| s.history).count(), 8);
+        assert_eq!(specs.len(), 8 + 4 + 3 + 1);
+        assert_eq!(specs.iter().filter(|s| s.history).count(), 9);
         assert!(specs.iter().any(|s| s.slug == "32-16-8-history"));
         assert!(specs.iter().any(|s| s.slug == "32-16-8-history-denoised"));
+        // Uniform 1 spp after its history, denoised: the equal-time partner of the line above.
+        let equal = specs.last().unwrap();
+        assert_eq!(equal.slug, "uniform-1-history-denoised");
+        assert!(equal.history && equal.denoise && !equal.foveated && equal.spp == [1; 3]);
         assert_eq!(specs[9].spp, [2, 2, 2]);
         assert!(specs[11].history && specs[11].spp == [2, 2, 2]);
     }
