@@ -175,6 +175,7 @@ pub fn load_gltf_from(
     let gltf =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| malformed(e.to_string()))?;
     let sampler_json = samplers_with_invalid_values(gltf.document.as_json(), &bytes);
+    let precision_warnings = core_factors_beyond_f32(&bytes);
     drop(bytes);
     let gltf::Gltf { document, blob } = gltf;
     // gltf 1.4.1 panics on some JSON its validation accepts (or, for POSITION, on a dangling index while
@@ -182,6 +183,7 @@ pub fn load_gltf_from(
     let mut root = document.into_json();
     let mut early_warnings = check_json(&mut root).map_err(malformed)?;
     early_warnings.extend(replace_invalid_sampler_values(&mut root, &sampler_json));
+    early_warnings.extend(precision_warnings);
     // The material extensions fovea maps itself (`crate::gltf_pbr`) are unknown to gltf's validation,
     // which refuses a file that requires one: they are taken off the required list it checks.
     root.extensions_required
@@ -374,13 +376,9 @@ fn is_invalid_sampler(sampler: &gltf::json::texture::Sampler) -> bool {
         || matches!(sampler.wrap_t, Invalid)
 }
 
-/// The file's own `samplers` array, read again from its JSON (`bytes`: a `.gltf` or a `.glb`) when a
-/// sampler holds a value the spec does not allow, so that the warning can name the number; `Null`
-/// when none does (the usual case: no second parse).
-fn samplers_with_invalid_values(root: &gltf::json::Root, bytes: &[u8]) -> serde_json::Value {
-    if !root.samplers.iter().any(is_invalid_sampler) {
-        return serde_json::Value::Null;
-    }
+/// The file's JSON (`bytes`: a `.gltf`, or a `.glb`'s JSON chunk) parsed again as plain values, for
+/// the checks that need the file's own numbers; `Null` if it cannot be read (gltf's parse has said why).
+fn file_json(bytes: &[u8]) -> serde_json::Value {
     let glb;
     let json: &[u8] = if bytes.starts_with(b"glTF") {
         glb = gltf::Glb::from_slice(bytes).ok();
@@ -391,9 +389,115 @@ fn samplers_with_invalid_values(root: &gltf::json::Root, bytes: &[u8]) -> serde_
     } else {
         bytes
     };
-    serde_json::from_slice::<serde_json::Value>(json)
-        .map(|mut value| value["samplers"].take())
-        .unwrap_or_default()
+    serde_json::from_slice(json).unwrap_or_default()
+}
+
+/// The file's own `samplers` array when a sampler holds a value the spec does not allow, so that the
+/// warning can name the number; `Null` when none does (the usual case: no second parse).
+fn samplers_with_invalid_values(root: &gltf::json::Root, bytes: &[u8]) -> serde_json::Value {
+    if !root.samplers.iter().any(is_invalid_sampler) {
+        return serde_json::Value::Null;
+    }
+    file_json(bytes)["samplers"].take()
+}
+
+/// Whether `text` may hold a number that single precision cannot: an exponent of two or more digits
+/// (f32 ends near 3.4e38 and 1.4e-45) or a run of 38 digits. A cheap scan before the exact check,
+/// which a data URI's base64 can also trigger (at the cost of that check only).
+fn may_exceed_f32(text: &[u8]) -> bool {
+    let mut digits = 0;
+    for (i, &b) in text.iter().enumerate() {
+        if b.is_ascii_digit() {
+            digits += 1;
+            if digits >= 38 {
+                return true;
+            }
+            continue;
+        }
+        digits = 0;
+        if b == b'e' || b == b'E' {
+            let rest = &text[i + 1..];
+            let rest = rest
+                .strip_prefix(b"-")
+                .or(rest.strip_prefix(b"+"))
+                .unwrap_or(rest);
+            if rest.len() >= 2 && rest[0].is_ascii_digit() && rest[1].is_ascii_digit() {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// `v` with seven significant digits and an exponent, trailing zeros dropped (`1e-50`, `2.5e39`): the
+/// file's number as it wrote it, where JSON parsing may have moved it by an ulp.
+fn seven_digits(v: f64) -> String {
+    let text = format!("{v:.6e}");
+    match text.split_once('e') {
+        Some((mantissa, exponent)) if mantissa.contains('.') => format!(
+            "{}e{exponent}",
+            mantissa.trim_end_matches('0').trim_end_matches('.')
+        ),
+        _ => text,
+    }
+}
+
+/// Warnings for the core material factors the file gives beyond single precision, which gltf reads
+/// as f32 (an overflow as infinity, which the material check then replaces; an underflow silently as
+/// 0): `materials[i] ("name"): pbrMetallicRoughness.roughnessFactor 1e-50 is beyond single precision;
+/// read as 0`. The extensions' numbers are checked by `crate::gltf_pbr` instead.
+fn core_factors_beyond_f32(bytes: &[u8]) -> Vec<String> {
+    if !may_exceed_f32(bytes) {
+        return Vec::new();
+    }
+    let json = file_json(bytes);
+    let Some(materials) = json["materials"].as_array() else {
+        return Vec::new();
+    };
+    let mut warnings = Vec::new();
+    for (i, material) in materials.iter().enumerate() {
+        let pbr = &material["pbrMetallicRoughness"];
+        let fields = [
+            (
+                "pbrMetallicRoughness.baseColorFactor",
+                &pbr["baseColorFactor"],
+            ),
+            (
+                "pbrMetallicRoughness.metallicFactor",
+                &pbr["metallicFactor"],
+            ),
+            (
+                "pbrMetallicRoughness.roughnessFactor",
+                &pbr["roughnessFactor"],
+            ),
+            ("emissiveFactor", &material["emissiveFactor"]),
+            ("alphaCutoff", &material["alphaCutoff"]),
+            ("normalTexture.scale", &material["normalTexture"]["scale"]),
+            (
+                "KHR_materials_emissive_strength.emissiveStrength",
+                &material["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"],
+            ),
+        ];
+        for (field, value) in fields {
+            let numbers: Vec<&serde_json::Value> = match value.as_array() {
+                Some(list) => list.iter().collect(),
+                None => vec![value],
+            };
+            let beyond = numbers.iter().find_map(|n| {
+                let v = n.as_f64()?;
+                let read = v as f32;
+                (read.is_infinite() || (read == 0.0 && v != 0.0)).then_some((v, read))
+            });
+            if let Some((v, read)) = beyond {
+                let name = material["name"].as_str().unwrap_or("");
+                warnings.push(format!(
+                    "materials[{i}] ({name:?}): {field} {} is beyond single precision; read as {read}",
+                    seven_digits(v)
+                ));
+            }
+        }
+    }
+    warnings
 }
 
 /// Replaces each sampler value the spec does not allow by glTF's default (linear magnification,
@@ -2196,6 +2300,54 @@ mod tests {
         assert_eq!(named("2 TANGENT w values are not 1 or -1 (the first 0)"), 1);
         assert_eq!(s.tangents[0], [0.0, 1.0, 0.0, 1.0]);
         assert_eq!(s.tangents[1], [0.0; 4]);
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// Core material factors beyond single precision, which gltf reads as f32 (an overflow as
+    /// infinity, an underflow as 0), are named with the file's number and what was read.
+    #[test]
+    fn core_factors_beyond_single_precision_are_named() {
+        let dir = temp_dir("precision");
+        let file = dir.join("p.gltf");
+        let text = triangle_gltf(TRI, None, "")
+            .replace(
+                r#""baseColorFactor":[1,0.5,0.25,1]"#,
+                r#""baseColorFactor":[1e39,0.5,0.25,1],"roughnessFactor":1e-50"#,
+            )
+            .replace(
+                r#""emissiveFactor":[1,1,1]"#,
+                r#""emissiveFactor":[2e-46,1,1]"#,
+            );
+        std::fs::write(&file, text).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        for want in [
+            r#"materials[0] (""): pbrMetallicRoughness.baseColorFactor 1e39 is beyond single precision; read as inf"#,
+            r#"materials[0] (""): pbrMetallicRoughness.roughnessFactor 1e-50 is beyond single precision; read as 0"#,
+            r#"materials[0] (""): emissiveFactor 2e-46 is beyond single precision; read as 0"#,
+        ] {
+            assert_eq!(
+                s.warnings.iter().filter(|w| w.ends_with(want)).count(),
+                1,
+                "{want}: {:?}",
+                s.warnings
+            );
+        }
+        // The infinite base colour is then replaced, with the material check's own warning.
+        assert_eq!(s.materials[0].base_color[0], 0.8);
+        assert!(s
+            .warnings
+            .iter()
+            .any(|w| w.contains("base colour inf (used 0.8)")));
+        // Numbers within single precision get no such warning.
+        std::fs::write(&file, triangle_gltf(TRI, None, "")).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        assert!(
+            s.warnings.iter().all(|w| !w.contains("single precision")),
+            "{:?}",
+            s.warnings
+        );
+        assert!(!may_exceed_f32(br#"{"a":[1.5e3,-2.25,100000]}"#));
+        assert!(may_exceed_f32(br#"{"a":1e-50}"#) && may_exceed_f32(br#"{"a":3.5E+38}"#));
         std::fs::remove_dir_all(dir).ok();
     }
 
