@@ -213,8 +213,9 @@ impl Renderer {
             device_index: device,
             validation: fovea_vulkan::validation_requested(),
             window: Some(window),
-            // The CPU backend only presents: no acceleration structures for it.
+            // The CPU backend only presents: no kernel and no acceleration structures for it.
             traversal: fovea_vulkan::Traversal::Software,
+            present_only: true,
         };
         let presenter = fovea_vulkan::VulkanContext::new(&options).map_err(|e| {
             FoveaError::View(format!(
@@ -240,6 +241,7 @@ impl Renderer {
             validation: fovea_vulkan::validation_requested(),
             window,
             traversal: traversal.into(),
+            present_only: false,
         };
         match fovea_vulkan::VulkanContext::new(&options) {
             Ok(ctx) => {

@@ -529,8 +529,6 @@ fn a_terminated_view_keeps_its_last_stats_snapshot() {
         .args(["--budget-ms", "0", "--exit-after-frames", "1000000"])
         .arg("--stats")
         .arg(&stats)
-        // Validation is the other tests' concern; it adds half a minute to the start here.
-        .env_remove("FOVEA_VULKAN_VALIDATION")
         .stdout(Stdio::null())
         .stderr(Stdio::null());
     let mut child = c.spawn().unwrap();

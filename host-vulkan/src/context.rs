@@ -34,6 +34,11 @@ pub struct ContextOptions {
     pub window: Option<crate::swapchain::WindowHandles>,
     /// Software or hardware traversal (the latter loads the ray-query kernel module).
     pub traversal: crate::traversal::Traversal,
+    /// Only present host images to the window (`fovea view --backend cpu`): the kernel's module and
+    /// pipelines are not created, which saves their compile (seconds on lavapipe, and half a minute
+    /// more under the validation layer, which checks the whole module). Rendering then fails with
+    /// an error that says so.
+    pub present_only: bool,
 }
 
 impl ContextOptions {
@@ -45,6 +50,7 @@ impl ContextOptions {
             validation: validation_requested(),
             window: None,
             traversal: crate::traversal::Traversal::Auto,
+            present_only: false,
         }
     }
 }
@@ -432,12 +438,20 @@ impl VulkanContext {
             hardware_scratch_alignment,
         };
         // From here on, `ctx`'s Drop cleans up whatever was created if a step fails.
-        ctx.create_objects(family, &code, timestamp_bits > 0)?;
+        let kernel = (!options.present_only).then_some(code.as_slice());
+        ctx.create_objects(family, kernel, timestamp_bits > 0)?;
         Ok(ctx)
     }
 
     /// Queue, command buffer, fence, descriptor layout and set, pipelines and the timestamp pool.
-    fn create_objects(&mut self, family: u32, code: &[u32], timestamps: bool) -> Result<()> {
+    /// Creates the queue's command objects, the descriptor set and, given the kernel's `code`, its
+    /// module and pipelines (a present-only context has none).
+    fn create_objects(
+        &mut self,
+        family: u32,
+        code: Option<&[u32]>,
+        timestamps: bool,
+    ) -> Result<()> {
         let device = &self.shared.device;
         // SAFETY: (whole function) every create call gets a valid create info whose pointers live until
         // the call returns; the handles are stored in `self` at once, so Drop destroys them.
@@ -508,6 +522,29 @@ impl VulkanContext {
                 )
                 .during("vkAllocateDescriptorSets")?[0];
 
+            if timestamps {
+                self.query_pool = device
+                    .create_query_pool(
+                        &vk::QueryPoolCreateInfo::default()
+                            .query_type(vk::QueryType::TIMESTAMP)
+                            .query_count(crate::frame::TIMESTAMP_QUERIES),
+                        None,
+                    )
+                    .during("vkCreateQueryPool")?;
+            }
+        }
+        if let Some(code) = code {
+            self.create_kernel_pipelines(code)?;
+        }
+        Ok(())
+    }
+
+    /// The kernel's module and its pipelines, `render_samples` specialised for every feature.
+    fn create_kernel_pipelines(&mut self, code: &[u32]) -> Result<()> {
+        let device = &self.shared.device;
+        // SAFETY: (whole function) every create call gets a valid create info whose pointers live until
+        // the call returns; the handles are stored in `self` at once, so Drop destroys them.
+        unsafe {
             self.module = device
                 .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None)
                 .during("vkCreateShaderModule")?;
@@ -541,17 +578,6 @@ impl VulkanContext {
             let created = create_compute_pipelines(device, &infos)?;
             self.pipeline_create_ms = start.elapsed().as_secs_f64() * 1e3;
             self.pipelines.copy_from_slice(&created);
-
-            if timestamps {
-                self.query_pool = device
-                    .create_query_pool(
-                        &vk::QueryPoolCreateInfo::default()
-                            .query_type(vk::QueryType::TIMESTAMP)
-                            .query_count(crate::frame::TIMESTAMP_QUERIES),
-                        None,
-                    )
-                    .during("vkCreateQueryPool")?;
-            }
         }
         Ok(())
     }
@@ -613,6 +639,19 @@ impl VulkanContext {
     #[doc(hidden)]
     pub fn inject_fault(&mut self, fault: vk::Result) {
         self.injected_fault = Some(fault);
+    }
+
+    /// Fails on a present-only context ([`ContextOptions::present_only`]), which has no kernel.
+    pub(crate) fn check_kernel(&self) -> Result<()> {
+        if self.module == vk::ShaderModule::null() {
+            Err(VulkanError::Invalid(
+                "this Vulkan context was created to present host images only; it has no kernel to \
+                 render with"
+                    .into(),
+            ))
+        } else {
+            Ok(())
+        }
     }
 
     /// Fails if an earlier device loss or timeout left the device in an unknown state.
@@ -824,6 +863,7 @@ impl VulkanContext {
     /// frames. The next frame warms the new pipeline up again, and [`Self::pipeline_create_ms`] then
     /// holds this creation's time.
     pub(crate) fn specialize_render_pipeline(&mut self, features: u32) -> Result<()> {
+        self.check_kernel()?;
         if features == self.render_features {
             return Ok(());
         }

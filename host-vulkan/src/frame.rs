@@ -485,6 +485,7 @@ impl VulkanContext {
     ) -> Result<PreparedFrame> {
         let (temporal, denoise) = (request.history, request.denoise);
         self.check_usable()?;
+        self.check_kernel()?;
         scene.check_uploaded_to(&self.shared)?;
         let (w, h) = (frame.width, frame.height);
         if w == 0 || h == 0 {

@@ -57,6 +57,7 @@ impl VulkanContext {
         cell_means: &[[f32; 4]],
     ) -> Result<Vec<[f32; 4]>> {
         self.check_usable()?;
+        self.check_kernel()?;
         let record = std::mem::size_of::<[f32; 4]>() as u64;
         for (what, n) in [
             ("the probe image", replicated.len()),
@@ -95,6 +96,7 @@ impl VulkanContext {
         inputs: &[[f32; 4]],
     ) -> Result<Vec<[f32; 4]>> {
         self.check_usable()?;
+        self.check_kernel()?;
         scene.check_uploaded_to(&self.shared)?;
         let extra = scene.buffer_infos();
         self.dispatch_probe(

@@ -243,15 +243,25 @@ pub fn vulkan_context_with_or_skip(
     what: &str,
     traversal: fovea_vulkan::Traversal,
 ) -> Option<fovea_vulkan::VulkanContext> {
-    use fovea_vulkan::{ContextOptions, VulkanContext, VulkanError};
     std::env::set_var("FOVEA_VULKAN_VALIDATION", "1");
-    let options = ContextOptions {
+    let options = fovea_vulkan::ContextOptions {
         device_index: None,
         validation: fovea_vulkan::validation_requested(),
         window: None,
         traversal,
+        present_only: false,
     };
-    match VulkanContext::new(&options) {
+    vulkan_context_from_or_skip(what, &options)
+}
+
+/// A Vulkan context made with `options`, or `None` (a note printed) where there is no Vulkan device;
+/// under `CI=true` a missing device fails the test.
+pub fn vulkan_context_from_or_skip(
+    what: &str,
+    options: &fovea_vulkan::ContextOptions,
+) -> Option<fovea_vulkan::VulkanContext> {
+    use fovea_vulkan::{VulkanContext, VulkanError};
+    match VulkanContext::new(options) {
         Ok(ctx) => Some(ctx),
         Err(e @ (VulkanError::NoLoader(_) | VulkanError::NoDevice(_))) => {
             if std::env::var("CI").as_deref() == Ok("true") {

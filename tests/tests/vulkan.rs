@@ -185,6 +185,7 @@ fn bad_device_index_is_a_clear_error() {
         validation: false,
         window: None,
         traversal: fovea_vulkan::Traversal::Software,
+        present_only: false,
     })
     .err()
     .expect("an out-of-range index fails");
@@ -260,4 +261,36 @@ fn device_loss_and_out_of_memory_are_clear_errors() {
         .render_frame(&scene, &frame, FILL_BILINEAR, 0.0, false)
         .expect_err("a lost device is not used again");
     assert!(matches!(again, VulkanError::Poisoned), "{again}");
+}
+
+/// A present-only context (the presenter of `fovea view --backend cpu`) creates no kernel module or
+/// pipelines; rendering on it fails with an error that says so, and validation stays silent.
+#[test]
+fn a_present_only_context_has_no_kernel_and_says_so() {
+    let options = ContextOptions {
+        device_index: None,
+        validation: true,
+        window: None,
+        traversal: fovea_vulkan::Traversal::Software,
+        present_only: true,
+    };
+    let Some(mut ctx) = vulkan_context_from_or_skip("the present-only test", &options) else {
+        return;
+    };
+    let log = ctx.validation_log();
+    let packed = load_packed(&cornell_box_path(), &Environment::None);
+    let scene = ctx.upload_scene(&packed).expect("upload");
+    let frame = frame_params(cornell_camera(W, H), foveation(), W, H, 1);
+    let Err(e) = ctx.render_frame(&scene, &frame, FILL_BILINEAR, 0.0, false) else {
+        panic!("a present-only context rendered");
+    };
+    assert!(e.to_string().contains("present host images only"), "{e}");
+    let Err(e) = ctx.run_probe(0, &[[0.0; 4]; 8]) else {
+        panic!("a present-only context ran a probe");
+    };
+    assert!(e.to_string().contains("no kernel"), "{e}");
+    drop(scene);
+    drop(ctx);
+    let messages = log.lock().unwrap().clone();
+    assert!(messages.is_empty(), "validation: {messages:?}");
 }
