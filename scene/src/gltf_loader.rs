@@ -401,12 +401,27 @@ fn samplers_with_invalid_values(root: &gltf::json::Root, bytes: &[u8]) -> serde_
     file_json(bytes)["samplers"].take()
 }
 
-/// Whether `text` may hold a number that single precision cannot: an exponent of two or more digits
-/// (f32 ends near 3.4e38 and 1.4e-45) or a run of 38 digits. A cheap scan before the exact check,
-/// which a data URI's base64 can also trigger (at the cost of that check only).
+/// Whether `text` (JSON) may hold a number that single precision cannot: outside strings, an exponent
+/// of two or more digits (f32 ends near 3.4e38 and 1.4e-45) or a run of 38 digits. A cheap scan before
+/// the exact check; strings (a data URI's base64 among them) are skipped, since JSON numbers are
+/// never inside one.
 fn may_exceed_f32(text: &[u8]) -> bool {
-    let mut digits = 0;
+    let (mut digits, mut in_string, mut escaped) = (0, false, false);
     for (i, &b) in text.iter().enumerate() {
+        if in_string {
+            match (escaped, b) {
+                (true, _) => escaped = false,
+                (false, b'\\') => escaped = true,
+                (false, b'"') => in_string = false,
+                _ => {}
+            }
+            continue;
+        }
+        if b == b'"' {
+            in_string = true;
+            digits = 0;
+            continue;
+        }
         if b.is_ascii_digit() {
             digits += 1;
             if digits >= 38 {
@@ -2348,6 +2363,7 @@ mod tests {
         );
         assert!(!may_exceed_f32(br#"{"a":[1.5e3,-2.25,100000]}"#));
         assert!(may_exceed_f32(br#"{"a":1e-50}"#) && may_exceed_f32(br#"{"a":3.5E+38}"#));
+        assert!(!may_exceed_f32(br#"{"uri":"data:;base64,AAe45x\"e99"}"#));
         std::fs::remove_dir_all(dir).ok();
     }
 
