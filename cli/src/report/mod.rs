@@ -902,12 +902,8 @@ fn run_scene(
             .and_then(|seq| seq.camera_path.as_ref()),
         &frame_cameras,
     ) {
-        // A part of the scene's own camera's reference is written above already (without parts, a
-        // camera equal to the scene's finds its reference in the cache).
-        let mut done: Vec<Camera> = Vec::new();
-        if plan.reference_part.is_some() {
-            done.push(camera);
-        }
+        // The scene's own camera has its reference above (it joins `moving` below).
+        let mut done: Vec<Camera> = vec![camera];
         for (key, &camera) in keys.iter().zip(cameras) {
             if done.contains(&camera) {
                 continue;
@@ -943,6 +939,9 @@ fn run_scene(
         return Ok(None);
     };
     let reference_rgb8 = tonemapped_rgb8(&reference, args.exposure);
+    if frame_cameras.as_ref().is_some_and(|c| c.contains(&camera)) {
+        moving.push((camera, reference.clone(), reference_rgb8.clone()));
+    }
     write_png(&out_dir.join("reference.png"), w, h, &reference_rgb8)?;
     write_png(
         &out_dir.join("regions.png"),
