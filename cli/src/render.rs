@@ -432,6 +432,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let integrator = args.path.integrator();
 
     let mut frames = Vec::new();
+    // Frames whose tone-mapped image is all black (see `BLACK_IMAGE_WARNING`).
+    let mut black_frames = 0usize;
     for g in &plan.gazes {
         let mut foveation = plan.foveation_template;
         if !args.foveation.uniform {
@@ -519,6 +521,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             (None, Some(hdr)) => tonemapped_rgb8(hdr, args.image.exposure),
             (None, None) => unreachable!("every backend returns HDR or tone-mapped pixels"),
         };
+        if rgb8.iter().all(|&byte| byte == 0) {
+            black_frames += 1;
+        }
 
         let output = if plan.per_frame_outputs {
             frame_path(&plan.output, g.frame)
@@ -560,6 +565,21 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         });
     }
 
+    // A black image from a scene with lights (one without has had its warning): say why, not only
+    // write it. Like the no-light warning, also under --quiet: the output is of no use as it is.
+    if black_frames > 0 && !scene.packed.lights.list.is_empty() {
+        let warning = if frames.len() == 1 {
+            crate::scene_setup::BLACK_IMAGE_WARNING.to_string()
+        } else {
+            format!(
+                "{black_frames} of {} frames: {}",
+                frames.len(),
+                crate::scene_setup::BLACK_IMAGE_WARNING
+            )
+        };
+        eprintln!("warning: {warning}");
+        run_warnings.push(warning);
+    }
     let wall_ms = wall.elapsed().as_secs_f64() * 1e3;
     let report = crate::stats::build_report(
         backend_name,

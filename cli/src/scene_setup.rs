@@ -50,6 +50,13 @@ pub const NO_LIGHT_WARNING: &str =
     "the scene has no light and no sky: the image will be black (add \
                                     --sky R,G,B or --point-light X,Y,Z,R,G,B)";
 
+/// Given when a rendered image is black although the scene has lights: none of their light reached the
+/// camera (e.g. the bundled Lost Empire named by its path: the camera then frames the whole map from
+/// outside, without the bundled sky, and the lava is inside).
+pub const BLACK_IMAGE_WARNING: &str = "the image is black: no light reached the camera (a scene \
+     named by its file gets no bundled sky, and its own lights may be hidden from this view): add \
+     --sky R,G,B, --env-map FILE or --point-light X,Y,Z,R,G,B, or raise --exposure";
+
 /// Loads `path` (or the default scene; OBJ materials from `mtl_override` if given, purely diffuse ones
 /// as `mtl_diffuse` says), adds `environment` and the `extra_lights` (point lights from the command line)
 /// and packs it, with the CPU's 8-wide tree if `wide_bvh` (see

@@ -611,6 +611,40 @@ fn cli_mtl_diffuse_switches_the_diffuse_lobe() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// A scene with a light that reaches nothing the camera sees (a one-sided quad facing the camera, the
+/// point light behind it) renders black: the warning says so, in stderr and in --stats.
+#[test]
+fn a_black_image_from_a_lit_scene_is_named() {
+    let Some(bin) = fovea_binary() else { return };
+    let dir = temp_dir("black");
+    let png = dir.join("out.png");
+    let stats = dir.join("stats.json");
+    let scene = fixture("no_light.obj");
+    let mut args = vec![scene.to_str().unwrap()];
+    args.extend(SMALL);
+    args.extend(["--point-light", "0,0,-2,4,4,4"]);
+    args.extend([
+        "--stats",
+        stats.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let out = run(&bin, &args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("no light and no sky"), "{stderr}");
+    assert!(
+        stderr.contains("warning: the image is black: no light reached the camera"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("--sky R,G,B"), "{stderr}");
+    let image = image::open(&png).unwrap().to_rgb8();
+    assert!(image.pixels().all(|p| p.0 == [0, 0, 0]), "not black");
+    let json = std::fs::read_to_string(&stats).unwrap();
+    assert!(json.contains("the image is black"), "{json}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn cli_warns_and_renders_when_it_can() {
     let Some(bin) = fovea_binary() else { return };
@@ -646,6 +680,7 @@ fn cli_warns_and_renders_when_it_can() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(!stderr.contains("no light"), "{stderr}");
+    assert!(!stderr.contains("image is black"), "{stderr}");
     let json = std::fs::read_to_string(&stats).unwrap();
     assert!(json.contains("\"lights\": 1"), "{json}");
     assert!(json.contains("punctual_lights"), "{json}");
