@@ -113,7 +113,8 @@ pub const CHUNK_TIMEOUT: Duration = Duration::from_secs(60);
 pub const WARMUP_TIMEOUT: Duration = Duration::from_secs(300);
 
 /// A Vulkan device ready to run the fovea kernel: one compute queue, one pipeline per entry point (all from
-/// the one SPIR-V module, created once), and the buffers of the last frame size, reused across frames.
+/// the one SPIR-V module, each created when a frame first needs it), and the buffers of the last frame
+/// size, reused across frames.
 pub struct VulkanContext {
     pub(crate) shared: Arc<Shared>,
     pub(crate) info: DeviceInfo,
@@ -124,10 +125,12 @@ pub struct VulkanContext {
     pub(crate) fence: vk::Fence,
     pub(crate) set_layout: vk::DescriptorSetLayout,
     pub(crate) pipeline_layout: vk::PipelineLayout,
+    /// One per entry point, null until a frame first needs it ([`Self::ensure_pipelines`]): a render
+    /// without history or denoiser never creates those passes' pipelines.
     pub(crate) pipelines: [vk::Pipeline; ENTRY_POINTS.len()],
     /// The kernel module, kept for re-specialising `render_samples` per scene.
     pub(crate) module: vk::ShaderModule,
-    /// The feature mask `pipelines[RENDER_SAMPLES]` was specialised for.
+    /// The feature mask `pipelines[RENDER_SAMPLES]` was (or, while it is null, will be) specialised for.
     pub(crate) render_features: u32,
     /// The pipelines of the `probe` and `probe_scene` entry points, created on first use by
     /// [`VulkanContext::run_probe`] and [`VulkanContext::run_scene_probe`].
@@ -151,7 +154,7 @@ pub struct VulkanContext {
     /// Bound on the samples of one `render_samples` dispatch (and one submission):
     /// [`DEFAULT_MAX_CHUNK_SAMPLES`], or [`SOFTWARE_MAX_CHUNK_SAMPLES`] on a software driver.
     pub max_chunk_samples: u32,
-    /// Host time of `vkCreateComputePipelines` for the five frame entry points (lavapipe translates the
+    /// Host time of every `vkCreateComputePipelines` of this context so far (lavapipe translates the
     /// module to NIR here; LLVM code generation waits for the first dispatch, see [`Self::warmed_up`]).
     pub pipeline_create_ms: f64,
     /// Whether every frame pipeline has been dispatched once (the first frame does it before its own
@@ -539,45 +542,65 @@ impl VulkanContext {
         Ok(())
     }
 
-    /// The kernel's module and its pipelines, `render_samples` specialised for every feature.
+    /// The kernel's module. Its pipelines are created when a frame first needs them
+    /// ([`Self::ensure_pipelines`]).
     fn create_kernel_pipelines(&mut self, code: &[u32]) -> Result<()> {
         let device = &self.shared.device;
-        // SAFETY: (whole function) every create call gets a valid create info whose pointers live until
-        // the call returns; the handles are stored in `self` at once, so Drop destroys them.
-        unsafe {
-            self.module = device
+        // SAFETY: a valid create info whose code lives until the call returns; the handle is stored in
+        // `self` at once, so Drop destroys it.
+        self.module = unsafe {
+            device
                 .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None)
-                .during("vkCreateShaderModule")?;
-            let names: Vec<std::ffi::CString> = ENTRY_POINTS
-                .iter()
-                .map(|n| std::ffi::CString::new(*n).expect("entry point names have no NUL"))
-                .collect();
-            // `render_samples` starts specialised for every feature (its constant's default).
-            let spec_data = FEATURES_ALL.to_ne_bytes();
-            let spec_entries = features_map_entry();
-            let spec = vk::SpecializationInfo::default()
-                .map_entries(&spec_entries)
-                .data(&spec_data);
-            let infos: Vec<vk::ComputePipelineCreateInfo> = names
-                .iter()
-                .enumerate()
-                .map(|(i, name)| {
-                    let mut stage = vk::PipelineShaderStageCreateInfo::default()
-                        .stage(vk::ShaderStageFlags::COMPUTE)
-                        .module(self.module)
-                        .name(name);
-                    if i == pipeline::RENDER_SAMPLES {
-                        stage = stage.specialization_info(&spec);
-                    }
-                    vk::ComputePipelineCreateInfo::default()
-                        .stage(stage)
-                        .layout(self.pipeline_layout)
-                })
-                .collect();
-            let start = std::time::Instant::now();
-            let created = create_compute_pipelines(device, &infos)?;
-            self.pipeline_create_ms = start.elapsed().as_secs_f64() * 1e3;
-            self.pipelines.copy_from_slice(&created);
+                .during("vkCreateShaderModule")?
+        };
+        Ok(())
+    }
+
+    /// Creates those of the pipelines `which` (indices into [`Self::pipelines`]) that do not exist yet,
+    /// in one call; `render_samples` specialised for [`Self::render_features`]. Creating only what a
+    /// frame uses matters where creation is slow: the validation layer spent about 40 s on all 13
+    /// pipelines of the kernel on lavapipe, and a render without history or denoiser uses 6.
+    pub(crate) fn ensure_pipelines(&mut self, which: &[usize]) -> Result<()> {
+        self.check_kernel()?;
+        if which.contains(&pipeline::RENDER_SAMPLES)
+            && self.pipelines[pipeline::RENDER_SAMPLES] == vk::Pipeline::null()
+        {
+            self.specialize_render_pipeline(self.render_features)?;
+        }
+        let missing: Vec<usize> = which
+            .iter()
+            .copied()
+            .filter(|&p| self.pipelines[p] == vk::Pipeline::null())
+            .collect();
+        if missing.is_empty() {
+            return Ok(());
+        }
+        let names: Vec<std::ffi::CString> = missing
+            .iter()
+            .map(|&p| {
+                std::ffi::CString::new(ENTRY_POINTS[p]).expect("entry point names have no NUL")
+            })
+            .collect();
+        let infos: Vec<vk::ComputePipelineCreateInfo> = names
+            .iter()
+            .map(|name| {
+                vk::ComputePipelineCreateInfo::default()
+                    .stage(
+                        vk::PipelineShaderStageCreateInfo::default()
+                            .stage(vk::ShaderStageFlags::COMPUTE)
+                            .module(self.module)
+                            .name(name),
+                    )
+                    .layout(self.pipeline_layout)
+            })
+            .collect();
+        let start = std::time::Instant::now();
+        // SAFETY: every create info and what it points to live until the call returns; the handles
+        // are stored in `self` at once, so Drop destroys them.
+        let created = unsafe { create_compute_pipelines(&self.shared.device, &infos)? };
+        self.pipeline_create_ms += start.elapsed().as_secs_f64() * 1e3;
+        for (&p, pipeline) in missing.iter().zip(created) {
+            self.pipelines[p] = pipeline;
         }
         Ok(())
     }
@@ -859,12 +882,13 @@ fn features_map_entry() -> [vk::SpecializationMapEntry; 1] {
 impl VulkanContext {
     /// Makes `render_samples` the pipeline specialised for the feature mask `features` (its
     /// specialization constant [`SPEC_CONSTANT_FEATURES`]), so that the driver compiles out the code of
-    /// features the scene lacks. Re-created only when the mask changes; nothing is in flight between
-    /// frames. The next frame warms the new pipeline up again, and [`Self::pipeline_create_ms`] then
-    /// holds this creation's time.
+    /// features the scene lacks. Created on first use, re-created only when the mask changes; nothing is
+    /// in flight between frames. The next frame warms the new pipeline up again.
     pub(crate) fn specialize_render_pipeline(&mut self, features: u32) -> Result<()> {
         self.check_kernel()?;
-        if features == self.render_features {
+        if features == self.render_features
+            && self.pipelines[pipeline::RENDER_SAMPLES] != vk::Pipeline::null()
+        {
             return Ok(());
         }
         let device = &self.shared.device;
@@ -893,7 +917,7 @@ impl VulkanContext {
             device.destroy_pipeline(self.pipelines[pipeline::RENDER_SAMPLES], None);
             self.pipelines[pipeline::RENDER_SAMPLES] = created[0];
         }
-        self.pipeline_create_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.pipeline_create_ms += start.elapsed().as_secs_f64() * 1e3;
         self.render_features = features;
         self.warmed_up = false;
         Ok(())

@@ -684,11 +684,13 @@ impl VulkanContext {
         unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
     }
 
-    /// Dispatches one workgroup of each of `which` (indices into the frame pipelines) with zero items
-    /// (each returns at once), so that lazy shader compilation happens here; one submission each, so
+    /// Creates the pipelines `which` (indices into the frame pipelines) if they do not exist yet, then
+    /// dispatches one workgroup of each with zero items (each returns at once), so that a driver's lazy
+    /// shader compilation happens here; one submission each, so
     /// that each compilation has the whole timeout (lavapipe compiles the general ray-query kernels for
     /// tens of seconds each). The descriptors must already point at live buffers.
     fn warm_up(&mut self, which: &[usize]) -> Result<()> {
+        self.ensure_pipelines(which)?;
         let layout = self.pipeline_layout;
         let set = self.descriptor_set;
         let pc = KernelPushConstants {
