@@ -1497,7 +1497,14 @@ impl Loader<'_> {
             specular: 0.5,
             ..Material::default()
         };
-        let strength = m.emissive_strength().unwrap_or(1.0);
+        let mut strength = m.emissive_strength().unwrap_or(1.0);
+        if strength < 0.0 {
+            // The extension's range is [0, ∞); clamped as the material check clamps (`mesh`).
+            self.warn(format!(
+                "{label}: KHR_materials_emissive_strength.emissiveStrength {strength} is negative (used 0)"
+            ));
+            strength = 0.0;
+        }
         let e = Vec3::from(m.emissive_factor()) * strength;
         out.emission = [e.x, e.y, e.z, 0.0];
         match m.alpha_mode() {
@@ -2364,6 +2371,33 @@ mod tests {
         assert!(!may_exceed_f32(br#"{"a":[1.5e3,-2.25,100000]}"#));
         assert!(may_exceed_f32(br#"{"a":1e-50}"#) && may_exceed_f32(br#"{"a":3.5E+38}"#));
         assert!(!may_exceed_f32(br#"{"uri":"data:;base64,AAe45x\"e99"}"#));
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// A negative `emissiveStrength` is named and clamped to 0, not multiplied into a negative emission.
+    #[test]
+    fn a_negative_emissive_strength_is_named_and_clamped() {
+        let dir = temp_dir("strength");
+        let file = dir.join("s.gltf");
+        let text = triangle_gltf(TRI, None, "").replace(
+            r#""emissiveFactor":[1,1,1]"#,
+            r#""emissiveFactor":[1,1,1],"extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":-2.5}}"#,
+        );
+        std::fs::write(&file, text).unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        let named: Vec<&String> = s
+            .warnings
+            .iter()
+            .filter(|w| w.contains("emissiveStrength -2.5 is negative (used 0)"))
+            .collect();
+        assert_eq!(named.len(), 1, "{:?}", s.warnings);
+        assert_eq!(s.materials[0].emission[..3], [0.0; 3]);
+        // No second warning from the material check for the product.
+        assert!(
+            s.warnings.iter().all(|w| !w.contains("emission -")),
+            "{:?}",
+            s.warnings
+        );
         std::fs::remove_dir_all(dir).ok();
     }
 

@@ -155,7 +155,7 @@ pub struct LoadedScene {
     /// normal-mapped and anisotropic triangles that lack one ([`crate::tangents`]).
     pub tangents: Vec<[f32; 4]>,
     /// Per vertex or empty: linear RGBA in `[0, 1]` that multiplies the base colour and its alpha
-    /// (glTF `COLOR_0`; an RGB colour has alpha 1, a vertex without one is white).
+    /// (glTF `COLOR_0`, OBJ `v x y z r g b`; an RGB colour has alpha 1, a vertex without one is white).
     pub colors: Vec<[f32; 4]>,
     /// Vertex indices, counter-clockwise = front.
     pub triangles: Vec<[u32; 3]>,

@@ -6,7 +6,8 @@
 //! (0, 0) is the top-left of the image). A face index that names no element (0, a relative index before
 //! the first element, or one past the file's last) is an error naming its line, found in a pass of our
 //! own before tobj parses the file (tobj 4.0.5 overflows on such indices; the pass adds about 20 ms to
-//! Conference's 27 MB, 110 -> 132 ms of loading).
+//! Conference's 27 MB, 110 -> 132 ms of loading). Vertex colours written as `v x y z r g b` (a common
+//! extension) multiply the base colour, like glTF's `COLOR_0`.
 //!
 //! Materials come from the MTL file(s) the OBJ names with `mtllib`, or only from
 //! [`LoadOptions::mtl_override`] when that is set (e.g. Lost Empire's torch-emissive variant). Mapping
@@ -207,41 +208,54 @@ pub fn load_obj_from(
             message: format!("{problem} at line {line}: {content:?}"),
         });
     }
-    let mut obj_reader = Cursor::new(text.as_bytes());
-    let result = match &options.mtl_override {
-        Some(mtl) => {
-            // An explicitly requested MTL must exist (one that `mtllib` names is only a warning).
-            if let Err(e) = source.read(mtl) {
-                return Err(SceneError::from_io(mtl, e));
-            }
-            // Load the override exactly once, as if the OBJ began with `mtllib <override>`, and ignore the
-            // OBJ's own `mtllib` lines.
-            let mut reader = Cursor::new(&b"mtllib fovea-mtl-override\n"[..]).chain(obj_reader);
-            tobj::load_obj_buf(&mut reader, &load_options, |_| {
-                let first = {
-                    let mut l = log.borrow_mut();
-                    l.calls += 1;
-                    l.calls == 1
-                };
-                if first {
-                    read_mtl(source, mtl, &log)
-                } else {
-                    Ok((Vec::new(), Default::default()))
-                }
-            })
+    // An explicitly requested MTL must exist (one that `mtllib` names is only a warning).
+    if let Some(mtl) = &options.mtl_override {
+        if let Err(e) = source.read(mtl) {
+            return Err(SceneError::from_io(mtl, e));
         }
-        None => tobj::load_obj_buf(&mut obj_reader, &load_options, |name| {
-            let name = name.to_string_lossy().replace('\\', "/");
-            if name.trim().is_empty() || name.ends_with('/') {
-                log.borrow_mut().warnings.push(format!(
-                    "{}: `mtllib` without a file name ({name:?}); ignored",
-                    path.display()
-                ));
-                return Err(tobj::LoadError::OpenFileFailed);
+    }
+    let parse = |text: &str| {
+        let mut obj_reader = Cursor::new(text.as_bytes());
+        match &options.mtl_override {
+            Some(mtl) => {
+                // Load the override exactly once, as if the OBJ began with `mtllib <override>`, and ignore the
+                // OBJ's own `mtllib` lines.
+                let mut reader = Cursor::new(&b"mtllib fovea-mtl-override\n"[..]).chain(obj_reader);
+                tobj::load_obj_buf(&mut reader, &load_options, |_| {
+                    let first = {
+                        let mut l = log.borrow_mut();
+                        l.calls += 1;
+                        l.calls == 1
+                    };
+                    if first {
+                        read_mtl(source, mtl, &log)
+                    } else {
+                        Ok((Vec::new(), Default::default()))
+                    }
+                })
             }
-            read_mtl(source, &dir.join(name), &log)
-        }),
+            None => tobj::load_obj_buf(&mut obj_reader, &load_options, |name| {
+                let name = name.to_string_lossy().replace('\\', "/");
+                if name.trim().is_empty() || name.ends_with('/') {
+                    log.borrow_mut().warnings.push(format!(
+                        "{}: `mtllib` without a file name ({name:?}); ignored",
+                        path.display()
+                    ));
+                    return Err(tobj::LoadError::OpenFileFailed);
+                }
+                read_mtl(source, &dir.join(name), &log)
+            }),
+        }
     };
+    let mut result = parse(&text);
+    // tobj refuses a file whose `v` lines carry colours on only some vertices; such a file is read
+    // again without them, with a warning, rather than refused.
+    let mut colours_dropped = false;
+    if matches!(result, Err(tobj::LoadError::FaceColorOutOfBounds)) {
+        *log.borrow_mut() = MtlLog::default();
+        result = parse(&without_vertex_colours(&text));
+        colours_dropped = true;
+    }
     let log = log.into_inner();
     let (models, materials) = result.map_err(|e| {
         // tobj does not say where; find the first line that fails the same way.
@@ -268,6 +282,12 @@ pub fn load_obj_from(
         warnings: log.warnings,
         ..LoadedScene::default()
     };
+    if colours_dropped {
+        scene.warnings.push(format!(
+            "{}: only some `v` lines have a vertex colour (`v x y z r g b`); all vertex colours ignored",
+            path.display()
+        ));
+    }
     // tobj reports a failed library only when no material at all was loaded; the log has it already.
     let materials = materials.unwrap_or_default();
 
@@ -288,6 +308,9 @@ pub fn load_obj_from(
     options.check_size(path, total_vertices as u64, total_triangles as u64)?;
     let any_normals = models.iter().any(|m| !m.mesh.normals.is_empty());
     let any_uvs = models.iter().any(|m| !m.mesh.texcoords.is_empty());
+    // Vertex colours: the common extension `v x y z r g b` (MeshLab, ZBrush and others write it), read
+    // as linear 0..1 RGB with alpha 1, as Mitsuba reads it.
+    let any_colors = models.iter().any(|m| !m.mesh.vertex_color.is_empty());
     // Positions in f64 until the scene's origin is known (`crate::rebase`).
     let mut world_positions: Vec<[f64; 3]> = Vec::with_capacity(total_vertices);
     scene.triangles.reserve_exact(total_triangles);
@@ -298,8 +321,12 @@ pub fn load_obj_from(
     if any_uvs {
         scene.uvs.reserve_exact(total_vertices);
     }
+    if any_colors {
+        scene.colors.reserve_exact(total_vertices);
+    }
     let mut mismatched_normals = 0usize;
     let mut mismatched_uvs = 0usize;
+    let mut mismatched_colors = 0usize;
     for model in &models {
         let mesh = &model.mesh;
         let base = world_positions.len() as u32;
@@ -331,6 +358,21 @@ pub fn load_obj_from(
                     mismatched_uvs += 1;
                 }
                 scene.uvs.resize(world_positions.len(), [0.0; 2]);
+            }
+        }
+        if any_colors {
+            if mesh.vertex_color.len() == 3 * n {
+                scene.colors.extend(
+                    mesh.vertex_color
+                        .chunks_exact(3)
+                        .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0]),
+                );
+            } else {
+                if !mesh.vertex_color.is_empty() {
+                    mismatched_colors += 1;
+                }
+                // An object without colours is white (no change to its base colour).
+                scene.colors.resize(world_positions.len(), [1.0; 4]);
             }
         }
         let material = match mesh.material_id {
@@ -367,6 +409,34 @@ pub fn load_obj_from(
             path.display()
         ));
     }
+    if mismatched_colors > 0 {
+        scene.warnings.push(format!(
+            "{}: {mismatched_colors} objects have vertex colours on only some vertices; their colours are ignored",
+            path.display()
+        ));
+    }
+    if any_colors {
+        let first_outside = scene
+            .colors
+            .iter()
+            .find(|c| !c.iter().all(|v| (0.0..=1.0).contains(v)))
+            .copied();
+        let outside = crate::mesh::clamp_colors(&mut scene.colors);
+        if let Some(c) = first_outside {
+            let hint = if c[..3].iter().all(|v| (0.0..=255.0).contains(v)) {
+                " (fovea reads 0 to 1; this file may use 0 to 255)"
+            } else {
+                ""
+            };
+            scene.warnings.push(format!(
+                "{}: {outside} vertex colours outside 0 to 1, clamped (the first: {} {} {}){hint}",
+                path.display(),
+                c[0],
+                c[1],
+                c[2]
+            ));
+        }
+    }
     if default_triangles > 0 {
         scene.warnings.push(format!(
             "{}: {default_triangles} triangles have no material or an unknown one; default grey used",
@@ -387,6 +457,27 @@ pub fn load_obj_from(
     drop(world_positions);
     scene.validate(path)?;
     Ok(scene)
+}
+
+/// `text` with every `v` line cut to its position (`v x y z r g b` becomes `v x y z`); a `v` line with
+/// fewer than six numbers (a position, or a position and `w`) is kept as it is.
+fn without_vertex_colours(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        if words.next() == Some("v") {
+            let numbers: Vec<&str> = words.collect();
+            if numbers.len() >= 6 {
+                out.push_str("v ");
+                out.push_str(&numbers[..3].join(" "));
+                out.push('\n');
+                continue;
+            }
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    out
 }
 
 /// The first face of an OBJ (its 1-based line, text, and what is wrong) whose vertex, texture coordinate or
@@ -978,6 +1069,59 @@ mod tests {
             std::env::temp_dir().join(format!("fovea_obj_test_{}_{name}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         dir
+    }
+
+    /// `v x y z r g b` colours are read per vertex (alpha 1); values outside 0 to 1 are clamped with one
+    /// warning that suspects 0-255 files; a file with colours on only some vertices is read without
+    /// them; and a scene without any colour keeps none.
+    #[test]
+    fn vertex_colours_are_read_from_the_v_lines() {
+        let dir = temp_dir("vertex_colors");
+        let file = dir.join("c.obj");
+        std::fs::write(
+            &file,
+            "o a\nv 0 0 0 1 0 0\nv 1 0 0 0 0.5 0\nv 0 1 0 0 0 255\nf 1 2 3\n\
+             o b\nv 0 0 1 1 1 1\nv 1 0 1 1 1 1\nv 0 1 1 0.25 0.25 0.25\nf 4 5 6\n",
+        )
+        .unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        assert_eq!(s.colors.len(), s.positions.len());
+        let colour_at = |p: [f32; 3]| {
+            let v = s.positions.iter().position(|&q| q == p).unwrap();
+            s.colors[v]
+        };
+        assert_eq!(colour_at([0.0, 0.0, 0.0]), [1.0, 0.0, 0.0, 1.0]);
+        assert_eq!(colour_at([1.0, 0.0, 0.0]), [0.0, 0.5, 0.0, 1.0]);
+        assert_eq!(colour_at([0.0, 1.0, 0.0]), [0.0, 0.0, 1.0, 1.0]);
+        assert_eq!(colour_at([1.0, 0.0, 1.0]), [1.0; 4]);
+        assert_eq!(colour_at([0.0, 1.0, 1.0]), [0.25, 0.25, 0.25, 1.0]);
+        let clamped: Vec<&String> = s
+            .warnings
+            .iter()
+            .filter(|w| w.contains("1 vertex colours outside 0 to 1, clamped (the first: 0 0 255)"))
+            .collect();
+        assert_eq!(clamped.len(), 1, "{:?}", s.warnings);
+        assert!(clamped[0].contains("may use 0 to 255"), "{clamped:?}");
+        // Colours on only some vertices (which tobj refuses): read without colours, with a warning.
+        std::fs::write(
+            &file,
+            "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0\nf 1 2 3\nv 0 0 1 0.5 0.5 0.5\nf 1 2 4\n",
+        )
+        .unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        assert!(s.colors.is_empty());
+        assert_eq!(s.triangles.len(), 2);
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.contains("only some `v` lines have a vertex colour")),
+            "{:?}",
+            s.warnings
+        );
+        std::fs::write(&file, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        let s = load_scene(&file, &LoadOptions::default()).unwrap();
+        assert!(s.colors.is_empty());
+        std::fs::remove_dir_all(dir).ok();
     }
 
     fn material<'a>(s: &'a LoadedScene, name: &str) -> &'a Material {
