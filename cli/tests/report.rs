@@ -557,3 +557,66 @@ fn scenes_split_over_tasks_are_combined() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A scene that fails after the up-front checks (here: its reference is neither cached nor in the
+/// --reference-parts folder it is to be merged from) is named, and the other scene's results are still
+/// written, in its folder and in the combined report; the run then fails, saying where they are.
+#[test]
+fn a_scene_that_fails_later_is_named_and_the_others_are_written() {
+    let dir = temp_dir("later-failure");
+    let assets = cornell().parent().unwrap().to_owned();
+    std::fs::copy(
+        assets.join("CornellBox-Original.mtl"),
+        dir.join("CornellBox-Original.mtl"),
+    )
+    .unwrap();
+    // Another scene: the Cornell box and one more small triangle, so its reference differs.
+    let mut text = std::fs::read_to_string(cornell()).unwrap();
+    text.push_str("\nv 0.1 0.1 0.1\nv 0.2 0.1 0.1\nv 0.1 0.2 0.1\nf -3 -2 -1\n");
+    let other = dir.join("other.obj");
+    std::fs::write(&other, text).unwrap();
+    let cache = dir.join("cache");
+    let no_parts = dir.join("parts");
+    std::fs::create_dir_all(&no_parts).unwrap();
+    let run = |scenes: &[&Path], extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_fovea"))
+            .arg("report")
+            .args(scenes)
+            .args(["--eye", "0,1,3.9", "--target", "0,1,0", "--fov", "38"])
+            .args(["--quick", "--resolution", "96x54", "--reference-spp", "16"])
+            .args(["--backend", "cpu", "--cache-dir"])
+            .arg(&cache)
+            .arg("--out")
+            .arg(dir.join("out"))
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    // The Cornell box's reference is cached by a run of its own.
+    let output = run(&[cornell().as_path()], &[]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    std::fs::remove_dir_all(dir.join("out")).unwrap();
+    // Both scenes, references merged from an empty folder where not cached: the second fails.
+    let output = run(
+        &[cornell().as_path(), other.as_path()],
+        &["--reference-parts", no_parts.to_str().unwrap()],
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("1 of 2 scenes failed") && stderr.contains("other.obj"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("holds no part of"), "{stderr}");
+    let out = dir.join("out");
+    assert!(out.join("CornellBox-Original/report.md").is_file());
+    assert!(!out.join("other/report.md").exists());
+    let combined = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(combined.contains("## CornellBox-Original"), "{combined}");
+    assert!(combined.contains("other.obj: failed"), "{combined}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
