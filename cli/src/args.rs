@@ -23,6 +23,10 @@ pub enum Command {
     /// Merge the parts of a render split by samples (`render --samples A..B -o PART.fvpart`) into its
     /// image, after checking that they belong to one render and tile its samples.
     Merge(MergeArgs),
+    /// How far one linear HDR image (.exr) is from another: the share of pixels that agree within
+    /// 1e-3, the largest difference, relMSE and mean FLIP (a render against a reference, the CPU's
+    /// frame against a GPU's, fovea against another renderer).
+    Compare(CompareArgs),
     /// Error against run time: foveated and uniform configurations measured against a converged
     /// reference (FLIP and relMSE per region, render time, speed-up), written as Markdown, JSON, CSV,
     /// images and an SVG plot.
@@ -737,6 +741,28 @@ pub struct MergeArgs {
     /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// `fovea compare`: one image against another (see `crate::compare`).
+#[derive(Args, Debug, Clone)]
+pub struct CompareArgs {
+    /// The image to judge (.exr, linear HDR).
+    #[arg(value_name = "TEST")]
+    pub test: PathBuf,
+    /// The image it is judged against (.exr, linear HDR).
+    #[arg(value_name = "REFERENCE")]
+    pub reference: PathBuf,
+    /// Exposure compensation in EV of the tone mapping that FLIP sees (both images).
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "EV",
+        allow_hyphen_values = true
+    )]
+    pub exposure: f32,
+    /// Also write the figures as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
 }
 
 /// `fovea bench`: build, traversal and scale benchmarks (see `crate::bench`).

@@ -3,6 +3,7 @@ mod args;
 mod backend;
 mod bench;
 mod camera_path;
+mod compare;
 mod content_hash;
 mod error;
 // Without the Vulkan backend (`--no-default-features`: the CPU-only build of scripts/render-default.sh
@@ -30,6 +31,7 @@ fn main() -> std::process::ExitCode {
     let result = match &cli.command {
         args::Command::Render(r) => render::run(r),
         args::Command::Merge(m) => merge::run(m),
+        args::Command::Compare(c) => compare::run(c),
         args::Command::Report(r) => report::run(r),
         args::Command::Bench(b) => bench::run(b),
         args::Command::View(v) => view::run(v),

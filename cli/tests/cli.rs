@@ -528,3 +528,77 @@ fn ignored_option_combinations_are_refused_or_warned() {
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--display-cm"));
 }
+
+/// `fovea compare`: an image against itself agrees everywhere; two seeds' renders do not; the JSON
+/// holds the printed figures; images of two sizes, a PNG and a missing file are clear errors.
+#[test]
+fn compare_judges_one_exr_against_another() {
+    let dir = temp_dir("compare");
+    let render = |seed: &str, size: &str, name: &str| {
+        let path = dir.join(name);
+        let out = fovea()
+            .arg("render")
+            .arg(cornell())
+            .args(CAMERA)
+            .args(["--resolution", size, "--spp", "4,2,1", "--backend", "cpu"])
+            .args(["--seed", seed, "-q", "-o"])
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        path
+    };
+    let a = render("0", "64x48", "a.exr");
+    let b = render("1", "64x48", "b.exr");
+    let small = render("0", "32x24", "small.exr");
+    let compare = |test: &Path, reference: &Path, extra: &[&str]| {
+        fovea()
+            .arg("compare")
+            .arg(test)
+            .arg(reference)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let same = compare(&a, &a, &[]);
+    let stdout = String::from_utf8_lossy(&same.stdout);
+    assert!(
+        same.status.success(),
+        "{}",
+        String::from_utf8_lossy(&same.stderr)
+    );
+    assert!(
+        stdout.contains("100.0000 % of pixels within 1e-3, max abs 0.000e0"),
+        "{stdout}"
+    );
+    let json = dir.join("cmp.json");
+    let other = compare(&b, &a, &["--json", json.to_str().unwrap()]);
+    assert!(
+        other.status.success(),
+        "{}",
+        String::from_utf8_lossy(&other.stderr)
+    );
+    let figures: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let within = figures["within_1e-3"].as_f64().unwrap();
+    assert!(within < 0.99, "two seeds agree on {within}");
+    assert!(figures["mean_flip"].as_f64().unwrap() > 0.0);
+    for (test, reference, needle) in [
+        (small.clone(), a.clone(), "compare needs images of one size"),
+        (
+            dir.join("c.png"),
+            a.clone(),
+            "compare reads linear HDR .exr images",
+        ),
+        (dir.join("missing.exr"), a.clone(), "missing.exr"),
+    ] {
+        let out = compare(&test, &reference, &[]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && stderr.contains(needle), "{stderr}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -5,9 +5,9 @@
 //! reference (mean FLIP and relMSE over the whole image and each foveation region).
 mod configs;
 mod fvvdp;
-mod metrics;
+pub(crate) mod metrics;
 mod plot;
-mod reference_cache;
+pub(crate) mod reference_cache;
 mod saccades;
 mod sequence;
 mod tasks;
