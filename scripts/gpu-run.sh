@@ -9,7 +9,7 @@
 #   most if the time runs out) the frame's passes with temporal reuse and the denoiser (`--history
 #   --denoise`, foveated, at each of PASS_SIZES, default 1920x1080 and 3840x2160): each pass's median GPU
 #   milliseconds (the issues' budgets at 1080p: the temporal pass at most 2 ms, the denoiser at most
-#   10 ms).
+#   10 ms). Then the GPU's frame against the CPU's (`fovea compare`, AGREE_SIZE, default 640x360).
 #   Each run's --stats JSON and stderr go to RAW (default $OUT/raw); after every run they are packed into
 #   $OUT/gpu-raw.tgz, so a run cut short by its time limit still brings back what it finished (the device
 #   tool returns at most 8 files: there, set RAW outside $OUT).
@@ -58,6 +58,17 @@ echo "== warm-up (untimed)"
 timeout 150 "$BIN" render "${scene[@]}" --backend vulkan --resolution 1920x1080 --history --denoise \
   --gaze-trace "$warm" -o "$work/w.png" -q 2>"$RAW/warm-up.log" || echo "   failed: $(tail -2 "$RAW/warm-up.log")"
 rm -f "$work"/w_*.png
+# The GPU's frame against the CPU's, the same view and samples (the CPU renders there too): the share of
+# pixels within 1e-3, the largest difference, relMSE and FLIP (`fovea compare`).
+AGREE_SIZE=${AGREE_SIZE:-640x360}
+if [ "${FOVEA_GPU_QUICK:-0}" = 1 ]; then AGREE_SIZE=160x90; fi
+echo "== the GPU's frame against the CPU's ($AGREE_SIZE, uniform 8 spp)"
+for b in vulkan cpu; do
+  timeout 150 "$BIN" render "${scene[@]}" --backend "$b" --resolution "$AGREE_SIZE" --uniform --spp 8,8,8 \
+    -o "$RAW/agree-$b.exr" -q 2>"$RAW/agree-$b.log" || echo "   failed: $(tail -2 "$RAW/agree-$b.log")"
+done
+"$BIN" compare "$RAW/agree-vulkan.exr" "$RAW/agree-cpu.exr" --json "$RAW/agree.json" 2>&1 | tee "$RAW/agree.txt"
+pack
 PASS_SIZES=${PASS_SIZES:-"1920x1080 3840x2160"}
 if [ "${FOVEA_GPU_QUICK:-0}" = 1 ]; then PASS_SIZES=320x180; fi
 for size in $PASS_SIZES; do
@@ -96,7 +107,7 @@ import json, os, statistics, sys
 raw, out = sys.argv[1], sys.argv[2]
 rows, runs = [], {}
 for f in sorted(os.listdir(raw)):
-    if not f.endswith(".json") or f.startswith("passes"):
+    if not f.endswith(".json") or f.startswith(("passes", "agree")):
         continue
     size, mode, traversal = f[:-5].split("-")
     d = json.load(open(os.path.join(raw, f)))
@@ -142,6 +153,9 @@ for pf in sorted(f for f in os.listdir(raw) if f.startswith("passes") and f.ends
     lines += ["", f"Passes with history and the denoiser, {pf[7:-5]}, foveated 32/16/8, {len(frames)} warm frames, median GPU ms:", "",
               "| " + " | ".join(names) + " |", "|" + "---|" * len(names)]
     lines.append("| " + " | ".join(f"{statistics.median(f['pass_ms'][n] for f in frames if n in f.get('pass_ms', {})):.3f}" for n in names) + " |")
+agree = os.path.join(raw, "agree.txt")
+if os.path.exists(agree):
+    lines += ["", "The GPU's frame against the CPU's: " + open(agree).read().strip()]
 open(os.path.join(out, "gpu-results.md"), "w").write("\n".join(lines) + "\n")
 json.dump(rows, open(os.path.join(out, "gpu-results.json"), "w"), indent=1)
 print("\n".join(lines))
