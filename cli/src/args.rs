@@ -460,7 +460,8 @@ pub struct ReportArgs {
         long,
         default_value_t = 0.0,
         value_name = "EV",
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = crate::values::exposure_ev
     )]
     pub exposure: f32,
     /// Seed of the test renders (the reference uses a different one, so its noise is independent).
@@ -667,7 +668,8 @@ pub struct ImageArgs {
         long,
         default_value_t = 0.0,
         value_name = "EV",
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = crate::values::exposure_ev
     )]
     pub exposure: f32,
     /// Seed of all random numbers.
@@ -735,7 +737,8 @@ pub struct MergeArgs {
         long,
         default_value_t = 0.0,
         value_name = "EV",
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = crate::values::exposure_ev
     )]
     pub exposure: f32,
     /// No summary line.
@@ -757,7 +760,8 @@ pub struct CompareArgs {
         long,
         default_value_t = 0.0,
         value_name = "EV",
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = crate::values::exposure_ev
     )]
     pub exposure: f32,
     /// Also write the figures as JSON to this file.

@@ -9,12 +9,6 @@ use crate::partial::{check_parts, largest_spp, PartHeader};
 /// Runs `fovea merge`.
 pub fn run(args: &MergeArgs) -> Result<()> {
     let format = check_output_path(&args.output, "--output", true)?;
-    if !args.exposure.is_finite() || args.exposure.abs() > 64.0 {
-        return Err(FoveaError::option(
-            "--exposure",
-            "must be a finite EV between -64 and 64",
-        ));
-    }
     if let Some(p) = args.parts.iter().find(|p| **p == args.output) {
         return Err(FoveaError::option(
             "--output",

@@ -219,12 +219,6 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
     if let Some(p) = &args.stats {
         check_json_path(p, "--stats")?;
     }
-    if !args.image.exposure.is_finite() || args.image.exposure.abs() > 64.0 {
-        return Err(FoveaError::option(
-            "--exposure",
-            "must be a finite EV between -64 and 64",
-        ));
-    }
 
     let lighting = Lighting::from_args(&args.lighting)?;
     if samples.is_some() && args.image.exposure != 0.0 {

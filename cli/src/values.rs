@@ -51,6 +51,16 @@ pub fn whole_number<T: FromStr + TryFrom<u64>>(text: &str) -> Result<T, String> 
     T::try_from(v).map_err(|_| format!("'{text}' is too large"))
 }
 
+/// An exposure compensation in EV (`--exposure`): finite and within ±64 stops (2^64 is beyond what
+/// tone mapping can use in f32).
+pub fn exposure_ev(text: &str) -> Result<f32, String> {
+    let text = text.trim();
+    match text.parse::<f32>() {
+        Ok(v) if v.is_finite() && v.abs() <= 64.0 => Ok(v),
+        _ => Err(format!("'{text}' is not a finite EV between -64 and 64")),
+    }
+}
+
 /// `N` finite floats separated by `sep`.
 fn finite<const N: usize>(text: &str, sep: char) -> Result<[f32; N], String> {
     let v: [f32; N] = split(text, sep)?;
@@ -357,6 +367,19 @@ pub fn eccentricity_radii(eccentricity: Eccentricity, display: &DisplayGeometry)
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn exposure_is_a_finite_ev_within_64_stops() {
+        assert_eq!(exposure_ev(" -2.5 "), Ok(-2.5));
+        assert_eq!(exposure_ev("64"), Ok(64.0));
+        for bad in ["65", "-64.5", "nan", "inf", "1e40", "two"] {
+            let e = exposure_ev(bad).unwrap_err();
+            assert!(
+                e.contains("is not a finite EV between -64 and 64"),
+                "{bad}: {e}"
+            );
+        }
+    }
 
     #[test]
     fn parses_and_rejects() {

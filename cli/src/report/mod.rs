@@ -200,12 +200,6 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
             |r| r.0,
         ),
     });
-    if !args.exposure.is_finite() || args.exposure.abs() > 64.0 {
-        return Err(FoveaError::option(
-            "--exposure",
-            "must be a finite EV between -64 and 64",
-        ));
-    }
     let (eye, target, up) = args.camera.points();
     let mut names = std::collections::HashSet::new();
     for s in &args.scenes {

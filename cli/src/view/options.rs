@@ -229,12 +229,6 @@ impl ViewOptions {
                 GazeInput::Mouse
             }
         };
-        if !args.image.exposure.is_finite() || args.image.exposure.abs() > 64.0 {
-            return Err(FoveaError::option(
-                "--exposure",
-                "must be a finite EV between -64 and 64",
-            ));
-        }
         if !(args.budget_ms.is_finite() && (0.0..=60_000.0).contains(&args.budget_ms)) {
             return Err(FoveaError::option(
                 "--budget-ms",
