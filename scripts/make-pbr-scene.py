@@ -142,7 +142,7 @@ def main():
         {"name": "clearcoat", "pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.05, 0.05, 1], "metallicFactor": 0, "roughnessFactor": 0.6},
          "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1, "clearcoatRoughnessFactor": 0.1}}},
         {"name": "sheen", "pbrMetallicRoughness": {"baseColorFactor": [0.05, 0.05, 0.3, 1], "metallicFactor": 0, "roughnessFactor": 0.9},
-         "extensions": {"KHR_materials_sheen": {"sheenColorFactor": [0.9, 0.9, 0.9], "sheenRoughnessFactor": 0.3}}},
+         "extensions": {"KHR_materials_sheen": {"sheenColorFactor": [0.9, 0.9, 0.9]}}},
         {"name": "anisotropy", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.8, 0.5, 1], "metallicFactor": 1, "roughnessFactor": 0.4},
          "extensions": {"KHR_materials_anisotropy": {"anisotropyStrength": 0.8}}},
         {"name": "unlit", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.5, 0.1, 1]}, "extensions": {"KHR_materials_unlit": {}}},

@@ -11,7 +11,7 @@
 //! | `KHR_materials_ior` (`ior`) | `specular` = F0 / 0.08 with F0 = ((ior − 1) / (ior + 1))² (Burley's dielectric F0 is 0.08 · specular; ior 1.5 gives 0.5, diamond's 2.4 gives 2.1); `ior: 0`, an infinite index, is F0 = 1 (`SPECULAR_MAX`) and transmits nothing; other values below 1 are warned about and read as 1 |
 //! | `KHR_materials_specular` (`specularFactor`, `specularColorFactor`) | F0 above × `specularFactor` × the colour's largest component (Burley's specular is not coloured) |
 //! | `KHR_materials_clearcoat` (`clearcoatFactor`, `clearcoatRoughnessFactor`) | `clearcoat`, `clearcoat_gloss` = 1 − roughness |
-//! | `KHR_materials_sheen` (`sheenColorFactor`) | `sheen` = the colour's largest component, `sheen_tint` 0 (`sheenRoughnessFactor` has no Burley counterpart) |
+//! | `KHR_materials_sheen` (`sheenColorFactor`) | `sheen` = the colour's largest component, `sheen_tint` 0 (`sheenRoughnessFactor` has no Burley counterpart: range-checked, and named when not 0) |
 //! | `KHR_materials_anisotropy` (`anisotropyStrength`) | `anisotropic` (along the shading frame's tangent: `anisotropyRotation` is not read) |
 //! | `KHR_materials_unlit` | the base colour (and texture) becomes the emission, the BRDF black, and `MATERIAL_UNLIT` shows it to camera rays only (not a light, not in reflections) |
 //! | `KHR_materials_emissive_strength` | read by the loader (`emission` × strength) |
@@ -531,7 +531,14 @@ pub fn apply_material_extensions(
         let name = "KHR_materials_sheen";
         let mut notes = Vec::new();
         let colour = checked_array(e, "sheenColorFactor", [0.0; 3], SpecRange::UNIT, &mut notes);
+        let roughness = checked_number(e, "sheenRoughnessFactor", 0.0, SpecRange::UNIT, &mut notes);
         replaced(name, notes, &mut out);
+        if roughness != 0.0 {
+            out.unsupported.push(Unsupported::new(
+                name,
+                "sheenRoughnessFactor is not read (Burley's sheen has no roughness)",
+            ));
+        }
         material.sheen = colour.iter().fold(0.0f32, |m, &c| m.max(c));
         material.sheen_tint = 0.0;
         texture(
@@ -720,8 +727,9 @@ mod tests {
         assert_eq!((m.clearcoat, m.clearcoat_gloss), (0.8, 0.75));
         assert_eq!((m.sheen, m.sheen_tint), (0.6, 0.0));
         assert_eq!(m.anisotropic, 0.7);
-        assert_eq!(notes.len(), 1, "{notes:?}");
-        assert!(notes[0].what.contains("anisotropyRotation"));
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        assert!(notes[0].what.contains("sheenRoughnessFactor is not read"));
+        assert!(notes[1].what.contains("anisotropyRotation"));
         // Out-of-range values are clamped and malformed ones take the default, each with a note.
         let (m, applied) = apply_all(
             r#"{"KHR_materials_clearcoat":{"clearcoatFactor":7},"KHR_materials_sheen":{"sheenColorFactor":"red"}}"#,
@@ -869,7 +877,7 @@ mod tests {
         const IOR: &str = "ior";
         // (extension, field, values per field, range; `IOR` also allows 0), and the extensions it
         // needs beside it.
-        let fields: [(&str, &str, usize, SpecRange, &str); 12] = [
+        let fields: [(&str, &str, usize, SpecRange, &str); 13] = [
             (
                 "KHR_materials_ior",
                 "ior",
@@ -944,6 +952,13 @@ mod tests {
                 "",
             ),
             (
+                "KHR_materials_sheen",
+                "sheenRoughnessFactor",
+                1,
+                SpecRange::UNIT,
+                "",
+            ),
+            (
                 "KHR_materials_anisotropy",
                 "anisotropyStrength",
                 1,
@@ -1010,7 +1025,7 @@ mod tests {
                 check(json, key, value.is_none());
             }
         }
-        assert_eq!(cases, 15 * 6);
+        assert_eq!(cases, 16 * 6);
         assert!(silent.is_empty(), "silent changes: {silent:#?}");
         assert!(
             spurious.is_empty(),
