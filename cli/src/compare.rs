@@ -7,20 +7,14 @@
 //! - the mean FLIP of the two images tone-mapped as `render` writes PNGs.
 use crate::args::CompareArgs;
 use crate::error::{FoveaError, Result};
-use crate::output::tonemapped_rgb8;
+use crate::output::{read_exr, tonemapped_rgb8};
 use crate::report::metrics::{flip_map, rel_mse_map};
-use crate::report::reference_cache::read_exr;
 use fovea_cpu::FrameImage;
-
-/// Per-channel agreement: within this share of the larger magnitude...
-pub const RELATIVE_TOLERANCE: f32 = 1e-3;
-/// ...or within this much (for values near zero).
-pub const ABSOLUTE_TOLERANCE: f32 = 1e-4;
 
 /// What `fovea compare` reports.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Agreement {
-    /// Share of pixels whose every channel agrees ([`RELATIVE_TOLERANCE`], [`ABSOLUTE_TOLERANCE`]).
+    /// Share of pixels whose every channel agrees ([`fovea_frame::pixels_agree`]).
     pub within: f64,
     /// The largest absolute difference of one channel.
     pub max_abs: f32,
@@ -38,21 +32,7 @@ pub fn agreement(test: &FrameImage, reference: &FrameImage, exposure_ev: f32) ->
         (reference.width, reference.height),
         "same size"
     );
-    let mut within = 0usize;
-    let mut max_abs = 0f32;
-    for (t, r) in test.pixels.iter().zip(&reference.pixels) {
-        let mut agrees = true;
-        for c in 0..3 {
-            let d = (t[c] - r[c]).abs();
-            max_abs = max_abs.max(d);
-            let larger = t[c].abs().max(r[c].abs());
-            // NaN differences agree with nothing.
-            if !(d <= ABSOLUTE_TOLERANCE || d <= RELATIVE_TOLERANCE * larger) {
-                agrees = false;
-            }
-        }
-        within += usize::from(agrees);
-    }
+    let (within, max_abs) = fovea_frame::agreement(test, reference);
     let n = test.pixels.len().max(1) as f64;
     let rel_mse = rel_mse_map(test, reference)
         .iter()
@@ -68,7 +48,7 @@ pub fn agreement(test: &FrameImage, reference: &FrameImage, exposure_ev: f32) ->
     );
     let mean_flip = flip.iter().map(|&e| f64::from(e)).sum::<f64>() / n;
     Agreement {
-        within: within as f64 / n,
+        within,
         max_abs,
         rel_mse,
         mean_flip,

@@ -197,3 +197,28 @@ pub fn regions_overlay(
     }
     out
 }
+/// Reads the RGB channels of an EXR file as a linear HDR frame.
+pub fn read_exr(path: &Path) -> Result<FrameImage> {
+    struct Pixels {
+        width: usize,
+        data: Vec<[f32; 4]>,
+    }
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |resolution, _| Pixels {
+            width: resolution.width(),
+            data: vec![[0.0, 0.0, 0.0, 1.0]; resolution.width() * resolution.height()],
+        },
+        |pixels: &mut Pixels, position, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let i = position.y() * pixels.width + position.x();
+            pixels.data[i] = [r, g, b, 1.0];
+        },
+    )
+    .map_err(|e| FoveaError::file(path, e))?;
+    let size = image.layer_data.size;
+    Ok(FrameImage {
+        width: size.width() as u32,
+        height: size.height() as u32,
+        pixels: image.layer_data.channel_data.pixels.data,
+    })
+}

@@ -39,3 +39,40 @@ pub fn rgba8_to_rgb8(pixels: &[u32]) -> Vec<u8> {
         .flat_map(|p| [*p as u8, (*p >> 8) as u8, (*p >> 16) as u8])
         .collect()
 }
+
+/// Two renders of one frame agree on a channel when they differ by at most this share of the larger
+/// magnitude...
+pub const AGREEMENT_RELATIVE: f32 = 1e-3;
+/// ...or by at most this much (values near zero). The cross-backend tests' tolerance, and `fovea
+/// compare`'s.
+pub const AGREEMENT_ABSOLUTE: f32 = 1e-4;
+
+/// Whether two HDR pixels agree on every channel ([`AGREEMENT_RELATIVE`], [`AGREEMENT_ABSOLUTE`]; a NaN
+/// agrees with nothing), and their largest absolute channel difference.
+#[must_use]
+pub fn pixels_agree(a: &[f32; 4], b: &[f32; 4]) -> (bool, f32) {
+    let mut ok = true;
+    let mut max_abs = 0f32;
+    for c in 0..3 {
+        let d = (a[c] - b[c]).abs();
+        max_abs = max_abs.max(d);
+        if !(d <= AGREEMENT_ABSOLUTE || d / a[c].abs().max(b[c].abs()) <= AGREEMENT_RELATIVE) {
+            ok = false;
+        }
+    }
+    (ok, max_abs)
+}
+
+/// The fraction of pixels of two HDR images that agree ([`pixels_agree`]) and the largest absolute
+/// channel difference.
+#[must_use]
+pub fn agreement(a: &FrameImage, b: &FrameImage) -> (f64, f32) {
+    let mut within = 0usize;
+    let mut max_abs = 0f32;
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        let (ok, d) = pixels_agree(p, q);
+        within += usize::from(ok);
+        max_abs = max_abs.max(d);
+    }
+    (within as f64 / a.pixels.len().max(1) as f64, max_abs)
+}

@@ -175,33 +175,7 @@ pub fn scene_camera(
 
 pub use fovea_frame::rgba8_to_rgb8;
 
-/// Whether two HDR pixels agree to the cross-backend tolerance (every channel within 1e-3 relative or
-/// 1e-4 absolute), and their largest absolute channel difference.
-pub fn pixels_agree(a: &[f32; 4], b: &[f32; 4]) -> (bool, f32) {
-    let mut ok = true;
-    let mut max_abs = 0f32;
-    for c in 0..3 {
-        let d = (a[c] - b[c]).abs();
-        max_abs = max_abs.max(d);
-        if !(d <= 1e-4 || d / a[c].abs().max(b[c].abs()) <= 1e-3) {
-            ok = false;
-        }
-    }
-    (ok, max_abs)
-}
-
-/// The fraction of pixels of two HDR images that agree ([`pixels_agree`]) and the largest absolute
-/// channel difference.
-pub fn agreement(a: &FrameImage, b: &FrameImage) -> (f64, f32) {
-    let mut within = 0usize;
-    let mut max_abs = 0f32;
-    for (p, q) in a.pixels.iter().zip(&b.pixels) {
-        let (ok, d) = pixels_agree(p, q);
-        within += usize::from(ok);
-        max_abs = max_abs.max(d);
-    }
-    (within as f64 / a.pixels.len().max(1) as f64, max_abs)
-}
+pub use fovea_frame::{agreement, pixels_agree};
 
 /// relMSE (per channel: squared error over the reference squared plus 0.01) over the pixels `keep`
 /// selects.

@@ -7,7 +7,7 @@ mod configs;
 mod fvvdp;
 pub(crate) mod metrics;
 mod plot;
-pub(crate) mod reference_cache;
+mod reference_cache;
 mod saccades;
 mod sequence;
 mod tasks;

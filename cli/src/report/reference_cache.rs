@@ -16,7 +16,7 @@ use fovea_scene::pack::PackedScene;
 
 use crate::content_hash::{executable_hash, fnv1a64, packed_scene_hash};
 use crate::error::{FoveaError, Result};
-use crate::output::{write_atomically, write_image, ImageFormat};
+use crate::output::{read_exr, write_atomically, write_image, ImageFormat};
 
 /// The canonical text that keys a reference. `scene_file_hash` is the FNV-1a-64 of the scene file's bytes;
 /// `environment` describes the sky or environment map as given on the command line.
@@ -141,32 +141,6 @@ impl CacheEntry {
             std::fs::write(tmp, self.key_text.as_bytes()).map_err(|e| e.to_string())
         })
     }
-}
-
-/// Reads the RGB channels of an EXR file as a linear HDR frame.
-pub fn read_exr(path: &Path) -> Result<FrameImage> {
-    struct Pixels {
-        width: usize,
-        data: Vec<[f32; 4]>,
-    }
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |resolution, _| Pixels {
-            width: resolution.width(),
-            data: vec![[0.0, 0.0, 0.0, 1.0]; resolution.width() * resolution.height()],
-        },
-        |pixels: &mut Pixels, position, (r, g, b, _a): (f32, f32, f32, f32)| {
-            let i = position.y() * pixels.width + position.x();
-            pixels.data[i] = [r, g, b, 1.0];
-        },
-    )
-    .map_err(|e| FoveaError::file(path, e))?;
-    let size = image.layer_data.size;
-    Ok(FrameImage {
-        width: size.width() as u32,
-        height: size.height() as u32,
-        pixels: image.layer_data.channel_data.pixels.data,
-    })
 }
 
 #[cfg(test)]
