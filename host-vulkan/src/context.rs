@@ -575,24 +575,10 @@ impl VulkanContext {
         if missing.is_empty() {
             return Ok(());
         }
-        let names: Vec<std::ffi::CString> = missing
-            .iter()
-            .map(|&p| {
-                std::ffi::CString::new(ENTRY_POINTS[p]).expect("entry point names have no NUL")
-            })
-            .collect();
+        let names: Vec<std::ffi::CString> = missing.iter().map(|&p| entry_point_name(p)).collect();
         let infos: Vec<vk::ComputePipelineCreateInfo> = names
             .iter()
-            .map(|name| {
-                vk::ComputePipelineCreateInfo::default()
-                    .stage(
-                        vk::PipelineShaderStageCreateInfo::default()
-                            .stage(vk::ShaderStageFlags::COMPUTE)
-                            .module(self.module)
-                            .name(name),
-                    )
-                    .layout(self.pipeline_layout)
-            })
+            .map(|name| self.kernel_pipeline_info(name, None))
             .collect();
         let start = std::time::Instant::now();
         // SAFETY: every create info and what it points to live until the call returns; the handles
@@ -891,23 +877,14 @@ impl VulkanContext {
         {
             return Ok(());
         }
-        let device = &self.shared.device;
-        let name = std::ffi::CString::new(ENTRY_POINTS[pipeline::RENDER_SAMPLES])
-            .expect("entry point names have no NUL");
+        let name = entry_point_name(pipeline::RENDER_SAMPLES);
         let spec_data = features.to_ne_bytes();
         let spec_entries = features_map_entry();
         let spec = vk::SpecializationInfo::default()
             .map_entries(&spec_entries)
             .data(&spec_data);
-        let create = [vk::ComputePipelineCreateInfo::default()
-            .stage(
-                vk::PipelineShaderStageCreateInfo::default()
-                    .stage(vk::ShaderStageFlags::COMPUTE)
-                    .module(self.module)
-                    .name(&name)
-                    .specialization_info(&spec),
-            )
-            .layout(self.pipeline_layout)];
+        let create = [self.kernel_pipeline_info(&name, Some(&spec))];
+        let device = &self.shared.device;
         let start = std::time::Instant::now();
         // SAFETY: the create info and everything it points to live until the call returns; the old
         // pipeline is not in use (every submission was waited on) and is destroyed only after the new
@@ -927,6 +904,30 @@ impl VulkanContext {
     pub fn render_features(&self) -> u32 {
         self.render_features
     }
+
+    /// The create info of the kernel module's compute pipeline for entry point `name`, with the
+    /// context's layout, specialised by `spec` where given.
+    fn kernel_pipeline_info<'a>(
+        &self,
+        name: &'a std::ffi::CStr,
+        spec: Option<&'a vk::SpecializationInfo<'a>>,
+    ) -> vk::ComputePipelineCreateInfo<'a> {
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(self.module)
+            .name(name);
+        if let Some(spec) = spec {
+            stage = stage.specialization_info(spec);
+        }
+        vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(self.pipeline_layout)
+    }
+}
+
+/// The kernel entry point of pipeline `index` ([`ENTRY_POINTS`]) as a C string.
+fn entry_point_name(index: usize) -> std::ffi::CString {
+    std::ffi::CString::new(ENTRY_POINTS[index]).expect("entry point names have no NUL")
 }
 
 impl Drop for VulkanContext {
