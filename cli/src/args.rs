@@ -764,6 +764,12 @@ pub struct CompareArgs {
         value_parser = crate::values::exposure_ev
     )]
     pub exposure: f32,
+    /// Fixation in pixels X,Y: also pool relMSE and FLIP by the foveation regions around it (bounded
+    /// by --eccentricity on the display), FLIP at the display's pixels per degree, as `report` does.
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    pub gaze: Option<PixelPoint>,
+    #[command(flatten)]
+    pub display: DisplayArgs,
     /// Also write the figures as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,

@@ -5,10 +5,16 @@
 //! - the largest absolute difference of a channel;
 //! - the mean relMSE (`report`'s, [`crate::report::metrics::rel_mse_map`]);
 //! - the mean FLIP of the two images tone-mapped as `render` writes PNGs.
+//!
+//! With `--gaze`, also relMSE and FLIP pooled by the paper's foveation regions around that fixation,
+//! FLIP at the display's pixels per degree: `report`'s per-region figures for any two images.
 use crate::args::CompareArgs;
 use crate::error::{FoveaError, Result};
 use crate::output::{read_exr, tonemapped_rgb8};
-use crate::report::metrics::{flip_map, rel_mse_map};
+use crate::report::metrics::{flip_map, rel_mse_map, RegionMap, RegionMeans};
+use crate::values;
+use fovea_core::foveation::display::pixels_per_degree;
+use fovea_core::foveation::regions::FoveationParams;
 use fovea_cpu::FrameImage;
 
 /// What `fovea compare` reports.
@@ -55,6 +61,52 @@ pub fn agreement(test: &FrameImage, reference: &FrameImage, exposure_ev: f32) ->
     }
 }
 
+/// The error pooled by foveation region (`report`'s measure).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RegionErrors {
+    /// The pixels per degree FLIP was computed at.
+    pub pixels_per_degree: f32,
+    /// Mean relMSE over the image and each region.
+    pub rel_mse: RegionMeans,
+    /// Mean FLIP over the image and each region.
+    pub flip: RegionMeans,
+}
+
+/// relMSE and FLIP (at `pixels_per_degree`) of `test` against `reference`, pooled by the regions of
+/// `foveation`.
+#[must_use]
+pub fn region_errors(
+    test: &FrameImage,
+    reference: &FrameImage,
+    exposure_ev: f32,
+    foveation: &FoveationParams,
+    pixels_per_degree: f32,
+) -> RegionErrors {
+    let map = RegionMap::new(test.width, test.height, foveation);
+    let flip = flip_map(
+        &tonemapped_rgb8(reference, exposure_ev),
+        &tonemapped_rgb8(test, exposure_ev),
+        test.width,
+        test.height,
+        pixels_per_degree,
+    );
+    RegionErrors {
+        pixels_per_degree,
+        rel_mse: RegionMeans::of(&rel_mse_map(test, reference), &map),
+        flip: RegionMeans::of(&flip, &map),
+    }
+}
+
+/// The four means as JSON (`null` for a region without pixels).
+fn means_json(m: RegionMeans) -> serde_json::Value {
+    serde_json::json!({
+        "all": m.all,
+        "fovea": m.fovea,
+        "intermediate": m.intermediate,
+        "periphery": m.periphery,
+    })
+}
+
 /// Runs `fovea compare`.
 pub fn run(args: &CompareArgs) -> Result<()> {
     for path in [&args.test, &args.reference] {
@@ -87,6 +139,25 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         ));
     }
     let a = agreement(&test, &reference, args.exposure);
+    let regions = match args.gaze {
+        Some(gaze) => {
+            let size = [test.width, test.height];
+            let (display, warning) =
+                values::display_geometry(args.display.display_cm, args.display.distance_cm, size)?;
+            if let Some(w) = warning {
+                eprintln!("warning: {w}");
+            }
+            let radii = values::eccentricity_radii(args.display.eccentricity, &display);
+            let foveation = FoveationParams::paper(gaze.0, radii[0], radii[1]);
+            let ppd = pixels_per_degree(&display);
+            Some((
+                gaze.0,
+                radii,
+                region_errors(&test, &reference, args.exposure, &foveation, ppd),
+            ))
+        }
+        None => None,
+    };
     println!(
         "fovea: {} against {} ({}x{}): {:.4} % of pixels within 1e-3, max abs {:.3e}, relMSE {:.3e}, \
          mean FLIP {:.3e}",
@@ -99,8 +170,27 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         a.rel_mse,
         a.mean_flip
     );
+    if let Some((gaze, radii, r)) = &regions {
+        let row = |m: RegionMeans| {
+            format!(
+                "{:.4} / {:.4} / {:.4} / {:.4}",
+                m.all, m.fovea, m.intermediate, m.periphery
+            )
+        };
+        println!(
+            "fovea: by region around ({}, {}), radii {:.1} and {:.1} px, all / fovea / intermediate / \
+             periphery:\n  relMSE {}\n  FLIP   {} (at {:.2} pixels per degree)",
+            gaze[0],
+            gaze[1],
+            radii[0],
+            radii[1],
+            row(r.rel_mse),
+            row(r.flip),
+            r.pixels_per_degree
+        );
+    }
     if let Some(path) = &args.json {
-        let json = serde_json::json!({
+        let mut json = serde_json::json!({
             "test": args.test.display().to_string(),
             "reference": args.reference.display().to_string(),
             "width": test.width,
@@ -110,6 +200,15 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "rel_mse": a.rel_mse,
             "mean_flip": a.mean_flip,
         });
+        if let Some((gaze, radii, r)) = &regions {
+            json["regions"] = serde_json::json!({
+                "gaze": gaze,
+                "radii_px": radii,
+                "pixels_per_degree": r.pixels_per_degree,
+                "rel_mse": means_json(r.rel_mse),
+                "flip": means_json(r.flip),
+            });
+        }
         crate::stats::write_json(path, &json)?;
     }
     Ok(())

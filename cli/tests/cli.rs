@@ -587,6 +587,29 @@ fn compare_judges_one_exr_against_another() {
     let within = figures["within_1e-3"].as_f64().unwrap();
     assert!(within < 0.99, "two seeds agree on {within}");
     assert!(figures["mean_flip"].as_f64().unwrap() > 0.0);
+    assert!(figures.get("regions").is_none(), "{figures}");
+    // With a fixation: the error by region, as `report` pools it (on the default display, a 64-pixel
+    // wide image has 0.95 pixels per degree and the regions' radii are 4.9 and 16.2 pixels).
+    let by_region = compare(
+        &b,
+        &a,
+        &["--gaze", "20,30", "--json", json.to_str().unwrap()],
+    );
+    let stdout = String::from_utf8_lossy(&by_region.stdout);
+    assert!(by_region.status.success(), "{stdout}");
+    assert!(stdout.contains("by region around (20, 30)"), "{stdout}");
+    let figures: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let regions = &figures["regions"];
+    assert_eq!(regions["gaze"], serde_json::json!([20.0, 30.0]), "{figures}");
+    for measure in ["rel_mse", "flip"] {
+        for region in ["all", "fovea", "intermediate", "periphery"] {
+            let v = regions[measure][region].as_f64().unwrap();
+            assert!(v > 0.0 && v.is_finite(), "{measure} {region}: {v}");
+        }
+    }
+    let ppd = regions["pixels_per_degree"].as_f64().unwrap();
+    assert!((ppd - 0.946).abs() < 0.01, "{ppd}");
     for (test, reference, needle) in [
         (small.clone(), a.clone(), "compare needs images of one size"),
         (
