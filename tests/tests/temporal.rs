@@ -679,3 +679,96 @@ fn a_thin_bright_bar_leaves_no_ghost() {
     assert!(mean < 0.1 && worst < 1.0, "mean {mean}, worst {worst}");
     assert!(f_mean < 0.1, "foveated: mean {f_mean}, worst {f_worst}");
 }
+
+/// The G-buffer's albedo is what a pixel's jittered samples see on average, the texture box-filtered
+/// over the pixel (`fovea_core::temporal::gbuffer::footprint_albedo`): a quad under a fine random
+/// texture (about three texels per pixel), seen at an angle. Against the mean of 16 × 16 points per
+/// pixel read at mip level 0 (as the samples read it), its error is well below that of one read at the
+/// centre at the footprint's mip level, which the history and the denoiser used before.
+#[test]
+fn the_gbuffer_albedo_is_the_mean_over_the_pixel() {
+    use fovea_core::bvh::closest_hit;
+    use fovea_core::integrator::pixel_cone_spread;
+    use fovea_core::material::shading::surface_point_lod;
+    use fovea_core::material::surface_point;
+    use fovea_core::scene::{Material, SceneSlices, MATERIAL_LAMBERTIAN};
+    use fovea_core::temporal::first_hit_gbuffer;
+    use fovea_scene::texture::{pack_rgba8, Texture};
+    use glam::Vec2;
+
+    let material = Material {
+        base_color: [1.0, 1.0, 1.0, 1.0],
+        flags: MATERIAL_LAMBERTIAN,
+        base_color_texture: 0,
+        ..Material::default()
+    };
+    let mut s = fovea_tests::stability::loaded_scene(
+        vec![
+            [-1.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
+        vec![0, 0],
+        vec![material],
+    );
+    s.uvs = vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    let side = 64u32;
+    let texels = (0..side * side)
+        .map(|i| {
+            let v = (i.wrapping_mul(2_654_435_761) >> 24) as u8;
+            pack_rgba8([v, v / 2 + 64, 255 - v, 255])
+        })
+        .collect();
+    s.textures = vec![Texture::new("noise", side, side, false, texels)];
+    let packed = fovea_tests::stability::pack(s, &Environment::Constant([1.0, 1.0, 1.0]));
+    let view = packed.view();
+    let (w, h) = (24u32, 24u32);
+    let camera = Camera::look_at(Vec3::new(1.2, 0.7, 3.0), Vec3::ZERO, Vec3::Y, 0.5, 1.0);
+    let frame = frame_params(camera, FoveationParams::uniform(1), w, h, 1);
+
+    let (mut new_error, mut centre_error, mut pixels) = (0.0f32, 0.0f32, 0u32);
+    for y in 0..h {
+        for x in 0..w {
+            // The pixel's mean albedo: 16 × 16 points, each read at mip level 0.
+            let (mut sum, mut count) = (Vec3::ZERO, 0u32);
+            for j in 0..256u32 {
+                let point = Vec2::new(
+                    x as f32 + ((j % 16) as f32 + 0.5) / 16.0,
+                    y as f32 + ((j / 16) as f32 + 0.5) / 16.0,
+                );
+                let hit = closest_hit(&view, &camera.generate_ray(point, w, h), f32::INFINITY);
+                if hit.is_hit() {
+                    sum += surface_point(&view, &SceneSlices, &hit).params.base_color;
+                    count += 1;
+                }
+            }
+            // Only pixels wholly on the quad: at its silhouette the mean mixes in the sky.
+            if count < 256 {
+                continue;
+            }
+            let mean = sum / 256.0;
+            let g = first_hit_gbuffer(&view, &SceneSlices, &frame, x, y);
+            new_error += (Vec3::from_slice(&g.albedo[..3]) - mean)
+                .abs()
+                .element_sum();
+            // One read at the centre over the whole footprint.
+            let ray = camera.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), w, h);
+            let hit = closest_hit(&view, &ray, f32::INFINITY);
+            let cone = pixel_cone_spread(&frame) * hit.t;
+            let centre = surface_point_lod(&view, &SceneSlices, &hit, ray.direction, cone);
+            centre_error += (centre.params.base_color - mean).abs().element_sum();
+            pixels += 1;
+        }
+    }
+    assert!(pixels > 200, "{pixels} pixels on the quad");
+    let (new_error, centre_error) = (new_error / pixels as f32, centre_error / pixels as f32);
+    println!(
+        "mean abs error per pixel: over the pixel {new_error:.4}, at the centre {centre_error:.4}"
+    );
+    assert!(
+        new_error < 0.6 * centre_error,
+        "the pixel's mean albedo is off by {new_error:.4}, one read at the centre by {centre_error:.4}"
+    );
+}

@@ -36,6 +36,9 @@ pub struct SurfacePoint {
     /// views the mapped normal turns away from (`crate::integrator::path`).
     pub unmapped_normal: Vec3,
     pub uv: Vec2,
+    /// The width of the ray cone's footprint in texture coordinates, which the textures were read
+    /// over (0: mip level 0).
+    pub footprint_uv: f32,
     pub params: DisneyParams,
     /// The absorption coefficient of the material's inside ([`Material::absorption`]); zero for scenes
     /// without volume absorption.
@@ -190,15 +193,7 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
         frame = Frame::from_normal_tangent(mapped, tangent);
     }
 
-    let mut base_color = vec3_from(material.base_color);
-    if scene.features.has(FEATURE_BASE_COLOR_TEXTURE)
-        && material.base_color_texture != INVALID_INDEX
-    {
-        base_color *=
-            sample_texture_lod(scene, source, material.base_color_texture, uv, footprint_uv)
-                .truncate();
-    }
-    base_color *= interpolate_vertex_color(scene, source, triangle, b1, b2).truncate();
+    let base_color = base_color_at(scene, source, triangle, &material, b1, b2, footprint_uv);
     let mut metallic = material.metallic;
     let mut roughness = material.roughness;
     if scene.features.has(FEATURE_METALLIC_ROUGHNESS_TEXTURE)
@@ -239,9 +234,36 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
         frame,
         unmapped_normal: ns,
         uv,
+        footprint_uv,
         params,
         absorption,
     }
+}
+
+/// The base colour of `material` at barycentrics (`b1`, `b2`) of `triangle`: its factor times its
+/// texture, read over `footprint_uv` in texture coordinates (0: mip level 0), times the vertex colour.
+/// [`surface_point_lod`]'s, alone: `crate::temporal::gbuffer` averages it over a pixel.
+#[inline]
+#[must_use]
+pub fn base_color_at<F: Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    triangle: u32,
+    material: &Material,
+    b1: f32,
+    b2: f32,
+    footprint_uv: f32,
+) -> Vec3 {
+    let mut base_color = vec3_from(material.base_color);
+    if scene.features.has(FEATURE_BASE_COLOR_TEXTURE)
+        && material.base_color_texture != INVALID_INDEX
+    {
+        let uv = interpolate_uv(scene, source, triangle, b1, b2);
+        base_color *=
+            sample_texture_lod(scene, source, material.base_color_texture, uv, footprint_uv)
+                .truncate();
+    }
+    base_color * interpolate_vertex_color(scene, source, triangle, b1, b2).truncate()
 }
 
 /// Multiplies the factors of `params` by the glTF material extensions' textures of `material`, each by
