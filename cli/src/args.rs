@@ -694,7 +694,7 @@ pub struct MtlArgs {
     pub mtl_diffuse: MtlDiffuse,
 }
 
-/// The display model that turns eccentricity angles into region radii (`render` and `report`).
+/// The display model that turns eccentricity angles into region radii (`render`, `report`, `compare`).
 #[derive(Args, Debug, Clone)]
 pub struct DisplayArgs {
     /// Eccentricity angles in degrees bounding the fovea and the intermediate region.
@@ -766,6 +766,7 @@ pub struct CompareArgs {
     pub exposure: f32,
     /// Fixation in pixels X,Y: also pool relMSE and FLIP by the foveation regions around it (bounded
     /// by --eccentricity on the display), FLIP at the display's pixels per degree, as `report` does.
+    /// The display options below are used only with it.
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
     pub gaze: Option<PixelPoint>,
     #[command(flatten)]

@@ -173,7 +173,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     if let Some((gaze, radii, r)) = &regions {
         let row = |m: RegionMeans| {
             format!(
-                "{:.4} / {:.4} / {:.4} / {:.4}",
+                "{:.3e} / {:.3e} / {:.3e} / {:.3e}",
                 m.all, m.fovea, m.intermediate, m.periphery
             )
         };

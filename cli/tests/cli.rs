@@ -589,7 +589,7 @@ fn compare_judges_one_exr_against_another() {
     assert!(figures["mean_flip"].as_f64().unwrap() > 0.0);
     assert!(figures.get("regions").is_none(), "{figures}");
     // With a fixation: the error by region, as `report` pools it (on the default display, a 64-pixel
-    // wide image has 0.95 pixels per degree and the regions' radii are 4.9 and 16.2 pixels).
+    // wide image has 0.95 pixels per degree and the regions' radii are 2.5 and 8.1 pixels).
     let by_region = compare(
         &b,
         &a,
@@ -601,7 +601,11 @@ fn compare_judges_one_exr_against_another() {
     let figures: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let regions = &figures["regions"];
-    assert_eq!(regions["gaze"], serde_json::json!([20.0, 30.0]), "{figures}");
+    assert_eq!(
+        regions["gaze"],
+        serde_json::json!([20.0, 30.0]),
+        "{figures}"
+    );
     for measure in ["rel_mse", "flip"] {
         for region in ["all", "fovea", "intermediate", "periphery"] {
             let v = regions[measure][region].as_f64().unwrap();

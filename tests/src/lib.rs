@@ -407,6 +407,24 @@ pub mod stability {
         }
     }
 
+    /// The square `[-1, 1]²` at z = 0, facing +z, of one `material`, with texture coordinates over it
+    /// (u along +x, v along −y: down the image, as glTF's) and no texture yet: set `textures` to what the material names.
+    pub fn textured_quad(material: Material) -> LoadedScene {
+        let mut s = loaded_scene(
+            vec![
+                [-1.0, -1.0, 0.0],
+                [1.0, -1.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [-1.0, 1.0, 0.0],
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+            vec![0, 0],
+            vec![material],
+        );
+        s.uvs = vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+        s
+    }
+
     /// Packs a loaded scene with the default BVH options.
     pub fn pack(scene: LoadedScene, environment: &Environment) -> PackedScene {
         pack_scene(scene, environment, &BvhBuildOptions::default())

@@ -537,18 +537,7 @@ fn a_normal_map_turned_from_the_viewer_falls_back_to_the_interpolated_normal() {
         normal_texture: 0,
         ..Material::default()
     };
-    let mut s = fovea_tests::stability::loaded_scene(
-        vec![
-            [-1.0, -1.0, 0.0],
-            [1.0, -1.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [-1.0, 1.0, 0.0],
-        ],
-        vec![[0, 1, 2], [0, 2, 3]],
-        vec![0, 0],
-        vec![material],
-    );
-    s.uvs = vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    let mut s = fovea_tests::stability::textured_quad(material);
     // The tangent-space normal (0.9, 0, 0.44): towards +u, which runs along +x.
     s.textures = vec![Texture::new(
         "n",

@@ -702,18 +702,7 @@ fn the_gbuffer_albedo_is_the_mean_over_the_pixel() {
         base_color_texture: 0,
         ..Material::default()
     };
-    let mut s = fovea_tests::stability::loaded_scene(
-        vec![
-            [-1.0, -1.0, 0.0],
-            [1.0, -1.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [-1.0, 1.0, 0.0],
-        ],
-        vec![[0, 1, 2], [0, 2, 3]],
-        vec![0, 0],
-        vec![material],
-    );
-    s.uvs = vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    let mut s = fovea_tests::stability::textured_quad(material);
     let side = 64u32;
     let texels = (0..side * side)
         .map(|i| {

@@ -193,7 +193,15 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
         frame = Frame::from_normal_tangent(mapped, tangent);
     }
 
-    let base_color = base_color_at(scene, source, triangle, &material, b1, b2, footprint_uv);
+    let base_color = base_color_at(
+        scene,
+        source,
+        triangle,
+        &material,
+        uv,
+        [b1, b2],
+        footprint_uv,
+    );
     let mut metallic = material.metallic;
     let mut roughness = material.roughness;
     if scene.features.has(FEATURE_METALLIC_ROUGHNESS_TEXTURE)
@@ -240,9 +248,10 @@ pub fn surface_point_lod<F: Features, S: SceneSource>(
     }
 }
 
-/// The base colour of `material` at barycentrics (`b1`, `b2`) of `triangle`: its factor times its
-/// texture, read over `footprint_uv` in texture coordinates (0: mip level 0), times the vertex colour.
-/// [`surface_point_lod`]'s, alone: `crate::temporal::gbuffer` averages it over a pixel.
+/// The base colour of `material` at barycentrics `b` (of `v1`, `v2`) of `triangle`, where the texture
+/// coordinates are `uv`: its factor times its texture, read over `footprint_uv` in texture coordinates
+/// (0: mip level 0), times the vertex colour. [`surface_point_lod`]'s, alone:
+/// `crate::temporal::gbuffer` averages it over a pixel.
 #[inline]
 #[must_use]
 pub fn base_color_at<F: Features, S: SceneSource>(
@@ -250,20 +259,19 @@ pub fn base_color_at<F: Features, S: SceneSource>(
     source: &S,
     triangle: u32,
     material: &Material,
-    b1: f32,
-    b2: f32,
+    uv: Vec2,
+    b: [f32; 2],
     footprint_uv: f32,
 ) -> Vec3 {
     let mut base_color = vec3_from(material.base_color);
     if scene.features.has(FEATURE_BASE_COLOR_TEXTURE)
         && material.base_color_texture != INVALID_INDEX
     {
-        let uv = interpolate_uv(scene, source, triangle, b1, b2);
         base_color *=
             sample_texture_lod(scene, source, material.base_color_texture, uv, footprint_uv)
                 .truncate();
     }
-    base_color * interpolate_vertex_color(scene, source, triangle, b1, b2).truncate()
+    base_color * interpolate_vertex_color(scene, source, triangle, b[0], b[1]).truncate()
 }
 
 /// Multiplies the factors of `params` by the glTF material extensions' textures of `material`, each by

@@ -18,18 +18,20 @@ use crate::bvh::traverse::Hit;
 use crate::geometry::triangle::WatertightRay;
 use crate::integrator::{pixel_cone_spread, FrameParams};
 use crate::lights::INFINITE_DISTANCE;
-use crate::material::alpha::is_cut_out;
+use crate::material::alpha::{interpolate_uv, is_cut_out};
 use crate::material::shading::{base_color_at, surface_point_lod, SurfacePoint};
-use crate::scene::{Features, SceneSource, SceneView};
+use crate::scene::{Features, SceneSource, SceneView, MATERIAL_ALPHA_CUTOUT};
 
 /// Albedo points per pixel edge: [`footprint_albedo`] averages the base colour over a
-/// `GBUFFER_ALBEDO_GRID²` grid of the pixel, each point's texture read over its own part of the
-/// footprint. Against one read at the pixel footprint's mip level, a 2 × 2 grid halves the denoised
-/// fovea's FLIP gap to a converged image (docs/performance.md, "The G-buffer's albedo over the pixel").
+/// `GBUFFER_ALBEDO_GRID`² grid of the pixel, each point's texture read over its own part of the
+/// footprint. Against one read at the centre at the whole footprint's mip level, a 2 × 2 grid took the
+/// denoised 4/2/1 fovea's FLIP on Lost Empire from 0.131 to 0.099 (raw 32/16/8: 0.123;
+/// docs/performance.md, "The G-buffer's albedo over the pixel").
 pub const GBUFFER_ALBEDO_GRID: u32 = 2;
 
 /// A pixel's first hit (32 bytes, GPU layout): `normal_distance` = (unit shading normal facing the
-/// camera xyz, distance from the camera), `albedo` = (base colour rgb, 1). A ray that hits nothing (the
+/// camera xyz, distance from the camera), `albedo` = (the base colour's mean over the pixel on the hit's
+/// triangle, [`footprint_albedo`], rgb, 1). A ray that hits nothing (the
 /// sky) has distance 0, normal 0 and albedo 1.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -68,7 +70,8 @@ impl GBufferTexel {
 }
 
 /// The G-buffer texel of pixel (`x`, `y`) of `frame`: the first hit of the camera ray through the
-/// pixel's centre (alpha cut-outs let it through, as they do the samples).
+/// pixel's centre (alpha cut-outs let it through, as they do the samples), with the albedo averaged
+/// over the pixel on the hit's triangle ([`footprint_albedo`]).
 #[must_use]
 pub fn first_hit_gbuffer<F: Features, S: SceneSource>(
     scene: &SceneView<F>,
@@ -103,7 +106,9 @@ pub fn first_hit_gbuffer<F: Features, S: SceneSource>(
 /// [`GBUFFER_ALBEDO_GRID`]² grid of camera rays through the pixel, each intersected with the hit's
 /// triangle alone (no traversal) and its textures read at the level of its part of the pixel's ray
 /// cone. Points off the triangle or in a cut-out's hole are left out; the centre's own albedo (read
-/// at the whole footprint's mip level) where none is left.
+/// at the whole footprint's mip level) where none is left. A point that something nearer hides still
+/// counts: without a traversal it cannot be told, and at such a silhouette the pixel's samples mix two
+/// surfaces that no one albedo stands for.
 ///
 /// The pixel's samples average radiance over the pixel, so they saw this albedo on average. One read
 /// at the centre, at the whole footprint's mip level, is a different filter: mip levels are box
@@ -121,6 +126,7 @@ pub fn footprint_albedo<F: Features, S: SceneSource>(
 ) -> Vec3 {
     let triangle = source.triangle(scene, hit.triangle);
     let material = source.material(scene, source.triangle_info(scene, hit.triangle).material);
+    let cut_out_material = material.flags & MATERIAL_ALPHA_CUTOUT != 0;
     let k = GBUFFER_ALBEDO_GRID;
     // Each point's part of the footprint: 1/k of the pixel's, on the same triangle.
     let footprint_uv = surface.footprint_uv / k as f32;
@@ -133,16 +139,11 @@ pub fn footprint_albedo<F: Features, S: SceneSource>(
         );
         let ray = frame.camera.generate_ray(point, frame.width, frame.height);
         let on = WatertightRay::new(&ray).intersect(&triangle, INFINITE_DISTANCE);
-        if on.hit && !is_cut_out(scene, source, hit.triangle, on.b1, on.b2) {
-            sum += base_color_at(
-                scene,
-                source,
-                hit.triangle,
-                &material,
-                on.b1,
-                on.b2,
-                footprint_uv,
-            );
+        let hole = cut_out_material && is_cut_out(scene, source, hit.triangle, on.b1, on.b2);
+        if on.hit && !hole {
+            let uv = interpolate_uv(scene, source, hit.triangle, on.b1, on.b2);
+            let b = [on.b1, on.b2];
+            sum += base_color_at(scene, source, hit.triangle, &material, uv, b, footprint_uv);
             count += 1;
         }
         i += 1;
