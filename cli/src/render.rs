@@ -493,6 +493,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 output: plan.output.clone(),
                 render: stats,
                 extra: None,
+                history_restarted: None,
             });
             continue;
         }
@@ -556,6 +557,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             output,
             render: rendered.stats,
             extra: rendered.extra,
+            history_restarted: args.history.then_some(rendered.history_restarted),
         });
     }
 

@@ -17,6 +17,9 @@ pub struct FrameStats {
     pub render: RenderStats,
     /// Backend-specific figures (Vulkan: chunks, idle invocations, upload time, validation messages).
     pub extra: Option<Value>,
+    /// With `--history`: whether this frame started every pixel's history afresh (the first frame,
+    /// or one whose history the backend could not continue).
+    pub history_restarted: Option<bool>,
 }
 
 /// "AMD EPYC ... (2 threads)" from /proc/cpuinfo where available.
@@ -52,7 +55,7 @@ pub fn build_report(
     let frame_list: Vec<Value> = frames
         .iter()
         .map(|f| {
-            json!({
+            let mut frame = json!({
                 "frame": f.frame,
                 "gaze": f.gaze,
                 "output": f.output,
@@ -60,7 +63,11 @@ pub fn build_report(
                 "primary_samples": f.render.primary_samples,
                 "samples_per_region": region_object(f.render.samples_per_region),
                 "pass_ms": pass_object(&f.render.passes),
-            })
+            });
+            if let Some(restarted) = f.history_restarted {
+                frame["history_restarted"] = json!(restarted);
+            }
+            frame
         })
         .collect();
     let backend_details = first.extra.clone().unwrap_or(Value::Null);

@@ -199,6 +199,58 @@ fn the_window_presents_frames_whose_fovea_sits_at_the_scripted_gaze() {
     assert_eq!(counts, [1, 2, 3, 4, 5]);
 }
 
+/// A gaze that moves every frame (saccades across the window, then a tracker's jitter) keeps the
+/// history on both backends: every frame adds to it (`accumulated_frames` counts 1, 2, 3, ...). On
+/// Vulkan the history used to restart whenever the new gaze needed more blocks or cells than the
+/// buffers had (issue 50).
+#[test]
+fn a_moving_gaze_keeps_the_history_on_both_backends() {
+    let _guard = DISPLAY_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = temp_dir("moving-gaze");
+    let mut lines = String::new();
+    let gazes = [
+        (0.5, 0.5),
+        (0.2, 0.3),
+        (0.8, 0.7),
+        (0.1, 0.9),
+        (0.9, 0.1),
+        (0.5, 0.5),
+        (0.51, 0.49),
+        (0.49, 0.5),
+        (0.52, 0.51),
+        (0.5, 0.52),
+    ];
+    for (k, (x, y)) in gazes.iter().enumerate() {
+        lines += &format!("{k} gaze {x} {y}\n");
+    }
+    let script = write(&dir, "s.txt", &lines);
+    for backend in ["vulkan", "cpu"] {
+        let Some(mut c) = view_under_xvfb() else {
+            return;
+        };
+        let stats = dir.join(format!("{backend}.json"));
+        c.arg(cornell())
+            .args(CAMERA)
+            .args(["--backend", backend, "--size", "96x64", "--radii", "6,18"])
+            .args(["--spp", "4,2,1", "--budget-ms", "0", "-q"])
+            .args(["--exit-after-frames", &gazes.len().to_string()])
+            .arg("--script")
+            .arg(&script)
+            .arg("--stats")
+            .arg(&stats);
+        let json = run_ok(c, &stats);
+        let f = frames(&json);
+        let moved = f.windows(2).filter(|w| gaze(&w[0]) != gaze(&w[1])).count();
+        assert!(moved >= gazes.len() - 2, "{backend}: the gaze must move");
+        let counts: Vec<u64> = f
+            .iter()
+            .map(|f| f["accumulated_frames"].as_u64().unwrap())
+            .collect();
+        let expected: Vec<u64> = (1..=gazes.len() as u64).collect();
+        assert_eq!(counts, expected, "{backend}");
+    }
+}
+
 #[test]
 fn the_uniform_toggle_changes_the_samples_per_frame_by_the_sample_ratio() {
     let _guard = DISPLAY_LOCK.lock().unwrap_or_else(|e| e.into_inner());

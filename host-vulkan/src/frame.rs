@@ -524,15 +524,22 @@ impl VulkanContext {
         };
         let plan_ms = plan_start.elapsed().as_secs_f64() * 1e3;
 
-        if !self.frame.as_ref().is_some_and(|f| sizes.fits_in(&f.sizes)) {
-            self.frame = None; // free the old buffers first
-            self.frame = Some(FrameResources::new(&self.shared, &self.limits, sizes)?);
-        }
         if self.last_frame_size != Some((w, h)) {
             // A history of another image size is not this image's.
             if let Some(res) = self.frame.as_mut() {
-                res.temporal = None;
+                res.drop_image_buffers();
             }
+        }
+        if !self.frame.as_ref().is_some_and(|f| sizes.fits_in(&f.sizes)) {
+            // A moving gaze changes the block and cell counts, so the per-frame buffers grow now and
+            // then; the image's own buffers (the history above all) carry over. The old buffers are
+            // freed before the new ones are made.
+            let kept = self.frame.take().map(FrameResources::into_image_buffers);
+            let mut res = FrameResources::new(&self.shared, &self.limits, sizes)?;
+            if let Some(kept) = kept {
+                res.restore_image_buffers(kept);
+            }
+            self.frame = Some(res);
         }
         self.last_frame_size = Some((w, h));
         let mut history_is_new = false;

@@ -113,7 +113,34 @@ impl TemporalBuffers {
     }
 }
 
+/// The buffers of [`FrameResources`] sized by the image alone, which outlive a reallocation of the
+/// others: the history must survive a frame whose gaze needs more blocks or cells than the last.
+pub(crate) struct ImageBuffers {
+    raw_readback: Option<GpuBuffer>,
+    temporal: Option<TemporalBuffers>,
+}
+
 impl FrameResources {
+    /// Forgets the buffers sized for the previous image (its history, its raw read-back).
+    pub fn drop_image_buffers(&mut self) {
+        self.raw_readback = None;
+        self.temporal = None;
+    }
+
+    /// Frees every buffer but those sized by the image alone, which it returns.
+    pub fn into_image_buffers(self) -> ImageBuffers {
+        ImageBuffers {
+            raw_readback: self.raw_readback,
+            temporal: self.temporal,
+        }
+    }
+
+    /// Takes over the image's buffers of the resources this set replaces (same image size).
+    pub fn restore_image_buffers(&mut self, kept: ImageBuffers) {
+        self.raw_readback = kept.raw_readback;
+        self.temporal = kept.temporal;
+    }
+
     pub fn new(shared: &Arc<Shared>, limits: &Limits, s: Sizes) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let src = vk::BufferUsageFlags::TRANSFER_SRC;
