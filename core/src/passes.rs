@@ -6,7 +6,9 @@
 //! [`frame_passes`] and `match` each [`FramePass`] to their step, and both time the passes under
 //! [`FramePass::name`] (`--stats`' `pass_ms`, the view's HUD). Adding a pass (the denoiser's, for
 //! example) is one variant here, one core function, one CPU step, one kernel entry and a test that the
-//! two backends agree on it; the `match`es in the hosts do not compile until it has both steps.
+//! two backends agree on it (docs/architecture.md, "Adding a pass"); the CPU host's `match` does not
+//! compile until it has its step, and the Vulkan host indexes its pipelines by [`KERNEL_ENTRIES`] and
+//! sizes each dispatch by [`FramePass::items`], with no list of its own.
 //!
 //! Host-side only: the kernel runs one entry point per dispatch and has no use for the list (nor for
 //! its `&str` names), so the module is not built for SPIR-V.
@@ -183,6 +185,47 @@ impl FramePass {
         }
     }
 
+    /// What one invocation of the pass's kernel entries works on, which sizes its dispatches.
+    #[must_use]
+    pub const fn items(self) -> PassItems {
+        match self {
+            FramePass::Samples => PassItems::BlockChunks,
+            FramePass::CellMeans | FramePass::CellAlbedo => PassItems::Cells,
+            FramePass::Fill
+            | FramePass::GBuffer
+            | FramePass::Temporal
+            | FramePass::ResolveHistory
+            | FramePass::DenoiseInput
+            | FramePass::DenoiseAtrous
+            | FramePass::DenoiseOutput
+            | FramePass::ToneMap
+            | FramePass::Overlay => PassItems::Pixels,
+        }
+    }
+
+    /// The index of the pass's first kernel entry in [`KERNEL_ENTRIES`]; its entries follow it in
+    /// [`Self::kernel_entries`]' order.
+    #[must_use]
+    pub const fn first_kernel_entry(self) -> usize {
+        let mut index = 0;
+        let mut k = 0;
+        while k < FramePass::ALL.len() {
+            if FramePass::ALL[k] as u32 == self as u32 {
+                break;
+            }
+            index += FramePass::ALL[k].kernel_entries().len();
+            k += 1;
+        }
+        index
+    }
+
+    /// The indices in [`KERNEL_ENTRIES`] of the pass's kernel entries, in dispatch order.
+    #[must_use]
+    pub const fn kernel_entry_range(self) -> core::ops::Range<usize> {
+        let first = self.first_kernel_entry();
+        first..first + self.kernel_entries().len()
+    }
+
     /// How many times a frame runs the pass in a row (the k-th run is step `k`): the denoiser's
     /// [`crate::denoise::DENOISE_MAX_PASSES`] à-trous steps, every other pass once.
     #[must_use]
@@ -208,6 +251,48 @@ impl FramePass {
         }
     }
 }
+
+/// What the invocations of a pass's dispatch each work on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PassItems {
+    /// The frame's blocks, dispatched chunk by chunk of the host's block plan (its samples, then each
+    /// block's mean).
+    BlockChunks,
+    /// One cell of the fill's coarse grids each.
+    Cells,
+    /// One pixel each.
+    Pixels,
+}
+
+/// How many kernel entries the passes have together.
+pub const KERNEL_ENTRY_COUNT: usize = {
+    let mut n = 0;
+    let mut k = 0;
+    while k < FramePass::ALL.len() {
+        n += FramePass::ALL[k].kernel_entries().len();
+        k += 1;
+    }
+    n
+};
+
+/// Every pass's kernel entries, pass after pass in [`FramePass::ALL`]'s order: the one list a host
+/// indexes its pipelines by ([`FramePass::kernel_entry_range`]).
+pub const KERNEL_ENTRIES: [&str; KERNEL_ENTRY_COUNT] = {
+    let mut out = [""; KERNEL_ENTRY_COUNT];
+    let mut n = 0;
+    let mut k = 0;
+    while k < FramePass::ALL.len() {
+        let entries = FramePass::ALL[k].kernel_entries();
+        let mut e = 0;
+        while e < entries.len() {
+            out[n] = entries[e];
+            n += 1;
+            e += 1;
+        }
+        k += 1;
+    }
+    out
+};
 
 /// The passes a frame with `setup` runs, in order. Both hosts schedule their frames from this list.
 pub fn frame_passes(setup: FrameSetup) -> impl Iterator<Item = FramePass> {
@@ -263,6 +348,21 @@ mod tests {
             ..FrameSetup::default()
         };
         assert!(!FramePass::Overlay.runs_in(no_tonemap));
+    }
+
+    #[test]
+    fn kernel_entries_list_every_pass_in_order_once() {
+        let mut flat = Vec::new();
+        for pass in FramePass::ALL {
+            let range = pass.kernel_entry_range();
+            assert_eq!(range.start, flat.len(), "{pass:?}");
+            flat.extend_from_slice(pass.kernel_entries());
+            assert_eq!(&KERNEL_ENTRIES[range], pass.kernel_entries(), "{pass:?}");
+        }
+        assert_eq!(flat, KERNEL_ENTRIES);
+        for (i, a) in KERNEL_ENTRIES.iter().enumerate() {
+            assert!(!KERNEL_ENTRIES[i + 1..].contains(a), "{a} twice");
+        }
     }
 
     #[test]

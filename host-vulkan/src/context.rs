@@ -10,6 +10,7 @@ use fovea_core::kernel_abi::{
     KernelPushConstants, BINDING_BLOCKS, BINDING_COUNT, BINDING_SCENE_TEXELS,
     SPEC_CONSTANT_FEATURES,
 };
+use fovea_core::passes::{FramePass, KERNEL_ENTRY_COUNT};
 use fovea_core::scene::features::FEATURES_ALL;
 
 use crate::blocks::{DEFAULT_MAX_CHUNK_SAMPLES, SOFTWARE_MAX_CHUNK_SAMPLES};
@@ -64,46 +65,9 @@ pub fn validation_requested() -> bool {
     )
 }
 
-/// Indices into [`VulkanContext::pipelines`].
-pub(crate) mod pipeline {
-    pub const RENDER_SAMPLES: usize = 0;
-    pub const REDUCE_BLOCKS: usize = 1;
-    pub const CELL_MEANS: usize = 2;
-    pub const FILL: usize = 3;
-    pub const TONEMAP: usize = 4;
-    /// Temporal reuse's three passes (the live view, `fovea render --history`).
-    pub const GBUFFER: usize = 5;
-    /// The live view's region overlay.
-    pub const OVERLAY_REGIONS: usize = 6;
-    pub const TEMPORAL: usize = 7;
-    pub const RESOLVE_HISTORY: usize = 8;
-    /// The denoiser's three passes (`--denoise`).
-    pub const DENOISE_INPUT: usize = 9;
-    pub const DENOISE_ATROUS: usize = 10;
-    pub const DENOISE_OUTPUT: usize = 11;
-    /// Each cell's mean albedo, after the G-buffer (temporal reuse and the denoiser divide by it).
-    pub const CELL_ALBEDO: usize = 12;
-    /// The denoiser's pipelines, and the G-buffer's and cell albedo's it reads, in their order in a
-    /// frame.
-    pub const DENOISE_PASSES: [usize; 5] = [
-        GBUFFER,
-        CELL_ALBEDO,
-        DENOISE_INPUT,
-        DENOISE_ATROUS,
-        DENOISE_OUTPUT,
-    ];
-    /// Temporal reuse's pipelines, in their order in a frame.
-    pub const TEMPORAL_PASSES: [usize; 4] = [GBUFFER, CELL_ALBEDO, TEMPORAL, RESOLVE_HISTORY];
-    /// Every frame's pipelines.
-    pub const FRAME_PASSES: [usize; 6] = [
-        RENDER_SAMPLES,
-        REDUCE_BLOCKS,
-        CELL_MEANS,
-        FILL,
-        TONEMAP,
-        OVERLAY_REGIONS,
-    ];
-}
+/// The index in [`VulkanContext::pipelines`] of `render_samples`, the one pipeline specialised per
+/// scene ([`VulkanContext::specialize_render_pipeline`]).
+pub(crate) const RENDER_SAMPLES: usize = FramePass::Samples.first_kernel_entry();
 
 /// Timeout of each fence wait per chunk of work.
 pub const CHUNK_TIMEOUT: Duration = Duration::from_secs(60);
@@ -125,9 +89,11 @@ pub struct VulkanContext {
     pub(crate) fence: vk::Fence,
     pub(crate) set_layout: vk::DescriptorSetLayout,
     pub(crate) pipeline_layout: vk::PipelineLayout,
-    /// One per entry point, null until a frame first needs it ([`Self::ensure_pipelines`]): a render
-    /// without history or denoiser never creates those passes' pipelines.
-    pub(crate) pipelines: [vk::Pipeline; ENTRY_POINTS.len()],
+    /// One per kernel entry of core's passes ([`ENTRY_POINTS`], indexed by
+    /// [`FramePass::kernel_entry_range`]), null until a frame first needs it
+    /// ([`Self::ensure_pipelines`]): a render without history or denoiser never creates those passes'
+    /// pipelines.
+    pub(crate) pipelines: [vk::Pipeline; KERNEL_ENTRY_COUNT],
     /// The kernel module, kept for re-specialising `render_samples` per scene.
     pub(crate) module: vk::ShaderModule,
     /// The feature mask `pipelines[RENDER_SAMPLES]` was (or, while it is null, will be) specialised for.
@@ -155,16 +121,12 @@ pub struct VulkanContext {
     /// [`DEFAULT_MAX_CHUNK_SAMPLES`], or [`SOFTWARE_MAX_CHUNK_SAMPLES`] on a software driver.
     pub max_chunk_samples: u32,
     /// Host time of every `vkCreateComputePipelines` of this context so far (lavapipe translates the
-    /// module to NIR here; LLVM code generation waits for the first dispatch, see [`Self::warmed_up`]).
+    /// module to NIR here; LLVM code generation waits for the first dispatch, see [`Self::warmed`]).
     pub pipeline_create_ms: f64,
-    /// Whether every frame pipeline has been dispatched once (the first frame does it before its own
-    /// dispatches, so that its `render_ms` excludes a driver's lazy shader compilation).
-    pub(crate) warmed_up: bool,
-    /// Whether temporal reuse's pipelines ([`pipeline::TEMPORAL_PASSES`]) have been dispatched once
-    /// (by the first frame with temporal reuse; other frames never compile them).
-    pub(crate) temporal_warmed_up: bool,
-    /// Whether the denoiser's pipelines ([`pipeline::DENOISE_PASSES`]) have been dispatched once.
-    pub(crate) denoise_warmed_up: bool,
+    /// Which pipelines have been dispatched once (by the first frame that runs their pass, before its
+    /// own dispatches, so that its `render_ms` excludes a driver's lazy shader compilation; frames that
+    /// never run a pass never compile it).
+    pub(crate) warmed: [bool; KERNEL_ENTRY_COUNT],
     /// Whether the kernel is the ray-query module (scenes get acceleration structures).
     pub(crate) hardware_traversal: bool,
     /// Why `Traversal::Auto` chose software, if it did.
@@ -409,7 +371,7 @@ impl VulkanContext {
             fence: vk::Fence::null(),
             set_layout: vk::DescriptorSetLayout::null(),
             pipeline_layout: vk::PipelineLayout::null(),
-            pipelines: [vk::Pipeline::null(); ENTRY_POINTS.len()],
+            pipelines: [vk::Pipeline::null(); KERNEL_ENTRY_COUNT],
             module: vk::ShaderModule::null(),
             render_features: FEATURES_ALL,
             probe_pipelines: [vk::Pipeline::null(); 2],
@@ -433,9 +395,7 @@ impl VulkanContext {
                 DEFAULT_MAX_CHUNK_SAMPLES
             },
             pipeline_create_ms: 0.0,
-            warmed_up: false,
-            temporal_warmed_up: false,
-            denoise_warmed_up: false,
+            warmed: [false; KERNEL_ENTRY_COUNT],
             hardware_traversal: hardware,
             traversal_note,
             hardware_scratch_alignment,
@@ -562,8 +522,7 @@ impl VulkanContext {
     /// pipelines of the kernel on lavapipe, and a render without history or denoiser uses 6.
     pub(crate) fn ensure_pipelines(&mut self, which: &[usize]) -> Result<()> {
         self.check_kernel()?;
-        if which.contains(&pipeline::RENDER_SAMPLES)
-            && self.pipelines[pipeline::RENDER_SAMPLES] == vk::Pipeline::null()
+        if which.contains(&RENDER_SAMPLES) && self.pipelines[RENDER_SAMPLES] == vk::Pipeline::null()
         {
             self.specialize_render_pipeline(self.render_features)?;
         }
@@ -873,11 +832,11 @@ impl VulkanContext {
     pub(crate) fn specialize_render_pipeline(&mut self, features: u32) -> Result<()> {
         self.check_kernel()?;
         if features == self.render_features
-            && self.pipelines[pipeline::RENDER_SAMPLES] != vk::Pipeline::null()
+            && self.pipelines[RENDER_SAMPLES] != vk::Pipeline::null()
         {
             return Ok(());
         }
-        let name = entry_point_name(pipeline::RENDER_SAMPLES);
+        let name = entry_point_name(RENDER_SAMPLES);
         let spec_data = features.to_ne_bytes();
         let spec_entries = features_map_entry();
         let spec = vk::SpecializationInfo::default()
@@ -891,12 +850,12 @@ impl VulkanContext {
         // one exists.
         unsafe {
             let created = create_compute_pipelines(device, &create)?;
-            device.destroy_pipeline(self.pipelines[pipeline::RENDER_SAMPLES], None);
-            self.pipelines[pipeline::RENDER_SAMPLES] = created[0];
+            device.destroy_pipeline(self.pipelines[RENDER_SAMPLES], None);
+            self.pipelines[RENDER_SAMPLES] = created[0];
         }
         self.pipeline_create_ms += start.elapsed().as_secs_f64() * 1e3;
         self.render_features = features;
-        self.warmed_up = false;
+        self.warmed[RENDER_SAMPLES] = false;
         Ok(())
     }
 

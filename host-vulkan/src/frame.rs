@@ -10,7 +10,7 @@ use fovea_core::foveation::fill::cell_buffer_len;
 use fovea_core::foveation::regions::FOVEATION_OK;
 use fovea_core::integrator::FrameParams;
 use fovea_core::kernel_abi::*;
-use fovea_core::passes::{frame_passes, FramePass};
+use fovea_core::passes::{frame_passes, FramePass, PassItems};
 pub use fovea_core::passes::{FrameOutput, FrameRequest};
 use fovea_core::temporal::{GBufferTexel, HistoryTexel, TemporalParams};
 use fovea_frame::{FrameImage, RenderStats};
@@ -20,7 +20,7 @@ use crate::blocks::{
     block_buffer_contents, enumerate_blocks, plan_chunks, workgroups_2d, ChunkPlan,
 };
 use crate::buffer::GpuBuffer;
-use crate::context::{pipeline, VulkanContext, CHUNK_TIMEOUT, WARMUP_TIMEOUT};
+use crate::context::{VulkanContext, CHUNK_TIMEOUT, WARMUP_TIMEOUT};
 use crate::error::{Result, VulkanError};
 use crate::resources::{FrameResources, Sizes, TemporalBuffers, PIXEL};
 use crate::scene::GpuScene;
@@ -124,23 +124,10 @@ struct FrameTiming {
 }
 
 /// The pipelines (indices into [`VulkanContext::pipelines`]) that run `pass`, in dispatch order: those
-/// of its [`FramePass::kernel_entries`] (checked by a test against [`crate::spirv::ENTRY_POINTS`]).
+/// of its [`FramePass::kernel_entries`], by their place in core's one list of entries.
 #[must_use]
-pub(crate) const fn pass_pipelines(pass: FramePass) -> &'static [usize] {
-    match pass {
-        FramePass::Samples => &[pipeline::RENDER_SAMPLES, pipeline::REDUCE_BLOCKS],
-        FramePass::CellMeans => &[pipeline::CELL_MEANS],
-        FramePass::Fill => &[pipeline::FILL],
-        FramePass::GBuffer => &[pipeline::GBUFFER],
-        FramePass::CellAlbedo => &[pipeline::CELL_ALBEDO],
-        FramePass::Temporal => &[pipeline::TEMPORAL],
-        FramePass::ResolveHistory => &[pipeline::RESOLVE_HISTORY],
-        FramePass::DenoiseInput => &[pipeline::DENOISE_INPUT],
-        FramePass::DenoiseAtrous => &[pipeline::DENOISE_ATROUS],
-        FramePass::DenoiseOutput => &[pipeline::DENOISE_OUTPUT],
-        FramePass::ToneMap => &[pipeline::TONEMAP],
-        FramePass::Overlay => &[pipeline::OVERLAY_REGIONS],
-    }
+pub(crate) const fn pass_pipelines(pass: FramePass) -> std::ops::Range<usize> {
+    pass.kernel_entry_range()
 }
 
 /// Which images a frame copies back to the host: (the 8-bit one, the HDR one).
@@ -572,18 +559,11 @@ impl VulkanContext {
         self.write_descriptors(scene, &sizes);
         self.specialize_render_pipeline(scene.features.0)?;
         let start = Instant::now();
-        if !self.warmed_up {
-            self.warm_up(&pipeline::FRAME_PASSES)?;
-            self.warmed_up = true;
-        }
-        if temporal && !self.temporal_warmed_up {
-            self.warm_up(&pipeline::TEMPORAL_PASSES)?;
-            self.temporal_warmed_up = true;
-        }
-        if denoise && !self.denoise_warmed_up {
-            self.warm_up(&pipeline::DENOISE_PASSES)?;
-            self.denoise_warmed_up = true;
-        }
+        let cold: Vec<usize> = frame_passes(request.setup())
+            .flat_map(pass_pipelines)
+            .filter(|&p| !self.warmed[p])
+            .collect();
+        self.warm_up(&cold)?;
         let warmup_ms = start.elapsed().as_secs_f64() * 1e3;
 
         Ok(PreparedFrame {
@@ -718,6 +698,7 @@ impl VulkanContext {
                 record_dispatch(device, cb, pipeline, layout, set, 0, &pc, 1, max_x);
                 barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
             })?;
+            self.warmed[p] = true;
         }
         Ok(())
     }
@@ -773,10 +754,9 @@ impl VulkanContext {
         let mut submissions = 0u32;
         // The samples pass: one submission per chunk, so that no submission runs long enough to trip a
         // driver's watchdog and the progress bar moves.
-        let [sample_pipeline, reduce_pipeline] = pass_pipelines(FramePass::Samples) else {
-            unreachable!("the samples pass is two dispatches")
-        };
-        let (sample_pipeline, reduce_pipeline) = (*sample_pipeline, *reduce_pipeline);
+        let samples = pass_pipelines(FramePass::Samples);
+        debug_assert_eq!(samples.len(), 2, "the samples pass is two dispatches");
+        let (sample_pipeline, reduce_pipeline) = (samples.start, samples.start + 1);
         for (i, chunk) in plan.chunks.iter().enumerate() {
             let offset = ChunkPlan::block_offset(chunk) as u32;
             let pc = KernelPushConstants {
@@ -859,10 +839,10 @@ impl VulkanContext {
                         );
                     }
                     // Each pass's items: its core function runs once per cell or per pixel.
-                    let items = match pass {
-                        FramePass::Samples => 0, // dispatched chunk by chunk above
-                        FramePass::CellMeans | FramePass::CellAlbedo => cells,
-                        _ => pixels,
+                    let items = match pass.items() {
+                        PassItems::BlockChunks => 0, // dispatched chunk by chunk above
+                        PassItems::Cells => cells,
+                        PassItems::Pixels => pixels,
                     };
                     if items > 0 {
                         // Step `k` of a repeated pass sees `pass: k`; the denoiser's output reads the
@@ -879,7 +859,7 @@ impl VulkanContext {
                                 flags: denoise_flags,
                                 ..base
                             };
-                            for &p in pass_pipelines(pass) {
+                            for p in pass_pipelines(pass) {
                                 dispatch(device, cb, p, 0, &pc, items);
                                 barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
                             }
@@ -973,24 +953,5 @@ impl VulkanContext {
             submissions,
             passes: Vec::new(),
         })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::spirv::ENTRY_POINTS;
-
-    /// The pipelines that run each pass are those of the kernel entries core lists for it: the pass
-    /// list and the kernel cannot drift apart unnoticed.
-    #[test]
-    fn every_pass_dispatches_the_kernel_entries_core_names_for_it() {
-        for pass in FramePass::ALL {
-            let entries: Vec<&str> = pass_pipelines(pass)
-                .iter()
-                .map(|&p| ENTRY_POINTS[p])
-                .collect();
-            assert_eq!(entries, pass.kernel_entries(), "{pass:?}");
-        }
     }
 }

@@ -7,22 +7,9 @@ pub static EMBEDDED_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_SPV"));
 /// where the build had none (a prebuilt software module without its twin).
 pub static EMBEDDED_RAY_QUERY_KERNEL: &[u8] = include_bytes!(env!("FOVEA_KERNEL_RQ_SPV"));
 
-/// Entry points the host creates a pipeline for, in [`crate::context`]'s pipeline order.
-pub const ENTRY_POINTS: [&str; 13] = [
-    "render_samples",
-    "reduce_blocks",
-    "cell_means",
-    "fill",
-    "tonemap",
-    "gbuffer",
-    "overlay_regions",
-    "temporal",
-    "resolve_history",
-    "denoise_input",
-    "denoise_atrous",
-    "denoise_output",
-    "cell_albedo",
-];
+/// Entry points the host creates a pipeline for: every frame pass's, in core's order (a pipeline's
+/// index is its entry's index here).
+pub use fovea_core::passes::KERNEL_ENTRIES as ENTRY_POINTS;
 
 /// The probe entry points (cross-backend tests), whose pipelines are created on first use.
 pub const PROBE_ENTRY_POINT: &str = "probe";
