@@ -266,22 +266,8 @@ pub struct RenderArgs {
     /// Fixation in pixels X,Y (default: the image centre). A gaze off the image is allowed.
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
     pub gaze: Option<PixelPoint>,
-    /// CSV gaze trace: lines `frame,x,y` (the default; one output image per line) or, after a header
-    /// `t,x,y`, timed samples rendered at --trace-fps; x,y in image pixels, origin top-left (or
-    /// --gaze-normalized).
-    #[arg(long, value_name = "FILE.csv")]
-    pub gaze_trace: Option<PathBuf>,
-    /// Frames per second at which a timed gaze trace (`t,x,y`) is rendered.
-    #[arg(
-        long,
-        default_value_t = 30.0,
-        value_name = "FPS",
-        allow_hyphen_values = true
-    )]
-    pub trace_fps: f64,
-    /// The gaze trace's x,y are 0..1 of the image (origin top-left), as `fovea view` reads them.
-    #[arg(long)]
-    pub gaze_normalized: bool,
+    #[command(flatten)]
+    pub sequence: SequenceArgs,
     /// Temporal reuse over the frames of a --gaze-trace: each frame joins every pixel's history
     /// (weighted by its samples and their footprint, as `fovea view` does) and each output image is
     /// the history's mean, not the frame alone.
@@ -296,11 +282,6 @@ pub struct RenderArgs {
     /// mean), .png or .exr; numbered like --output over a sequence.
     #[arg(long, value_name = "FILE")]
     pub keep_raw: Option<PathBuf>,
-    /// CSV camera path with lines `frame,eye_x,eye_y,eye_z,target_x,target_y,target_z` (world
-    /// coordinates): each frame's camera. With a --gaze-trace it must give every frame the trace gives;
-    /// without, it numbers the frames itself (the gaze stays at --gaze or the centre).
-    #[arg(long, value_name = "FILE.csv")]
-    pub camera_path: Option<PathBuf>,
     #[command(flatten)]
     pub foveation: FoveationArgs,
     #[command(flatten)]
@@ -416,28 +397,12 @@ pub struct ReportArgs {
     /// --out, which --task runs wrote.
     #[arg(long)]
     pub combine: bool,
-    /// Also judge a sequence: render this gaze trace frame by frame (the files `render` and `view`
-    /// read: `t,x,y` or `frame,x,y`, pixels or --gaze-normalized) for uniform and the paper's
-    /// foveated configurations, with and without history, and pool the error by eccentricity band
-    /// and over time (flicker). The camera stays still unless --camera-path moves it.
-    #[arg(long, value_name = "FILE.csv")]
-    pub gaze_trace: Option<PathBuf>,
-    /// With --gaze-trace: each frame's camera, lines `frame,eye_x,eye_y,eye_z,target_x,target_y,target_z`
-    /// (as `render` reads them; every frame of the trace needs one). Each camera gets its own
-    /// converged reference (cached), and history follows the camera as in `view`.
-    #[arg(long, value_name = "FILE.csv")]
-    pub camera_path: Option<PathBuf>,
-    /// Frames per second at which a timed gaze trace (`t,x,y`) is rendered.
-    #[arg(
-        long,
-        default_value_t = 30.0,
-        value_name = "FPS",
-        allow_hyphen_values = true
-    )]
-    pub trace_fps: f64,
-    /// The gaze trace's x,y are 0..1 of the image (origin top-left).
-    #[arg(long)]
-    pub gaze_normalized: bool,
+    // Also judge a sequence (with --gaze-trace): each configuration is rendered frame by frame,
+    // uniform and the paper's foveated ones, with and without history, and the error is pooled by
+    // eccentricity band and over time (flicker). A --camera-path gives each camera its own
+    // converged reference (cached), and history follows the camera as in `view`.
+    #[command(flatten)]
+    pub sequence: SequenceArgs,
     /// Render at most this many frames of the gaze trace.
     #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub sequence_frames: Option<u32>,
@@ -455,23 +420,8 @@ pub struct ReportArgs {
 
     #[command(flatten)]
     pub display: DisplayArgs,
-    /// Exposure compensation in EV before tone mapping (PNGs and FLIP).
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        value_name = "EV",
-        allow_hyphen_values = true,
-        value_parser = crate::values::exposure_ev
-    )]
-    pub exposure: f32,
-    /// Seed of the test renders (the reference uses a different one, so its noise is independent).
-    #[arg(
-        long,
-        default_value_t = 0,
-        value_name = "N",
-        allow_hyphen_values = true
-    )]
-    pub seed: u32,
+    #[command(flatten)]
+    pub image: ImageArgs,
     #[command(flatten)]
     pub camera: CameraArgs,
     #[command(flatten)]
@@ -659,11 +609,10 @@ pub struct FoveationArgs {
     pub display: DisplayArgs,
 }
 
-/// How paths become an image: their random numbers and the exposure (`render`, `view`; `report`
-/// has its own, documented for its references).
+/// How paths become an image: their random numbers and the exposure (`render`, `report`, `view`).
 #[derive(Args, Debug, Clone, Copy)]
 pub struct ImageArgs {
-    /// Exposure compensation in EV (stops) before tone mapping.
+    /// Exposure compensation in EV (stops) before tone mapping (PNGs, the window, and `report`'s FLIP).
     #[arg(
         long,
         default_value_t = 0.0,
@@ -672,7 +621,8 @@ pub struct ImageArgs {
         value_parser = crate::values::exposure_ev
     )]
     pub exposure: f32,
-    /// Seed of all random numbers.
+    /// Seed of all random numbers (`report`'s references use another, so their noise is
+    /// independent).
     #[arg(
         long,
         default_value_t = 0,
@@ -680,6 +630,33 @@ pub struct ImageArgs {
         allow_hyphen_values = true
     )]
     pub seed: u32,
+}
+
+/// A sequence of frames from files (`render`, `report`): a gaze trace, a camera path, or both.
+#[derive(Args, Debug, Clone)]
+pub struct SequenceArgs {
+    /// CSV gaze trace: lines `frame,x,y` (one frame per line) or, after a header `t,x,y`, timed
+    /// samples rendered at --trace-fps; x,y in image pixels, origin top-left (or --gaze-normalized).
+    /// `render` writes one numbered image per frame.
+    #[arg(long, value_name = "FILE.csv")]
+    pub gaze_trace: Option<PathBuf>,
+    /// Frames per second at which a timed gaze trace (`t,x,y`) is rendered.
+    #[arg(
+        long,
+        default_value_t = 30.0,
+        value_name = "FPS",
+        allow_hyphen_values = true
+    )]
+    pub trace_fps: f64,
+    /// The gaze trace's x,y are 0..1 of the image (origin top-left), as `fovea view` reads them.
+    #[arg(long)]
+    pub gaze_normalized: bool,
+    /// CSV camera path with lines `frame,eye_x,eye_y,eye_z,target_x,target_y,target_z` (world
+    /// coordinates): each frame's camera. With a --gaze-trace it must give every frame the trace
+    /// gives; without one, `render` takes its frames from the path (the gaze stays at --gaze or the
+    /// centre), and `report` needs a trace.
+    #[arg(long, value_name = "FILE.csv")]
+    pub camera_path: Option<PathBuf>,
 }
 
 /// How an OBJ's materials are read (`render`, `view`; `report` takes `--mtl-diffuse` alone).

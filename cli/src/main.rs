@@ -19,6 +19,7 @@ mod partial;
 mod render;
 mod report;
 mod scene_setup;
+mod schedule;
 mod stats;
 mod values;
 #[cfg_attr(not(feature = "vulkan"), allow(dead_code))]

@@ -5,12 +5,10 @@ use std::time::Instant;
 
 use fovea_core::foveation::blocks::count_samples;
 use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
-use fovea_core::integrator::FrameParams;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::RenderArgs;
-use crate::backend::{FrameOutput, FrameRequest, Renderer};
-use crate::camera_path::{read_camera_path, CameraKey};
+use crate::backend::{FrameOutput, Renderer};
 use crate::error::{FoveaError, Result};
 use crate::output::{
     check_json_path, check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png,
@@ -22,12 +20,7 @@ use crate::partial::{
 use crate::scene_setup::{choose_camera, prepare_scene, Lighting};
 use crate::stats::FrameStats;
 
-/// One frame to render: its number (part of the random-number key) and the gaze in image pixels.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct GazeSample {
-    frame: u32,
-    gaze: [f32; 2],
-}
+use crate::schedule::{FrameSchedule, FrameSettings, LonePath, ScheduledFrame};
 use crate::values::{self, SampleSelection};
 
 /// Everything `render` needs, parsed and checked before any work starts.
@@ -35,9 +28,8 @@ struct Plan {
     resolution: [u32; 2],
     foveation_template: FoveationParams,
     radii_px: [f32; 2],
-    gazes: Vec<GazeSample>,
-    /// Each frame's camera (`--camera-path`), by frame number.
-    cameras: Option<std::collections::HashMap<u32, CameraKey>>,
+    /// The frames, each with its gaze and camera.
+    schedule: FrameSchedule,
     output: PathBuf,
     output_format: ImageFormat,
     /// `--samples`: this run renders one part of a split render, written to `output` (a .fvpart file):
@@ -46,7 +38,7 @@ struct Plan {
     /// `--keep-raw`: where the image before the denoiser goes.
     keep_raw: Option<(PathBuf, ImageFormat)>,
     per_frame_outputs: bool,
-    fill_mode: u32,
+    settings: FrameSettings,
     lighting: Lighting,
     /// Options that are accepted but do not do what a user may expect (printed unless `--quiet`).
     warnings: Vec<String>,
@@ -83,83 +75,41 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
     } else {
         FoveationParams::new([0.5 * w as f32, 0.5 * h as f32], radii_px, spp, blocks)
     };
-    let gazes =
-        match (&args.gaze_trace, args.gaze) {
-            (Some(_), Some(_)) => {
-                return Err(FoveaError::option(
-                    "--gaze-trace",
-                    "give either --gaze or --gaze-trace, not both",
-                ))
-            }
-            (Some(_), None) if args.frame != 0 => return Err(FoveaError::option(
-                "--frame",
-                "numbers a single frame; a --gaze-trace numbers its own frames (its first column)",
-            )),
-            (Some(path), None) => read_gaze_frames(args, path, resolution)?,
-            (None, Some(g)) => vec![GazeSample {
-                frame: args.frame,
-                gaze: g.0,
-            }],
-            (None, None) => vec![GazeSample {
-                frame: args.frame,
-                gaze: [0.5 * w as f32, 0.5 * h as f32],
-            }],
-        };
-    let camera_keys = args
-        .camera_path
-        .as_deref()
-        .map(read_camera_path)
-        .transpose()?;
-    if camera_keys.is_some() && args.gaze_trace.is_none() && args.frame != 0 {
+    let sequence = &args.sequence;
+    if sequence.gaze_trace.is_some() && args.gaze.is_some() {
         return Err(FoveaError::option(
-            "--frame",
-            "numbers a single frame; a --camera-path numbers its own frames (its first column)",
+            "--gaze-trace",
+            "give either --gaze or --gaze-trace, not both",
         ));
     }
-    let (gazes, cameras) = match camera_keys {
-        None => (gazes, None),
-        Some(keys) => {
-            let by_frame: std::collections::HashMap<u32, CameraKey> =
-                keys.iter().map(|k| (k.frame, *k)).collect();
-            let gazes = if args.gaze_trace.is_some() {
-                if let Some(g) = gazes.iter().find(|g| !by_frame.contains_key(&g.frame)) {
-                    return Err(FoveaError::option(
-                        "--camera-path",
-                        format!(
-                            "has no line for frame {}, which the --gaze-trace renders",
-                            g.frame
-                        ),
-                    ));
-                }
-                gazes
-            } else {
-                let gaze = gazes[0].gaze;
-                keys.iter()
-                    .map(|k| GazeSample {
-                        frame: k.frame,
-                        gaze,
-                    })
-                    .collect()
-            };
-            (gazes, Some(by_frame))
-        }
-    };
-    for g in &gazes {
-        if g.gaze.iter().any(|v| v.abs() > values::MAX_GAZE_OFFSET) {
+    if args.frame != 0 {
+        if sequence.gaze_trace.is_some() {
             return Err(FoveaError::option(
-                "--gaze-trace",
-                format!("{:?} is absurdly far off the image", g.gaze),
+                "--frame",
+                "numbers a single frame; a --gaze-trace numbers its own frames (its first column)",
+            ));
+        }
+        if sequence.camera_path.is_some() {
+            return Err(FoveaError::option(
+                "--frame",
+                "numbers a single frame; a --camera-path numbers its own frames (its first column)",
             ));
         }
     }
-    if args.history && gazes.len() < 2 {
+    let still = ScheduledFrame {
+        number: args.frame,
+        gaze: args.gaze.map_or([0.5 * w as f32, 0.5 * h as f32], |g| g.0),
+        camera: None,
+    };
+    let schedule = FrameSchedule::read(sequence, still, resolution, LonePath::NumbersFrames, None)?;
+    if args.history && schedule.frames.len() < 2 {
         warnings.push(
             "--history accumulates over the frames of a --gaze-trace or --camera-path; a single \
              frame is rendered as it is"
                 .to_string(),
         );
     }
-    foveation_template.gaze = gazes[0].gaze;
+    foveation_template.gaze = schedule.frames[0].gaze;
     if foveation_template.validate() != FOVEATION_OK {
         return Err(FoveaError::option(
             "--spp/--blocks/--radii",
@@ -241,14 +191,13 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         resolution,
         foveation_template,
         radii_px,
-        per_frame_outputs: args.gaze_trace.is_some() || cameras.is_some(),
-        gazes,
-        cameras,
+        per_frame_outputs: schedule.from_files,
+        schedule,
         output: args.output.clone(),
         output_format,
         samples,
         keep_raw,
-        fill_mode: args.path.fill_mode(),
+        settings: FrameSettings::new(resolution, &args.path, &args.image),
         lighting,
         warnings,
     })
@@ -267,10 +216,10 @@ fn check_part_options(
             format!("{why}; --samples renders one part of a single still frame"),
         ))
     };
-    if args.gaze_trace.is_some() {
+    if args.sequence.gaze_trace.is_some() {
         return refuse("--gaze-trace", "renders a sequence");
     }
-    if args.camera_path.is_some() {
+    if args.sequence.camera_path.is_some() {
         return refuse("--camera-path", "renders a sequence");
     }
     if args.history {
@@ -312,17 +261,6 @@ fn check_part_options(
         ));
     }
     Ok(spec)
-}
-
-/// The frames of `--gaze-trace` (see [`crate::gaze`]): per-frame lines, or a timed trace sampled at
-/// `--trace-fps`, in image pixels.
-fn read_gaze_frames(args: &RenderArgs, path: &Path, image: [u32; 2]) -> Result<Vec<GazeSample>> {
-    Ok(
-        crate::gaze::read_trace_frames(path, args.trace_fps, args.gaze_normalized, image)?
-            .into_iter()
-            .map(|(frame, gaze)| GazeSample { frame, gaze })
-            .collect(),
-    )
 }
 
 /// `out.png` → `out_00012.png` for frame 12 of a gaze trace.
@@ -414,45 +352,29 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
 
     let [w, h] = plan.resolution;
-    let camera = choose_camera(
-        &scene,
-        eye,
-        target,
-        up,
-        args.camera.fov,
-        w as f32 / h as f32,
-    )?;
+    let settings = plan.settings;
+    let camera = choose_camera(&scene, eye, target, up, args.camera.fov, settings.aspect())?;
+    let cameras = plan.schedule.cameras(camera, |key| {
+        choose_camera(
+            &scene,
+            Some(key.eye),
+            Some(key.target),
+            up,
+            args.camera.fov,
+            settings.aspect(),
+        )
+    })?;
     renderer.set_scene(&scene.packed, !args.no_specialize)?;
-    let integrator = args.path.integrator();
 
     let mut frames = Vec::new();
     // Frames whose tone-mapped image is all black (see `BLACK_IMAGE_WARNING`).
     let mut black_frames = 0usize;
-    for g in &plan.gazes {
+    for (g, &camera) in plan.schedule.frames.iter().zip(&cameras) {
         let mut foveation = plan.foveation_template;
         if !args.foveation.uniform {
             foveation.gaze = g.gaze;
         }
-        let camera = match plan.cameras.as_ref().and_then(|c| c.get(&g.frame)) {
-            Some(key) => choose_camera(
-                &scene,
-                Some(key.eye),
-                Some(key.target),
-                up,
-                args.camera.fov,
-                w as f32 / h as f32,
-            )?,
-            None => camera,
-        };
-        let frame = FrameParams {
-            camera,
-            foveation,
-            integrator,
-            width: w,
-            height: h,
-            frame_index: g.frame,
-            seed: args.image.seed,
-        };
+        let frame = settings.frame(g.number, camera, foveation);
         let total: u64 = match plan.samples {
             Some(spec) => samples_in_part(w, h, &foveation, spec.samples),
             None => count_samples(w, h, &foveation).iter().sum(),
@@ -480,7 +402,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             let identity = identity_lines(
                 &RenderIdentity::of(&scene_bytes, &scene.packed),
                 &frame,
-                plan.fill_mode,
+                settings.fill_mode,
             );
             let (sums, stats) =
                 renderer
@@ -488,7 +410,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             bar.finish_and_clear();
             write_part(&plan.output, &identity, &scene_path, spec, &sums.pixels)?;
             frames.push(FrameStats {
-                frame: g.frame,
+                frame: g.number,
                 gaze: foveation.gaze,
                 output: plan.output.clone(),
                 render: stats,
@@ -499,16 +421,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         // The HDR image is needed for EXR output; PNG and the overlay use the backend's tone map.
         let want_hdr = plan.output_format == ImageFormat::Exr;
-        let request = FrameRequest {
-            fill_mode: plan.fill_mode,
-            exposure_ev: args.image.exposure,
-            history: args.history,
-            denoise: args.denoise,
-            output: FrameOutput::ReadBack {
+        let request = settings.request(
+            args.history,
+            args.denoise,
+            FrameOutput::ReadBack {
                 want_hdr,
                 want_raw: plan.keep_raw.is_some(),
             },
-        };
+        );
         let rendered = renderer.render(&scene.packed, &frame, &request, &|n| bar.inc(n))?;
         bar.finish_and_clear();
         let rgb8 = match (rendered.rgb8, &rendered.hdr) {
@@ -521,7 +441,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
 
         let output = if plan.per_frame_outputs {
-            frame_path(&plan.output, g.frame)
+            frame_path(&plan.output, g.number)
         } else {
             plan.output.clone()
         };
@@ -537,7 +457,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 FoveaError::Backend("the backend kept no image from before the denoiser".into())
             })?;
             let path = if plan.per_frame_outputs {
-                frame_path(path, g.frame)
+                frame_path(path, g.number)
             } else {
                 path.clone()
             };
@@ -545,14 +465,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         if let Some(p) = &args.regions_overlay {
             let p = if plan.per_frame_outputs {
-                frame_path(p, g.frame)
+                frame_path(p, g.number)
             } else {
                 p.clone()
             };
             write_png(&p, w, h, &regions_overlay(&rgb8, w, h, &foveation))?;
         }
         frames.push(FrameStats {
-            frame: g.frame,
+            frame: g.number,
             gaze: foveation.gaze,
             output,
             render: rendered.stats,
@@ -628,8 +548,8 @@ fn refuse_overwriting_inputs(args: &RenderArgs) -> Result<()> {
         args.scene.as_deref(),
         args.materials.mtl.as_deref(),
         args.lighting.env_map.as_deref(),
-        args.gaze_trace.as_deref(),
-        args.camera_path.as_deref(),
+        args.sequence.gaze_trace.as_deref(),
+        args.sequence.camera_path.as_deref(),
     ]
     .into_iter()
     .flatten()

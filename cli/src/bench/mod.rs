@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use fovea_core::camera::Camera;
 use fovea_core::foveation::display::{paper_params_for_display, DisplayGeometry};
-use fovea_core::integrator::{FrameParams, IntegratorSettings};
+use fovea_core::integrator::IntegratorSettings;
 use fovea_scene::bvh::{build_bvh_indexed, BvhBuildOptions};
 use fovea_scene::environment::Environment;
 use fovea_scene::load_scene;
@@ -213,15 +213,14 @@ fn bench_scale(triangles: u64, resolution: [u32; 2]) -> Result<serde_json::Value
         &DisplayGeometry::default(),
         w,
     );
-    let frame = FrameParams {
-        camera,
-        foveation,
+    let frame = crate::schedule::FrameSettings {
+        size: [w, h],
         integrator: IntegratorSettings::default(),
-        width: w,
-        height: h,
-        frame_index: 0,
         seed: 1,
-    };
+        fill_mode: fovea_core::foveation::fill::FILL_BILINEAR,
+        exposure_ev: 0.0,
+    }
+    .frame(0, camera, foveation);
     let view = packed.view();
     let (_image, stats) = fovea_cpu::render_frame(
         &view,

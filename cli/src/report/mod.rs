@@ -21,19 +21,20 @@ use fovea_core::camera::Camera;
 use fovea_core::foveation::blocks::count_samples;
 use fovea_core::foveation::display::{pixels_per_degree, DisplayGeometry};
 use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
-use fovea_core::integrator::{FrameParams, IntegratorSettings};
+use fovea_core::integrator::FrameParams;
 use fovea_cpu::FrameImage;
 use fovea_scene::environment::Environment;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::ReportArgs;
-use crate::backend::{FrameOutput, FrameRequest, Renderer};
+use crate::backend::{FrameOutput, Renderer};
 use crate::error::{FoveaError, Result};
 use crate::output::{regions_overlay, tonemapped_rgb8, write_png};
 use crate::partial::{
     check_parts, identity_lines, samples_in_part, write_part, PartHeader, PartSpec, RenderIdentity,
 };
 use crate::scene_setup::{choose_camera, default_scene_path, prepare_scene, Lighting};
+use crate::schedule::{FrameSchedule, FrameSettings, LonePath, ScheduledFrame};
 use crate::values::{self, SampleSelection, MAX_SPP};
 
 use configs::{ConfigKind, ConfigSpec, UNIFORM_SPP};
@@ -127,8 +128,8 @@ struct Plan {
     display: DisplayGeometry,
     radii_px: [f32; 2],
     ppd: f32,
-    fill_mode: u32,
-    integrator: IntegratorSettings,
+    /// What every frame shares (size, integrator, seed, fill, exposure).
+    settings: FrameSettings,
     eye: Option<[f64; 3]>,
     target: Option<[f64; 3]>,
     up: [f32; 3],
@@ -213,6 +214,19 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
             ));
         }
     }
+    // The trace's frames (with --camera-path, their cameras); a path without a trace is refused.
+    let still = ScheduledFrame {
+        number: 0,
+        gaze,
+        camera: None,
+    };
+    let schedule = FrameSchedule::read(
+        &args.sequence,
+        still,
+        resolution,
+        LonePath::NeedsTrace,
+        args.sequence_frames,
+    )?;
     Ok(Plan {
         resolution,
         gaze,
@@ -223,8 +237,7 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
         display,
         radii_px,
         user,
-        fill_mode: args.path.fill_mode(),
-        integrator: args.path.integrator(),
+        settings: FrameSettings::new(resolution, &args.path, &args.image),
         eye,
         target,
         up,
@@ -266,54 +279,16 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
             }
             (task, ..) => task,
         },
-        sequence: match &args.gaze_trace {
-            Some(path) => {
-                let mut seq = sequence::read_trace(
-                    path,
-                    args.trace_fps,
-                    args.gaze_normalized,
-                    resolution,
-                    args.sequence_frames,
-                    args.band_deg,
-                )?;
-                if let Some(camera_path) = &args.camera_path {
-                    seq.camera_path = Some((
-                        camera_path.display().to_string(),
-                        cameras_of_frames(camera_path, &seq.frames)?,
-                    ));
-                }
-                Some(seq)
-            }
-            None if args.camera_path.is_some() => {
-                return Err(FoveaError::option(
-                    "--camera-path",
-                    "moves the camera over a sequence; add --gaze-trace FILE.csv",
-                ))
-            }
+        sequence: match &args.sequence.gaze_trace {
+            Some(trace) => Some(sequence::SequencePlan::read(
+                &args.sequence,
+                trace,
+                schedule,
+                args.band_deg,
+            )?),
             None => None,
         },
     })
-}
-
-/// Each trace frame's camera from `--camera-path`, which must give every frame the trace renders.
-fn cameras_of_frames(
-    path: &Path,
-    frames: &[(u32, [f32; 2])],
-) -> Result<Vec<crate::camera_path::CameraKey>> {
-    let keys = crate::camera_path::read_camera_path(path)?;
-    let by_frame: HashMap<u32, crate::camera_path::CameraKey> =
-        keys.iter().map(|k| (k.frame, *k)).collect();
-    frames
-        .iter()
-        .map(|(frame, _)| {
-            by_frame.get(frame).copied().ok_or_else(|| {
-                FoveaError::option(
-                    "--camera-path",
-                    format!("has no line for frame {frame}, which the --gaze-trace renders"),
-                )
-            })
-        })
-        .collect()
 }
 
 /// Creates `dir` (and its parents).
@@ -386,18 +361,19 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         ));
     }
     // Samples of every render known now (the reference and equal time are added when known).
-    let per_scene: u64 = configs::table_configs(&paper, user.as_ref(), plan.integrator.texture_lod)
-        .iter()
-        .map(|c| c.foveation)
-        .chain(
-            configs::sweep_spps(plan.sweep_max)
-                .into_iter()
-                .filter(|&s| s != UNIFORM_SPP)
-                .map(FoveationParams::uniform),
-        )
-        .map(|f| count_samples(w, h, &f).iter().sum::<u64>())
-        .sum::<u64>()
-        * u64::from(plan.runs);
+    let per_scene: u64 =
+        configs::table_configs(&paper, user.as_ref(), plan.settings.integrator.texture_lod)
+            .iter()
+            .map(|c| c.foveation)
+            .chain(
+                configs::sweep_spps(plan.sweep_max)
+                    .into_iter()
+                    .filter(|&s| s != UNIFORM_SPP)
+                    .map(FoveationParams::uniform),
+            )
+            .map(|f| count_samples(w, h, &f).iter().sum::<u64>())
+            .sum::<u64>()
+            * u64::from(plan.runs);
     let bar = if args.quiet {
         ProgressBar::hidden()
     } else {
@@ -575,16 +551,14 @@ fn render_reference(
     let (w, h) = (reference_frame.width, reference_frame.height);
     bar.inc_length(u64::from(w) * u64::from(h) * u64::from(plan.reference_spp));
     bar.set_message(format!("{what}: reference ({} spp)", plan.reference_spp));
-    let request = FrameRequest {
-        fill_mode: plan.fill_mode,
-        exposure_ev: args.exposure,
-        history: false,
-        denoise: false,
-        output: FrameOutput::ReadBack {
+    let request = plan.settings.request(
+        false,
+        false,
+        FrameOutput::ReadBack {
             want_hdr: true,
             want_raw: false,
         },
-    };
+    );
     let rendered = renderer.render(packed, reference_frame, &request, &|n| bar.inc(n))?;
     let image = rendered
         .hdr
@@ -648,10 +622,10 @@ fn obtain_reference(
             scene.packed,
             scene.env_text,
             frame,
-            plan.fill_mode,
+            plan.settings.fill_mode,
         ),
     );
-    let identity = identity_lines(scene.identity, frame, plan.fill_mode);
+    let identity = identity_lines(scene.identity, frame, plan.settings.fill_mode);
     if let (Some(selection), Some(dir)) = (plan.reference_part, &plan.reference_parts) {
         let spec = PartSpec::new(selection, plan.reference_spp)
             .map_err(|why| FoveaError::option("--reference-part", why))?;
@@ -798,7 +772,7 @@ fn run_scene(
         point_lights,
         renderer.wants_wide_bvh(),
     )?;
-    if plan.integrator.texture_lod != fovea_core::integrator::path::TEXTURE_LOD_OFF
+    if plan.settings.integrator.texture_lod != fovea_core::integrator::path::TEXTURE_LOD_OFF
         && scene.packed.stats.texture_count == 0
     {
         note(
@@ -826,18 +800,6 @@ fn run_scene(
         w as f32 / h as f32,
     )?;
     renderer.set_scene(&scene.packed, true)?;
-    let frame = |foveation: FoveationParams, seed: u32, texture_lod: Option<u32>| FrameParams {
-        camera,
-        foveation,
-        integrator: IntegratorSettings {
-            texture_lod: texture_lod.unwrap_or(plan.integrator.texture_lod),
-            ..plan.integrator
-        },
-        width: w,
-        height: h,
-        frame_index: 0,
-        seed,
-    };
     let paper = FoveationParams::paper(plan.gaze, plan.radii_px[0], plan.radii_px[1]);
     let regions = RegionMap::new(w, h, &paper);
 
@@ -845,11 +807,15 @@ fn run_scene(
     let scene_bytes = std::fs::read(&file).map_err(|e| FoveaError::file(&file, e))?;
     // The reference reads every texture at level 0: many samples per pixel integrate the pixel's
     // footprint themselves (the ground truth the texture level of detail approximates).
-    let reference_frame = frame(
-        FoveationParams::uniform(plan.reference_spp),
-        args.seed ^ REFERENCE_SEED_XOR,
-        Some(fovea_core::integrator::path::TEXTURE_LOD_OFF),
-    );
+    // Its seed differs from the test renders', so that its noise is independent of theirs.
+    let reference_settings = FrameSettings {
+        seed: plan.settings.seed ^ REFERENCE_SEED_XOR,
+        ..plan
+            .settings
+            .with_texture_lod(fovea_core::integrator::path::TEXTURE_LOD_OFF)
+    };
+    let reference_foveation = FoveationParams::uniform(plan.reference_spp);
+    let reference_frame = reference_settings.frame(0, camera, reference_foveation);
     let identity = RenderIdentity::of(&scene_bytes, &scene.packed);
     let references = ReferenceScene {
         file: &file,
@@ -868,46 +834,34 @@ fn run_scene(
     )?;
     // A --camera-path sequence: each frame's camera, chosen once, and each moving camera's
     // reference (a still one shares the scene's), or with --reference-part a part of it.
-    let frame_cameras: Option<Vec<Camera>> = match plan
+    let moving_sequence = plan
         .sequence
         .as_ref()
-        .and_then(|seq| seq.camera_path.as_ref())
-    {
-        Some((_, keys)) => Some(
-            keys.iter()
-                .map(|key| {
-                    choose_camera(
-                        &scene,
-                        Some(key.eye),
-                        Some(key.target),
-                        plan.up,
-                        args.camera.fov,
-                        w as f32 / h as f32,
-                    )
-                })
-                .collect::<Result<_>>()?,
-        ),
+        .filter(|seq| seq.camera_path.is_some());
+    let frame_cameras: Option<Vec<Camera>> = match moving_sequence {
+        Some(seq) => Some(seq.schedule.cameras(camera, |key| {
+            choose_camera(
+                &scene,
+                Some(key.eye),
+                Some(key.target),
+                plan.up,
+                args.camera.fov,
+                plan.settings.aspect(),
+            )
+        })?),
         None => None,
     };
     let mut moving: Vec<(Camera, FrameImage, Vec<u8>)> = Vec::new();
-    if let (Some((_, keys)), Some(cameras)) = (
-        plan.sequence
-            .as_ref()
-            .and_then(|seq| seq.camera_path.as_ref()),
-        &frame_cameras,
-    ) {
+    if let (Some(seq), Some(cameras)) = (moving_sequence, &frame_cameras) {
         // The scene's own camera has its reference above (it joins `moving` below).
         let mut done: Vec<Camera> = vec![camera];
-        for (key, &camera) in keys.iter().zip(cameras) {
+        for (f, &camera) in seq.schedule.frames.iter().zip(cameras) {
             if done.contains(&camera) {
                 continue;
             }
             done.push(camera);
-            let frame_reference = FrameParams {
-                camera,
-                ..reference_frame
-            };
-            let what = format!("{scene_name} frame {}", key.frame);
+            let frame_reference = reference_settings.frame(0, camera, reference_foveation);
+            let what = format!("{scene_name} frame {}", f.number);
             if let Some(obtained) = obtain_reference(
                 args,
                 plan,
@@ -917,7 +871,7 @@ fn run_scene(
                 &frame_reference,
                 &what,
             )? {
-                let rgb8 = tonemapped_rgb8(&obtained.image, args.exposure);
+                let rgb8 = tonemapped_rgb8(&obtained.image, plan.settings.exposure_ev);
                 moving.push((camera, obtained.image, rgb8));
             }
         }
@@ -932,7 +886,7 @@ fn run_scene(
     else {
         return Ok(None);
     };
-    let reference_rgb8 = tonemapped_rgb8(&reference, args.exposure);
+    let reference_rgb8 = tonemapped_rgb8(&reference, plan.settings.exposure_ev);
     if frame_cameras.as_ref().is_some_and(|c| c.contains(&camera)) {
         moving.push((camera, reference.clone(), reference_rgb8.clone()));
     }
@@ -947,7 +901,6 @@ fn run_scene(
     create_dir(&out_dir.join("flip"))?;
 
     let measurer = Measurer {
-        args,
         plan,
         packed: &scene.packed,
         bar,
@@ -956,13 +909,14 @@ fn run_scene(
         reference_rgb8: &reference_rgb8,
         regions: &regions,
         out_dir,
-        frame: &frame,
+        camera,
     };
     // Uniform results by spp: the sweep's 32 spp and an equal-time spp already measured are reused.
     let mut uniform_by_spp: HashMap<u32, ConfigResult> = HashMap::new();
     let mut results = Vec::new();
     let user = plan.user.map(|u| u.around(plan.gaze));
-    for spec in configs::table_configs(&paper, user.as_ref(), plan.integrator.texture_lod) {
+    for spec in configs::table_configs(&paper, user.as_ref(), plan.settings.integrator.texture_lod)
+    {
         let r = measurer.measure(renderer, &spec)?;
         if spec.kind == ConfigKind::Uniform {
             uniform_by_spp.insert(spec.foveation.spp[0], r.clone());
@@ -1024,7 +978,7 @@ fn run_scene(
                     count_samples(w, h, &f).iter().sum::<u64>()
                 })
                 .sum::<u64>()
-                * seq.frames.len() as u64;
+                * seq.schedule.frames.len() as u64;
             bar.inc_length(samples);
             let views: Vec<sequence::FrameView> = match &frame_cameras {
                 Some(cameras) => cameras
@@ -1047,18 +1001,16 @@ fn run_scene(
                         reference: &reference,
                         reference_rgb8: &reference_rgb8,
                     };
-                    seq.frames.len()
+                    seq.schedule.frames.len()
                 ],
             };
             let inputs = sequence::SequenceInputs {
                 packed: &scene.packed,
-                base_frame: frame(paper, args.seed, None),
+                settings: plan.settings,
                 paper,
                 display: plan.display,
                 ppd: plan.ppd,
                 views,
-                fill_mode: plan.fill_mode,
-                exposure_ev: args.exposure,
                 scene_name: &scene_name,
                 bar,
                 fovvideovdp: metric.as_ref().map_err(Clone::clone),
@@ -1094,7 +1046,7 @@ fn run_scene(
         regions: "regions.png".into(),
         region_pixels: regions.pixels,
         runs: plan.runs,
-        seed: args.seed,
+        seed: plan.settings.seed,
         equal_time_spp: Some(equal_spp),
         equal_time_fit: equal_fit,
         wall_ms: 0.0,
@@ -1105,7 +1057,6 @@ fn run_scene(
 
 /// What measuring a configuration needs.
 struct Measurer<'a> {
-    args: &'a ReportArgs,
     plan: &'a Plan,
     packed: &'a fovea_scene::pack::PackedScene,
     bar: &'a ProgressBar,
@@ -1114,7 +1065,8 @@ struct Measurer<'a> {
     reference_rgb8: &'a [u8],
     regions: &'a RegionMap,
     out_dir: &'a Path,
-    frame: &'a dyn Fn(FoveationParams, u32, Option<u32>) -> FrameParams,
+    /// The scene's camera.
+    camera: Camera,
 }
 
 /// The median of `v` (the mean of the middle two for an even count).
@@ -1136,7 +1088,10 @@ impl Measurer<'_> {
     /// and FLIP map.
     fn measure(&self, renderer: &mut Renderer, spec: &ConfigSpec) -> Result<ConfigResult> {
         let [w, h] = self.plan.resolution;
-        let frame = (self.frame)(spec.foveation, self.args.seed, spec.texture_lod);
+        let settings = spec.texture_lod.map_or(self.plan.settings, |lod| {
+            self.plan.settings.with_texture_lod(lod)
+        });
+        let frame = settings.frame(0, self.camera, spec.foveation);
         let mut runs_ms = Vec::new();
         let mut first: Option<(FrameImage, fovea_cpu::RenderStats)> = None;
         for run in 0..self.plan.runs {
@@ -1147,16 +1102,14 @@ impl Measurer<'_> {
                 run + 1,
                 self.plan.runs
             ));
-            let request = FrameRequest {
-                fill_mode: self.plan.fill_mode,
-                exposure_ev: self.args.exposure,
-                history: false,
-                denoise: spec.denoise,
-                output: FrameOutput::ReadBack {
+            let request = settings.request(
+                false,
+                spec.denoise,
+                FrameOutput::ReadBack {
                     want_hdr: first.is_none(),
                     want_raw: false,
                 },
-            };
+            );
             let rendered = renderer.render(self.packed, &frame, &request, &|n| self.bar.inc(n))?;
             runs_ms.push(rendered.stats.render_ms);
             match &first {
@@ -1178,7 +1131,7 @@ impl Measurer<'_> {
         let (image, stats) = first.expect("at least one run");
         self.bar
             .set_message(format!("{}: {} (error)", self.scene_name, spec.name));
-        let rgb8 = tonemapped_rgb8(&image, self.args.exposure);
+        let rgb8 = tonemapped_rgb8(&image, settings.exposure_ev);
         let flip = metrics::flip_map(self.reference_rgb8, &rgb8, w, h, self.plan.ppd);
         let rel_mse = metrics::rel_mse_map(&image, self.reference);
         let image_rel = format!("images/{}.png", spec.slug);

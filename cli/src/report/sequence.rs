@@ -18,7 +18,6 @@ use std::path::Path;
 use fovea_core::camera::Camera;
 use fovea_core::foveation::display::{radius_px_to_eccentricity_deg, DisplayGeometry};
 use fovea_core::foveation::regions::FoveationParams;
-use fovea_core::integrator::FrameParams;
 use fovea_cpu::FrameImage;
 use fovea_scene::pack::PackedScene;
 use indicatif::ProgressBar;
@@ -28,23 +27,23 @@ use super::fvvdp::{FovVideoVdp, RawFrames};
 use super::median;
 use super::metrics::{self, RegionMap, RegionMeans, REL_MSE_EPSILON};
 use super::saccades::{fovea_lag, saccade_frames, FoveaLag};
-use crate::backend::{FrameOutput, FrameRequest, Renderer};
-use crate::camera_path::CameraKey;
+use crate::backend::{FrameOutput, Renderer};
 use crate::error::{FoveaError, Result};
+use crate::schedule::{FrameSchedule, FrameSettings};
 
 /// The trace's frames and how to pool them.
 #[derive(Clone, Debug)]
 pub struct SequencePlan {
     /// The trace file, for the report.
     pub trace: String,
-    /// Frame numbers and gaze in image pixels.
-    pub frames: Vec<(u32, [f32; 2])>,
+    /// The frames: numbers, gaze in image pixels and, with `--camera-path`, cameras.
+    pub schedule: FrameSchedule,
     /// Frames per second the trace was sampled at (timed traces).
     pub fps: f64,
     /// Width of an eccentricity band in degrees.
     pub band_deg: f32,
-    /// `--camera-path`: the file, and each frame's camera (in `frames`' order).
-    pub camera_path: Option<(String, Vec<CameraKey>)>,
+    /// `--camera-path`: the file (each frame's camera is in `schedule`).
+    pub camera_path: Option<String>,
 }
 
 /// One frame's camera and the converged reference it is scored against (shared by every frame while
@@ -227,17 +226,14 @@ pub fn sequence_specs(sweep: &[u32]) -> Vec<SequenceSpec> {
 /// Everything a sequence run needs from the scene's report.
 pub struct SequenceInputs<'a> {
     pub packed: &'a PackedScene,
-    /// The scene's frame at frame 0 (camera, size, integrator, seed); each frame sets its own
-    /// foveation and frame index.
-    pub base_frame: FrameParams,
+    /// What every frame shares (each frame's camera is in `views`).
+    pub settings: FrameSettings,
     /// The paper's 32/16/8 foveation at the image centre; moved to each frame's gaze.
     pub paper: FoveationParams,
     pub display: DisplayGeometry,
     pub ppd: f32,
     /// Each frame's camera and reference, in the plan's frame order.
     pub views: Vec<FrameView<'a>>,
-    pub fill_mode: u32,
-    pub exposure_ev: f32,
     pub scene_name: &'a str,
     pub bar: &'a ProgressBar,
     /// FovVideoVDP where it is set up, else why not; and the folder its frames are written to.
@@ -362,8 +358,8 @@ pub fn run_sequence(
     specs: &[SequenceSpec],
     inputs: &SequenceInputs<'_>,
 ) -> Result<SequenceReport> {
-    let (w, h) = (inputs.base_frame.width, inputs.base_frame.height);
-    if plan.frames.is_empty() {
+    let [w, h] = inputs.settings.size;
+    if plan.schedule.frames.is_empty() {
         return Err(FoveaError::option(
             "--gaze-trace",
             "the trace has no frame to render",
@@ -372,9 +368,11 @@ pub fn run_sequence(
     // Bands up to the farthest pixel from any gaze of the trace (gazes may lie off the image).
     let band_deg = plan.band_deg;
     let max_ecc = plan
+        .schedule
         .frames
         .iter()
-        .flat_map(|(_, g)| {
+        .map(|f| f.gaze)
+        .flat_map(|g| {
             [
                 [0.0, 0.0],
                 [w as f32, 0.0],
@@ -389,9 +387,11 @@ pub fn run_sequence(
 
     // Per frame: the regions and bands around its gaze (the same for every configuration).
     let per_frame: Vec<(RegionMap, Vec<u16>, FoveationParams)> = plan
+        .schedule
         .frames
         .iter()
-        .map(|&(_, gaze)| {
+        .map(|f| {
+            let gaze = f.gaze;
             let mut paper = inputs.paper;
             paper.gaze = gaze;
             let regions = RegionMap::new(w, h, &paper);
@@ -415,10 +415,10 @@ pub fn run_sequence(
             .collect()
     };
 
-    if inputs.views.len() != plan.frames.len() {
+    if inputs.views.len() != plan.schedule.frames.len() {
         return Err(FoveaError::Backend(format!(
             "{} frames but {} cameras and references",
-            plan.frames.len(),
+            plan.schedule.frames.len(),
             inputs.views.len()
         )));
     }
@@ -436,7 +436,7 @@ pub fn run_sequence(
         }
         Err(_) => None,
     };
-    let fixations: Vec<[f32; 2]> = plan.frames.iter().map(|(_, g)| *g).collect();
+    let fixations: Vec<[f32; 2]> = plan.schedule.frames.iter().map(|f| f.gaze).collect();
     let bounds = [inputs.paper.radius_fovea, inputs.paper.radius_intermediate]
         .map(|r| radius_px_to_eccentricity_deg(r, &inputs.display));
     let saccades = saccade_frames(&fixations, &inputs.display, bounds[0]);
@@ -465,13 +465,13 @@ pub fn run_sequence(
         let mut fovea_flip = Vec::new();
         let mut samples = 0u64;
         let mut previous: Option<FrameImage> = None;
-        for (i, &(frame_number, _)) in plan.frames.iter().enumerate() {
+        for (i, scheduled) in plan.schedule.frames.iter().enumerate() {
             inputs.bar.set_message(format!(
                 "{}: sequence {} (frame {}/{})",
                 inputs.scene_name,
                 spec.name,
                 i + 1,
-                plan.frames.len()
+                plan.schedule.frames.len()
             ));
             let (regions, band, paper_at_gaze) = &per_frame[i];
             let view = inputs.views[i];
@@ -482,22 +482,17 @@ pub fn run_sequence(
             } else {
                 FoveationParams::uniform(spec.spp[0])
             };
-            let frame = FrameParams {
-                camera: view.camera,
-                foveation,
-                frame_index: frame_number,
-                ..inputs.base_frame
-            };
-            let request = FrameRequest {
-                fill_mode: inputs.fill_mode,
-                exposure_ev: inputs.exposure_ev,
-                history: spec.history,
-                denoise: spec.denoise,
-                output: FrameOutput::ReadBack {
+            let frame = inputs
+                .settings
+                .frame(scheduled.number, view.camera, foveation);
+            let request = inputs.settings.request(
+                spec.history,
+                spec.denoise,
+                FrameOutput::ReadBack {
                     want_hdr: true,
                     want_raw: false,
                 },
-            };
+            );
             let rendered = renderer.render(inputs.packed, &frame, &request, &|n| {
                 inputs.bar.inc(n);
             })?;
@@ -541,7 +536,7 @@ pub fn run_sequence(
                     &test,
                     reference,
                     [w, h],
-                    plan.frames.len() as u32,
+                    plan.schedule.frames.len() as u32,
                     plan.fps,
                     &fixations,
                     &inputs.display,
@@ -572,9 +567,9 @@ pub fn run_sequence(
         fovea_series.push(fovea_flip);
         results.push(SequenceResult {
             spec: spec.clone(),
-            frames: plan.frames.len() as u32,
+            frames: plan.schedule.frames.len() as u32,
             frame_ms: median(&frame_ms),
-            primary_samples_per_frame: samples as f64 / plan.frames.len() as f64,
+            primary_samples_per_frame: samples as f64 / plan.schedule.frames.len() as f64,
             flip: region_means(&flip_regions.means()),
             rel_mse: region_means(&rel_regions.means()),
             flicker: region_means(&flicker_regions.means()),
@@ -605,8 +600,8 @@ pub fn run_sequence(
     }
     Ok(SequenceReport {
         trace: plan.trace.clone(),
-        camera_path: plan.camera_path.as_ref().map(|(file, _)| file.clone()),
-        frames: plan.frames.len() as u32,
+        camera_path: plan.camera_path.clone(),
+        frames: plan.schedule.frames.len() as u32,
         fps: plan.fps,
         band_deg,
         region_bounds_deg: bounds.map(f64::from),
@@ -645,33 +640,31 @@ fn fovvideovdp_note(
     }
 }
 
-/// Reads `--gaze-trace` for a report: the frames and their gaze in pixels of a `width × height`
-/// image, at most `max_frames` of them.
-pub fn read_trace(
-    path: &Path,
-    fps: f64,
-    normalized: bool,
-    image: [u32; 2],
-    max_frames: Option<u32>,
-    band_deg: f32,
-) -> Result<SequencePlan> {
-    if !(band_deg.is_finite() && (0.05..=90.0).contains(&band_deg)) {
-        return Err(FoveaError::option(
-            "--band-deg",
-            format!("{band_deg} is not a band width in [0.05, 90] degrees"),
-        ));
+impl SequencePlan {
+    /// The plan of `--gaze-trace trace`'s frames, `schedule`, pooled in bands `band_deg` wide.
+    pub fn read(
+        sequence: &crate::args::SequenceArgs,
+        trace: &Path,
+        schedule: FrameSchedule,
+        band_deg: f32,
+    ) -> Result<Self> {
+        if !(band_deg.is_finite() && (0.05..=90.0).contains(&band_deg)) {
+            return Err(FoveaError::option(
+                "--band-deg",
+                format!("{band_deg} is not a band width in [0.05, 90] degrees"),
+            ));
+        }
+        Ok(Self {
+            trace: trace.display().to_string(),
+            schedule,
+            fps: sequence.trace_fps,
+            band_deg,
+            camera_path: sequence
+                .camera_path
+                .as_ref()
+                .map(|p| p.display().to_string()),
+        })
     }
-    let mut frames = crate::gaze::read_trace_frames(path, fps, normalized, image)?;
-    if let Some(n) = max_frames {
-        frames.truncate(n as usize);
-    }
-    Ok(SequencePlan {
-        trace: path.display().to_string(),
-        frames,
-        fps,
-        band_deg,
-        camera_path: None,
-    })
 }
 
 #[cfg(test)]

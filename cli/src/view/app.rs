@@ -14,7 +14,6 @@ use std::time::{Duration, Instant};
 
 use fovea_core::camera::Camera;
 use fovea_core::foveation::regions::FOVEATION_OK;
-use fovea_core::integrator::FrameParams;
 use glam::Vec3;
 use serde_json::json;
 use winit::application::ApplicationHandler;
@@ -26,7 +25,7 @@ use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::{Window, WindowId};
 
 use crate::args::Backend;
-use crate::backend::{FrameOutput, FrameRequest};
+use crate::backend::FrameOutput;
 use crate::error::{FoveaError, Result};
 use crate::fixation::FixationFilter;
 use crate::gaze::GazeConvention;
@@ -577,38 +576,29 @@ impl Viewer {
                 "the foveation settings are inconsistent",
             ));
         }
+        let settings = self.options.settings.with_size(size);
         let pose = self.fly.pose();
         let camera = Camera::from_forward(
             pose.eye,
             pose.forward,
             pose.up_hint,
             pose.fov_y_degrees.to_radians(),
-            size[0] as f32 / size[1] as f32,
+            settings.aspect(),
         );
-        let frame = FrameParams {
-            camera,
-            foveation,
-            integrator: self.options.integrator,
-            width: size[0],
-            height: size[1],
-            frame_index: self.frame_index_key,
-            seed: self.options.seed,
-        };
+        let frame = settings.frame(self.frame_index_key, camera, foveation);
         self.frame_index_key = self.frame_index_key.wrapping_add(1);
         let gaze_is_new = self.gaze_arrived.is_some() && self.gaze_arrived != self.gaze_used;
         self.gaze_used = self.gaze_arrived;
 
         let renderer = self.renderer.as_mut().expect("the window is open");
         let render_start = Instant::now();
-        let request = FrameRequest {
-            fill_mode: self.options.fill_mode,
-            exposure_ev: self.options.exposure,
-            history: true,
-            denoise: self.denoise,
-            output: FrameOutput::Present {
+        let request = settings.request(
+            true,
+            self.denoise,
+            FrameOutput::Present {
                 overlay: self.overlay,
             },
-        };
+        );
         let (stats, before) =
             renderer.render(&self.scene.packed, &frame, &request, accumulated_before)?;
         let render_ms = render_start.elapsed().as_secs_f64() * 1e3;
@@ -853,7 +843,7 @@ impl Viewer {
             "backend": renderer.backend_name,
             "device": renderer.device,
             "scene": self.options.scene,
-            "seed": self.options.seed,
+            "seed": self.options.settings.seed,
             "camera": {
                 "eye": fovea_scene::rebase::to_world(pose.eye.to_array(), self.scene.origin),
                 "forward": pose.forward.to_array(),
@@ -863,7 +853,7 @@ impl Viewer {
         let path = write_screenshot(
             &self.options.screenshot_dir,
             &mean,
-            self.options.exposure,
+            self.options.settings.exposure_ev,
             &foveation,
             record,
             details,

@@ -3,12 +3,11 @@
 use std::net::{Ipv4Addr, SocketAddr};
 use std::path::PathBuf;
 
-use fovea_core::integrator::IntegratorSettings;
-
 use crate::args::{Backend, GazeSourceArg, ViewArgs};
 use crate::error::{FoveaError, Result};
 use crate::gaze::{GazeConvention, GazeTrace, TraceTiming, UdpGazeSource};
 use crate::scene_setup::Lighting;
+use crate::schedule::FrameSettings;
 use crate::values;
 use crate::view::sampling::{configurations, SamplingConfig};
 use crate::view::script::Script;
@@ -85,10 +84,9 @@ pub struct ViewOptions {
     pub overlay: bool,
     pub denoise: bool,
     pub budget_ms: f64,
-    pub integrator: IntegratorSettings,
-    pub fill_mode: u32,
-    pub exposure: f32,
-    pub seed: u32,
+    /// What every frame shares; its size is the first window's, and each frame takes the rendered
+    /// size of its own ([`FrameSettings::with_size`]).
+    pub settings: FrameSettings,
     /// `--eye`, `--target`, `--up`.
     pub camera: (Option<[f64; 3]>, Option<[f64; 3]>, [f32; 3]),
     pub fov: Option<f32>,
@@ -297,10 +295,7 @@ impl ViewOptions {
             overlay: args.overlay,
             denoise: args.denoise,
             budget_ms: args.budget_ms,
-            integrator: args.path.integrator(),
-            fill_mode: args.path.fill_mode(),
-            exposure: args.image.exposure,
-            seed: args.image.seed,
+            settings: FrameSettings::new(args.size.0, &args.path, &args.image),
             camera,
             fov: args.camera.fov,
             script,

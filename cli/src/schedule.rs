@@ -1,0 +1,335 @@
+//! The one frame driver of `render`, `report` and `view`: which frames a run renders (each one's
+//! number, gaze and camera, from `--gaze`, a `--gaze-trace`, a `--camera-path` or, in `view`, live
+//! input), and the one place that turns a run's settings into core's [`FrameParams`] and
+//! [`FrameRequest`].
+//!
+//! A new frame option is a field of a clap group in `args.rs` and of [`FrameSettings`] here; every
+//! command renders through [`FrameSettings::frame`] and [`FrameSettings::request`].
+use std::collections::HashMap;
+
+use fovea_core::camera::Camera;
+use fovea_core::foveation::regions::FoveationParams;
+use fovea_core::integrator::{FrameParams, IntegratorSettings};
+use fovea_core::passes::{FrameOutput, FrameRequest};
+
+use crate::args::{ImageArgs, PathArgs, SequenceArgs};
+use crate::camera_path::{read_camera_path, CameraKey};
+use crate::error::{FoveaError, Result};
+
+/// One frame of a run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScheduledFrame {
+    /// The frame's number: part of its random-number key, and of its output file's name.
+    pub number: u32,
+    /// The fixation, in image pixels.
+    pub gaze: [f32; 2],
+    /// The camera `--camera-path` gives the frame; `None` keeps the run's own camera.
+    pub camera: Option<CameraKey>,
+}
+
+/// What a `--camera-path` without a `--gaze-trace` means to a command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LonePath {
+    /// Its lines are the frames, all with the still frame's gaze (`render`).
+    NumbersFrames,
+    /// It is refused: the command's sequences follow a gaze trace (`report`).
+    NeedsTrace,
+}
+
+/// The frames of a run, in the order they are rendered.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameSchedule {
+    pub frames: Vec<ScheduledFrame>,
+    /// Whether the frames come from files (a trace or a path), so that each gets its own output.
+    pub from_files: bool,
+}
+
+impl FrameSchedule {
+    /// The frames `sequence` gives for an `image` (a gaze trace's, a camera path's, or both, the path
+    /// then giving every frame of the trace its camera), or `still` alone where it gives none.
+    /// `max_frames` keeps the first frames only (`report --sequence-frames`). Errors name the option.
+    pub fn read(
+        sequence: &SequenceArgs,
+        still: ScheduledFrame,
+        image: [u32; 2],
+        lone_path: LonePath,
+        max_frames: Option<u32>,
+    ) -> Result<Self> {
+        let trace = match &sequence.gaze_trace {
+            Some(path) => Some(crate::gaze::read_trace_frames(
+                path,
+                sequence.trace_fps,
+                sequence.gaze_normalized,
+                image,
+            )?),
+            None => None,
+        };
+        let keys = match (&sequence.camera_path, &trace, lone_path) {
+            (Some(_), None, LonePath::NeedsTrace) => {
+                return Err(FoveaError::option(
+                    "--camera-path",
+                    "moves the camera over a sequence; add --gaze-trace FILE.csv",
+                ))
+            }
+            (Some(path), ..) => Some(read_camera_path(path)?),
+            (None, ..) => None,
+        };
+        let mut frames: Vec<ScheduledFrame> = match (trace, &keys) {
+            (Some(trace), keys) => {
+                let by_frame: Option<HashMap<u32, CameraKey>> = keys
+                    .as_ref()
+                    .map(|k| k.iter().map(|k| (k.frame, *k)).collect());
+                trace
+                    .into_iter()
+                    .map(|(number, gaze)| {
+                        let camera = match &by_frame {
+                            None => None,
+                            Some(by_frame) => Some(*by_frame.get(&number).ok_or_else(|| {
+                                FoveaError::option(
+                                    "--camera-path",
+                                    format!(
+                                        "has no line for frame {number}, which the --gaze-trace renders"
+                                    ),
+                                )
+                            })?),
+                        };
+                        Ok(ScheduledFrame {
+                            number,
+                            gaze,
+                            camera,
+                        })
+                    })
+                    .collect::<Result<_>>()?
+            }
+            (None, Some(keys)) => keys
+                .iter()
+                .map(|k| ScheduledFrame {
+                    number: k.frame,
+                    gaze: still.gaze,
+                    camera: Some(*k),
+                })
+                .collect(),
+            (None, None) => vec![still],
+        };
+        if let Some(n) = max_frames {
+            frames.truncate(n as usize);
+        }
+        for f in &frames {
+            if f.gaze
+                .iter()
+                .any(|v| v.abs() > crate::values::MAX_GAZE_OFFSET)
+            {
+                return Err(FoveaError::option(
+                    "--gaze-trace",
+                    format!("{:?} is absurdly far off the image", f.gaze),
+                ));
+            }
+        }
+        Ok(Self {
+            frames,
+            from_files: sequence.gaze_trace.is_some() || sequence.camera_path.is_some(),
+        })
+    }
+
+    /// Each frame's camera: the path's, chosen by `choose`, or `base`.
+    pub fn cameras(
+        &self,
+        base: Camera,
+        choose: impl Fn(&CameraKey) -> Result<Camera>,
+    ) -> Result<Vec<Camera>> {
+        self.frames
+            .iter()
+            .map(|f| f.camera.as_ref().map_or(Ok(base), &choose))
+            .collect()
+    }
+}
+
+/// What every frame of a run shares. [`Self::frame`] and [`Self::request`] are the only places the
+/// command line makes core's [`FrameParams`] and [`FrameRequest`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameSettings {
+    /// The image size in pixels.
+    pub size: [u32; 2],
+    pub integrator: IntegratorSettings,
+    /// The seed of every random number (with the frame's number).
+    pub seed: u32,
+    /// `FILL_BILINEAR` or `FILL_REPLICATE`.
+    pub fill_mode: u32,
+    /// The tone map's exposure, in stops.
+    pub exposure_ev: f32,
+}
+
+impl FrameSettings {
+    /// The settings `path` and `image` give an image of `size` pixels.
+    #[must_use]
+    pub fn new(size: [u32; 2], path: &PathArgs, image: &ImageArgs) -> Self {
+        Self {
+            size,
+            integrator: path.integrator(),
+            seed: image.seed,
+            fill_mode: path.fill_mode(),
+            exposure_ev: image.exposure,
+        }
+    }
+
+    /// The same settings with textures read at `texture_lod` (`integrator::path::TEXTURE_LOD_*`).
+    #[must_use]
+    pub fn with_texture_lod(self, texture_lod: u32) -> Self {
+        Self {
+            integrator: IntegratorSettings {
+                texture_lod,
+                ..self.integrator
+            },
+            ..self
+        }
+    }
+
+    /// The same settings for an image of `size` pixels (the live view's window changes size).
+    #[must_use]
+    pub fn with_size(self, size: [u32; 2]) -> Self {
+        Self { size, ..self }
+    }
+
+    /// Frame `number` seen by `camera`, foveated by `foveation`.
+    #[must_use]
+    pub fn frame(&self, number: u32, camera: Camera, foveation: FoveationParams) -> FrameParams {
+        FrameParams {
+            camera,
+            foveation,
+            integrator: self.integrator,
+            width: self.size[0],
+            height: self.size[1],
+            frame_index: number,
+            seed: self.seed,
+        }
+    }
+
+    /// How to render a frame: with a history and the denoiser or not, its image going to `output`.
+    #[must_use]
+    pub fn request(&self, history: bool, denoise: bool, output: FrameOutput) -> FrameRequest {
+        FrameRequest {
+            fill_mode: self.fill_mode,
+            exposure_ev: self.exposure_ev,
+            history,
+            denoise,
+            output,
+        }
+    }
+
+    /// The image's aspect ratio (width over height), for a camera.
+    #[must_use]
+    pub fn aspect(&self) -> f32 {
+        self.size[0] as f32 / self.size[1] as f32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::{Path, PathBuf};
+
+    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    fn sequence(trace: Option<PathBuf>, path: Option<PathBuf>) -> SequenceArgs {
+        SequenceArgs {
+            gaze_trace: trace,
+            trace_fps: 30.0,
+            gaze_normalized: false,
+            camera_path: path,
+        }
+    }
+
+    const STILL: ScheduledFrame = ScheduledFrame {
+        number: 7,
+        gaze: [5.0, 6.0],
+        camera: None,
+    };
+
+    #[test]
+    fn a_trace_and_a_path_give_each_frame_its_gaze_and_camera() {
+        let dir = std::env::temp_dir().join(format!("fovea-schedule-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let trace = write(&dir, "t.csv", "0,1,2\n1,3,4\n2,5,6\n");
+        let path = write(
+            &dir,
+            "p.csv",
+            "frame,ex,ey,ez,tx,ty,tz\n0,0,0,1,0,0,0\n1,0,0,2,0,0,0\n2,0,0,3,0,0,0\n",
+        );
+        let image = [64, 48];
+        let s = FrameSchedule::read(
+            &sequence(Some(trace.clone()), Some(path.clone())),
+            STILL,
+            image,
+            LonePath::NeedsTrace,
+            None,
+        )
+        .unwrap();
+        assert!(s.from_files);
+        assert_eq!(s.frames.len(), 3);
+        assert_eq!(s.frames[1].gaze, [3.0, 4.0]);
+        assert_eq!(s.frames[2].camera.unwrap().eye, [0.0, 0.0, 3.0]);
+        // At most two frames.
+        let two = FrameSchedule::read(
+            &sequence(Some(trace.clone()), None),
+            STILL,
+            image,
+            LonePath::NeedsTrace,
+            Some(2),
+        )
+        .unwrap();
+        assert_eq!(two.frames.len(), 2);
+        assert!(two.frames.iter().all(|f| f.camera.is_none()));
+        // A path alone numbers the frames for `render` and is refused by `report`.
+        let alone = FrameSchedule::read(
+            &sequence(None, Some(path.clone())),
+            STILL,
+            image,
+            LonePath::NumbersFrames,
+            None,
+        )
+        .unwrap();
+        assert_eq!(
+            alone.frames.iter().map(|f| f.number).collect::<Vec<_>>(),
+            [0, 1, 2]
+        );
+        assert!(alone.frames.iter().all(|f| f.gaze == STILL.gaze));
+        let e = FrameSchedule::read(
+            &sequence(None, Some(path)),
+            STILL,
+            image,
+            LonePath::NeedsTrace,
+            None,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("--gaze-trace"), "{e}");
+        // A path that lacks one of the trace's frames names it.
+        let short = write(&dir, "s.csv", "0,0,0,1,0,0,0\n1,0,0,2,0,0,0\n");
+        let e = FrameSchedule::read(
+            &sequence(Some(trace), Some(short)),
+            STILL,
+            image,
+            LonePath::NeedsTrace,
+            None,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("frame 2"), "{e}");
+        // Neither: the still frame.
+        let still = FrameSchedule::read(
+            &sequence(None, None),
+            STILL,
+            image,
+            LonePath::NumbersFrames,
+            None,
+        )
+        .unwrap();
+        assert_eq!(still.frames, [STILL]);
+        assert!(!still.from_files);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
