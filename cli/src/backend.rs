@@ -1,6 +1,6 @@
 //! Choosing and driving a backend: the CPU host, or (with the `vulkan` feature) the Vulkan host.
 use fovea_core::integrator::FrameParams;
-use fovea_cpu::{FrameImage, RenderStats};
+use fovea_cpu::{FrameImage, RenderStats, RenderedFrame};
 use fovea_scene::pack::PackedScene;
 
 use crate::args::Backend;
@@ -9,12 +9,11 @@ use crate::stats::cpu_device_name;
 
 /// One rendered frame, as the backend produced it.
 pub struct Rendered {
-    /// Linear HDR, when asked for ([`FrameOutput::ReadBack`]'s `want_hdr`; the CPU has it anyway).
-    pub hdr: Option<FrameImage>,
-    /// Tone-mapped 8-bit sRGB RGB bytes (with [`FrameOutput::ReadBack`]).
-    pub rgb8: Option<Vec<u8>>,
-    /// The HDR image before the denoiser ([`FrameOutput::ReadBack`]'s `want_raw`, with the denoiser).
-    pub raw_hdr: Option<FrameImage>,
+    /// Its images: linear HDR when asked for ([`FrameOutput::ReadBack`]'s `want_hdr`; the CPU has it
+    /// anyway), the tone-mapped 8-bit one with [`FrameOutput::ReadBack`], and the HDR image before
+    /// the denoiser (`want_raw`, with the denoiser). Nothing with [`FrameOutput::Present`]: the
+    /// frame stays with the backend.
+    pub image: RenderedFrame,
     pub stats: RenderStats,
     /// With history: this frame started every pixel's history afresh (the first frame, a reset, a
     /// new size).
@@ -47,7 +46,7 @@ pub struct CpuRenderer {
     /// Each pixel's history, for frames rendered with temporal reuse.
     history: Box<fovea_cpu::TemporalHistory>,
     /// The last frame rendered for the window ([`FrameOutput::Present`]).
-    presented: Option<fovea_cpu::CpuFrame>,
+    presented: Option<RenderedFrame>,
 }
 
 impl CpuRenderer {
@@ -359,7 +358,7 @@ impl Renderer {
             Self::Cpu(cpu) => {
                 let view = packed.view().with_features(cpu.features);
                 let history_restarted = request.history && !cpu.history.continues(frame);
-                let (mut image, stats) = cpu.pool.install(|| {
+                let (image, stats) = cpu.pool.install(|| {
                     fovea_cpu::render_frame_passes(
                         &view,
                         frame,
@@ -368,22 +367,25 @@ impl Renderer {
                         progress,
                     )
                 });
-                let raw_hdr = image.raw_hdr.take();
-                let (hdr, rgb8) = match request.output {
+                let image = match request.output {
                     FrameOutput::Hdr | FrameOutput::ReadBack { .. } => {
                         cpu.presented = None;
-                        let rgb8 = image.rgb8();
-                        (Some(image.hdr), rgb8)
+                        image
                     }
                     FrameOutput::Present { .. } => {
+                        let kept = RenderedFrame {
+                            width: image.width,
+                            height: image.height,
+                            hdr: None,
+                            rgba8: None,
+                            raw_hdr: None,
+                        };
                         cpu.presented = Some(image);
-                        (None, None)
+                        kept
                     }
                 };
                 Ok(Rendered {
-                    hdr,
-                    rgb8,
-                    raw_hdr,
+                    image,
                     stats,
                     history_restarted,
                     extra: None,
@@ -400,14 +402,8 @@ impl Renderer {
                     .render(scene, frame, request, &|n| progress(n))
                     .map_err(|e| FoveaError::Backend(format!("Vulkan backend: {e}")))?;
                 let messages = v.ctx.validation_messages();
-                let rgb8 = match request.output {
-                    FrameOutput::ReadBack { .. } => Some(image.rgb8()),
-                    FrameOutput::Hdr | FrameOutput::Present { .. } => None,
-                };
                 Ok(Rendered {
-                    rgb8,
-                    hdr: image.hdr,
-                    raw_hdr: image.raw_hdr,
+                    image,
                     history_restarted: stats.history_restarted,
                     extra: Some(serde_json::json!({
                         "chunks": stats.chunks,
@@ -467,11 +463,10 @@ impl Renderer {
     #[cfg_attr(not(feature = "vulkan"), allow(dead_code))] // the live view's, which needs Vulkan
     pub fn presented_rgba8(&self) -> Option<(&[u32], u32, u32)> {
         match self {
-            Self::Cpu(cpu) => cpu.presented.as_ref().and_then(|f| {
-                f.rgba8
-                    .as_deref()
-                    .map(|pixels| (pixels, f.hdr.width, f.hdr.height))
-            }),
+            Self::Cpu(cpu) => cpu
+                .presented
+                .as_ref()
+                .and_then(|f| f.rgba8.as_deref().map(|pixels| (pixels, f.width, f.height))),
             #[cfg(feature = "vulkan")]
             Self::Vulkan(_) => None,
         }
@@ -485,7 +480,7 @@ impl Renderer {
             Self::Cpu(cpu) => cpu
                 .presented
                 .as_ref()
-                .map(|f| f.hdr.clone())
+                .and_then(|f| f.hdr.clone())
                 .ok_or_else(|| FoveaError::View("nothing rendered to save".into())),
             #[cfg(feature = "vulkan")]
             Self::Vulkan(v) => v

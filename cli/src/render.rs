@@ -431,7 +431,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         );
         let rendered = renderer.render(&scene.packed, &frame, &request, &|n| bar.inc(n))?;
         bar.finish_and_clear();
-        let rgb8 = match (rendered.rgb8, &rendered.hdr) {
+        let rgb8 = match (rendered.image.rgb8(), &rendered.image.hdr) {
             (Some(bytes), _) => bytes,
             (None, Some(hdr)) => tonemapped_rgb8(hdr, args.image.exposure),
             (None, None) => unreachable!("every backend returns HDR or tone-mapped pixels"),
@@ -445,7 +445,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         } else {
             plan.output.clone()
         };
-        match (plan.output_format, &rendered.hdr) {
+        match (plan.output_format, &rendered.image.hdr) {
             (ImageFormat::Exr, Some(hdr)) => {
                 write_image(&output, ImageFormat::Exr, hdr, args.image.exposure)?
             }
@@ -453,7 +453,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             (ImageFormat::Png, _) => write_png(&output, w, h, &rgb8)?,
         }
         if let Some((path, format)) = &plan.keep_raw {
-            let raw = rendered.raw_hdr.as_ref().ok_or_else(|| {
+            let raw = rendered.image.raw_hdr.as_ref().ok_or_else(|| {
                 FoveaError::Backend("the backend kept no image from before the denoiser".into())
             })?;
             let path = if plan.per_frame_outputs {

@@ -12,6 +12,29 @@ pub struct FrameImage {
     pub pixels: Vec<[f32; 4]>,
 }
 
+/// A frame as a host returns it: the images its request asked for (one type for every host and the
+/// command line).
+#[derive(Clone, Debug)]
+pub struct RenderedFrame {
+    pub width: u32,
+    pub height: u32,
+    /// Linear HDR: the CPU host always has it, a device reads it back when asked.
+    pub hdr: Option<FrameImage>,
+    /// The tone-mapped 8-bit image, RGBA8 packed in `u32` with R in the low byte (core's
+    /// `tonemap_to_rgba8`), where the frame was tone-mapped and read back.
+    pub rgba8: Option<Vec<u32>>,
+    /// The HDR image before the denoiser's passes, when asked for and they ran.
+    pub raw_hdr: Option<FrameImage>,
+}
+
+impl RenderedFrame {
+    /// The 8-bit image as sRGB RGB bytes (what a PNG stores), where there is one.
+    #[must_use]
+    pub fn rgb8(&self) -> Option<Vec<u8>> {
+        self.rgba8.as_deref().map(rgba8_to_rgb8)
+    }
+}
+
 /// What rendering a frame cost.
 #[derive(Clone, Debug, Default)]
 pub struct RenderStats {

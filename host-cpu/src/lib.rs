@@ -30,6 +30,6 @@ pub mod temporal;
 
 pub use render::{
     fill_from_sample_sums, render_frame, render_frame_passes, render_frame_with_history,
-    render_sample_range, CpuFrame, FrameImage, RenderStats, FRAME_BYTES_PER_PIXEL,
+    render_sample_range, FrameImage, RenderStats, RenderedFrame, FRAME_BYTES_PER_PIXEL,
 };
 pub use temporal::TemporalHistory;

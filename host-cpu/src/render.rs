@@ -18,25 +18,7 @@ use crate::temporal::TemporalHistory;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-pub use fovea_frame::{FrameImage, RenderStats};
-
-/// What the CPU host made of a frame: the HDR image (filled, or with history its mean) and, where the
-/// frame's [`FrameRequest`] asked for an 8-bit image, the RGBA8 image (R in the low byte, as the kernel's).
-#[derive(Clone, Debug)]
-pub struct CpuFrame {
-    pub hdr: FrameImage,
-    pub rgba8: Option<Vec<u32>>,
-    /// The HDR image before the denoiser's passes, when the request asked for it and they ran.
-    pub raw_hdr: Option<FrameImage>,
-}
-
-impl CpuFrame {
-    /// The RGBA8 image as 8-bit sRGB RGB bytes (what a PNG stores), if the frame was tone-mapped.
-    #[must_use]
-    pub fn rgb8(&self) -> Option<Vec<u8>> {
-        self.rgba8.as_deref().map(fovea_frame::rgba8_to_rgb8)
-    }
-}
+pub use fovea_frame::{FrameImage, RenderStats, RenderedFrame};
 
 /// The most memory the CPU host's frame holds per pixel, in bytes, with history and the denoiser on:
 /// the image and the one kept from before the denoiser, the RGBA8 image, the cell means (at most a third
@@ -68,7 +50,7 @@ pub fn render_frame_passes(
     request: &FrameRequest,
     history: &mut TemporalHistory,
     progress: &(dyn Fn(u64) + Sync),
-) -> (CpuFrame, RenderStats) {
+) -> (RenderedFrame, RenderStats) {
     let start = Instant::now();
     let (width, height) = (frame.width, frame.height);
     let foveation = &frame.foveation;
@@ -162,8 +144,10 @@ pub fn render_frame_passes(
         pixels,
     };
     (
-        CpuFrame {
-            hdr,
+        RenderedFrame {
+            width,
+            height,
+            hdr: Some(hdr),
             rgba8,
             raw_hdr,
         },
@@ -313,7 +297,10 @@ pub fn render_frame(
         &mut TemporalHistory::new(),
         progress,
     );
-    (out.hdr, stats)
+    (
+        out.hdr.expect("the CPU host always returns the HDR image"),
+        stats,
+    )
 }
 
 /// [`render_frame`] with temporal reuse: the frame joins `history` and the returned image is the
@@ -327,7 +314,10 @@ pub fn render_frame_with_history(
 ) -> (FrameImage, RenderStats) {
     let request = hdr_request(fill_mode, true);
     let (out, stats) = render_frame_passes(scene, frame, &request, history, progress);
-    (out.hdr, stats)
+    (
+        out.hdr.expect("the CPU host always returns the HDR image"),
+        stats,
+    )
 }
 
 /// A request for the HDR image alone, with or without history.

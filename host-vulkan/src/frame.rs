@@ -13,7 +13,7 @@ use fovea_core::kernel_abi::*;
 use fovea_core::passes::{frame_passes, FramePass, PassItems};
 pub use fovea_core::passes::{FrameOutput, FrameRequest};
 use fovea_core::temporal::{GBufferTexel, HistoryTexel, TemporalParams};
-use fovea_frame::{FrameImage, RenderStats};
+use fovea_frame::{FrameImage, RenderStats, RenderedFrame};
 
 use crate::barrier::memory_barrier;
 use crate::blocks::{
@@ -24,27 +24,6 @@ use crate::context::{VulkanContext, CHUNK_TIMEOUT, WARMUP_TIMEOUT};
 use crate::error::{Result, VulkanError};
 use crate::resources::{FrameResources, Sizes, TemporalBuffers, PIXEL};
 use crate::scene::GpuScene;
-
-/// A frame read back from the device.
-#[derive(Clone, Debug)]
-pub struct GpuFrame {
-    pub width: u32,
-    pub height: u32,
-    /// Tone-mapped pixels, RGBA8 packed in `u32` with R in the low byte (core's `tonemap_to_rgba8`).
-    pub ldr: Vec<u32>,
-    /// The filled linear HDR image, when asked for.
-    pub hdr: Option<FrameImage>,
-    /// The HDR image before the denoiser's passes, when asked for and they ran.
-    pub raw_hdr: Option<FrameImage>,
-}
-
-impl GpuFrame {
-    /// The LDR image as 8-bit sRGB RGB bytes (what a PNG stores).
-    #[must_use]
-    pub fn rgb8(&self) -> Vec<u8> {
-        fovea_frame::rgba8_to_rgb8(&self.ldr)
-    }
-}
 
 /// What a GPU frame cost: the CPU host's statistics plus how the work was split.
 #[derive(Clone, Debug, Default)]
@@ -299,7 +278,7 @@ impl VulkanContext {
         fill_mode: u32,
         exposure_ev: f32,
         want_hdr: bool,
-    ) -> Result<(GpuFrame, GpuRenderStats)> {
+    ) -> Result<(RenderedFrame, GpuRenderStats)> {
         self.render_frame_with_progress(scene, frame, fill_mode, exposure_ev, want_hdr, &|_| {})
     }
 
@@ -314,7 +293,7 @@ impl VulkanContext {
         exposure_ev: f32,
         want_hdr: bool,
         progress: &dyn Fn(u64),
-    ) -> Result<(GpuFrame, GpuRenderStats)> {
+    ) -> Result<(RenderedFrame, GpuRenderStats)> {
         self.render_frame_and_history(
             scene,
             frame,
@@ -345,7 +324,7 @@ impl VulkanContext {
         want_hdr: bool,
         history: bool,
         progress: &dyn Fn(u64),
-    ) -> Result<(GpuFrame, GpuRenderStats)> {
+    ) -> Result<(RenderedFrame, GpuRenderStats)> {
         let request = FrameRequest {
             fill_mode,
             exposure_ev,
@@ -365,8 +344,8 @@ impl VulkanContext {
     /// on with a timeout), then one submission for every later pass and the read-back.
     /// `progress` receives the samples of each finished chunk.
     ///
-    /// With [`FrameOutput::Hdr`] only the HDR image is read back (`ldr` is empty); with
-    /// [`FrameOutput::Present`] nothing is (`ldr` is empty): [`Self::present`] shows the
+    /// With [`FrameOutput::Hdr`] only the HDR image is read back (`rgba8` is `None`); with
+    /// [`FrameOutput::Present`] nothing is (`rgba8` is `None`): [`Self::present`] shows the
     /// image and [`Self::read_back_hdr`] fetches its HDR for a screenshot.
     pub fn render(
         &mut self,
@@ -374,7 +353,7 @@ impl VulkanContext {
         frame: &FrameParams,
         request: &FrameRequest,
         progress: &dyn Fn(u64),
-    ) -> Result<(GpuFrame, GpuRenderStats)> {
+    ) -> Result<(RenderedFrame, GpuRenderStats)> {
         let prepared = self.prepare_frame(scene, frame, request)?;
         let timing = self.dispatch_frame(&prepared.plan, &prepared.sizes, request, progress)?;
         if request.history {
@@ -387,10 +366,10 @@ impl VulkanContext {
         let (w, h) = (frame.width, frame.height);
         let res = self.frame.as_mut().expect("frame resources exist");
         let (want_ldr, want_hdr) = read_back(request.output);
-        let ldr = if want_ldr {
-            res.ldr_readback.read::<u32>(pixels)?
+        let rgba8 = if want_ldr {
+            Some(res.ldr_readback.read::<u32>(pixels)?)
         } else {
-            Vec::new()
+            None
         };
         let hdr = if want_hdr {
             Some(FrameImage {
@@ -413,11 +392,11 @@ impl VulkanContext {
             _ => None,
         };
         Ok((
-            GpuFrame {
+            RenderedFrame {
                 width: w,
                 height: h,
-                ldr,
                 hdr,
+                rgba8,
                 raw_hdr,
             },
             stats,

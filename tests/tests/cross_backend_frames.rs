@@ -306,11 +306,11 @@ fn small_scenes_render_alike(traversal: fovea_vulkan::Traversal) {
             .unwrap_or_else(|e| panic!("{}: {e}", case.name));
         drop(scene);
         let hdr = gpu.hdr.as_ref().expect("HDR requested");
-        let f = compare(&cpu.pixels, &hdr.pixels, &gpu.ldr, W, H);
+        let f = compare(&cpu.pixels, &hdr.pixels, gpu.rgba8.as_ref().unwrap(), W, H);
         let cpu_identical = cpu.pixels == cpu_specialised.pixels;
         let gpu_identical = gpu.hdr.as_ref().map(|i| &i.pixels)
             == gpu_general.hdr.as_ref().map(|i| &i.pixels)
-            && gpu.ldr == gpu_general.ldr;
+            && gpu.rgba8 == gpu_general.rgba8;
         rows.push((
             case.name,
             f,
@@ -402,7 +402,7 @@ fn lost_empire_full_frame_renders_alike() {
         .expect("Vulkan render");
     drop(scene);
     let hdr = gpu.hdr.as_ref().expect("HDR requested");
-    let f = compare(&cpu.pixels, &hdr.pixels, &gpu.ldr, w, h);
+    let f = compare(&cpu.pixels, &hdr.pixels, gpu.rgba8.as_ref().unwrap(), w, h);
     eprintln!(
         "Lost Empire {w}x{h} 32/16/8 ({} samples), CPU vs {}: {:.4} % within 1e-3, max abs {:.3e}, mean \
          FLIP {:.3e}; CPU {:.0} ms, GPU {:.0} ms ({} chunks, {} idle invocations, plan {:.1} ms, upload \

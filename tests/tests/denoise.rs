@@ -42,6 +42,7 @@ fn cpu_frame(
     render_frame_passes(&scene.view(), f, &request, history, &|_| {})
         .0
         .hdr
+        .expect("the CPU host returns the HDR image")
 }
 
 fn distance_to_centre(x: u32, y: u32) -> f32 {
@@ -147,7 +148,10 @@ fn cpu_and_lavapipe_denoise_alike() {
                     plain.pixels
                 );
             }
-            cpu = Some((image.hdr, image.raw_hdr.expect("raw kept")));
+            cpu = Some((
+                image.hdr.expect("the CPU host returns the HDR image"),
+                image.raw_hdr.expect("raw kept"),
+            ));
             let (image, _) = ctx
                 .render(&gpu_scene, &f, &request, &|_| {})
                 .expect("the device renders");

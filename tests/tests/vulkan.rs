@@ -106,12 +106,12 @@ fn cornell_box_on_vulkan_matches_the_cpu_host() {
 
     // The GPU's LDR buffer is core's tone map of the GPU's HDR image.
     let mut ldr_equal = 0;
-    for (p, l) in hdr.pixels.iter().zip(&gpu.ldr) {
+    for (p, l) in hdr.pixels.iter().zip(gpu.rgba8.as_ref().unwrap()) {
         if tonemap_to_rgba8(Vec3::new(p[0], p[1], p[2]), 0.0) == *l {
             ldr_equal += 1;
         }
     }
-    let ldr_fraction = ldr_equal as f64 / gpu.ldr.len() as f64;
+    let ldr_fraction = ldr_equal as f64 / gpu.rgba8.as_ref().unwrap().len() as f64;
     eprintln!(
         "LDR equal to the host tone map of the GPU HDR: {:.4} %",
         100.0 * ldr_fraction
@@ -149,7 +149,7 @@ fn sample_counts_match_core_and_frames_repeat_exactly() {
     let (b, _) = ctx
         .render_frame(&scene, &frame, FILL_REPLICATE, 0.0, true)
         .expect("render");
-    assert_eq!(a.ldr, b.ldr);
+    assert_eq!(a.rgba8, b.rgba8);
     assert_eq!(a.hdr.unwrap().pixels, b.hdr.unwrap().pixels);
     // A larger frame reallocates; uniform rendering has no cell means.
     let frame = frame_params(
@@ -164,7 +164,7 @@ fn sample_counts_match_core_and_frames_repeat_exactly() {
         .expect("render");
     assert_eq!(stats.render.primary_samples, 40 * 30 * 2);
     assert!(c.hdr.is_none());
-    assert_eq!(c.ldr.len(), 40 * 30);
+    assert_eq!(c.rgba8.as_ref().map(Vec::len), Some(40 * 30));
     assert!(
         ctx.validation_messages().is_empty(),
         "{:#?}",

@@ -561,6 +561,7 @@ fn render_reference(
     );
     let rendered = renderer.render(packed, reference_frame, &request, &|n| bar.inc(n))?;
     let image = rendered
+        .image
         .hdr
         .ok_or_else(|| FoveaError::Backend("the backend returned no HDR image".into()))?;
     match entry.store(&image) {
@@ -1114,7 +1115,7 @@ impl Measurer<'_> {
             runs_ms.push(rendered.stats.render_ms);
             match &first {
                 None => {
-                    let hdr = rendered.hdr.ok_or_else(|| {
+                    let hdr = rendered.image.hdr.ok_or_else(|| {
                         FoveaError::Backend("the backend returned no HDR image".into())
                     })?;
                     first = Some((hdr, rendered.stats));

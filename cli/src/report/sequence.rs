@@ -498,7 +498,7 @@ pub fn run_sequence(
             })?;
             frame_ms.push(rendered.stats.render_ms);
             samples += rendered.stats.primary_samples;
-            let (Some(hdr), Some(rgb8)) = (rendered.hdr, rendered.rgb8) else {
+            let (Some(rgb8), Some(hdr)) = (rendered.image.rgb8(), rendered.image.hdr) else {
                 return Err(FoveaError::Backend(
                     "the backend returned no HDR or 8-bit image".into(),
                 ));
