@@ -25,7 +25,7 @@
 //!
 //! **Bad input.** A non-finite HDR value is marked invalid: no neighbour reads it, and it takes its
 //! neighbours' filtered value (or black where it has none). Finite values are clamped to
-//! [`crate::temporal::history::HISTORY_SAMPLE_MAX`] first.
+//! [`crate::temporal::HISTORY_SAMPLE_MAX`] first.
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -36,7 +36,7 @@ use crate::math::color::{is_finite3, luminance};
 use crate::math::float::{exp, sqrt};
 use crate::math::vec3_from;
 use crate::temporal::albedo::{demodulation_albedo, filled_albedo};
-use crate::temporal::history::HISTORY_SAMPLE_MAX;
+use crate::temporal::HISTORY_SAMPLE_MAX;
 use crate::temporal::{GBufferTexel, HistoryTexel};
 
 /// À-trous steps of the most filtered pixels (steps 1, 2, 4, 8, 16 pixels: a support of 125 pixels).

@@ -12,7 +12,7 @@ use fovea_core::temporal::{
 };
 use rayon::prelude::*;
 
-use crate::render::FrameImage;
+use fovea_frame::FrameImage;
 
 /// Each pixel's history and what it was rendered with, carried from frame to frame.
 #[derive(Default)]

@@ -490,7 +490,7 @@ impl VulkanContext {
                     .create_query_pool(
                         &vk::QueryPoolCreateInfo::default()
                             .query_type(vk::QueryType::TIMESTAMP)
-                            .query_count(crate::frame::TIMESTAMP_QUERIES),
+                            .query_count(crate::timestamps::QUERIES),
                         None,
                     )
                     .during("vkCreateQueryPool")?;

@@ -24,6 +24,7 @@ use crate::context::{VulkanContext, CHUNK_TIMEOUT, WARMUP_TIMEOUT};
 use crate::error::{Result, VulkanError};
 use crate::resources::{FrameResources, Sizes, TemporalBuffers, PIXEL};
 use crate::scene::GpuScene;
+use crate::timestamps;
 
 /// What a GPU frame cost: the CPU host's statistics plus how the work was split.
 #[derive(Clone, Debug, Default)]
@@ -118,14 +119,6 @@ fn read_back(output: FrameOutput) -> (bool, bool) {
     }
 }
 
-/// The index of `pass` in [`FramePass::ALL`]: its timestamp is query `2 + index`.
-fn pass_index(pass: FramePass) -> u32 {
-    FramePass::ALL
-        .iter()
-        .position(|p| *p == pass)
-        .expect("every pass is in FramePass::ALL") as u32
-}
-
 /// Records one compute dispatch over `items` invocations: binds `pipeline` and `set` (with the one dynamic
 /// offset the layout has), pushes `pc` and dispatches enough workgroups (2D above the x limit). Frames,
 /// the warm-up and probes all record through this.
@@ -198,38 +191,6 @@ fn record_copy(
     // the command buffer belongs to, which the caller waits for.
     unsafe {
         device.cmd_copy_buffer(cb, src.0, dst.0, &[vk::BufferCopy::default().size(bytes)]);
-    }
-}
-
-/// Timestamp queries of a frame: 0 its start, 1 its end (after the read-back copies), and `2 + k`
-/// after pass `k` of [`FramePass::ALL`] where the frame runs it. The samples end where the last
-/// submission starts.
-pub(crate) const TIMESTAMP_QUERIES: u32 = 2 + FramePass::ALL.len() as u32;
-
-fn write_start_timestamp(device: &ash::Device, cb: vk::CommandBuffer, query_pool: vk::QueryPool) {
-    // SAFETY: the query pool has TIMESTAMP_QUERIES queries; they are reset before being written.
-    unsafe {
-        device.cmd_reset_query_pool(cb, query_pool, 0, TIMESTAMP_QUERIES);
-        device.cmd_write_timestamp(cb, vk::PipelineStageFlags::TOP_OF_PIPE, query_pool, 0);
-    }
-}
-
-/// Writes the timestamp that ends pass `k` of [`FramePass::ALL`].
-fn write_pass_timestamp(
-    device: &ash::Device,
-    cb: vk::CommandBuffer,
-    query_pool: vk::QueryPool,
-    k: u32,
-) {
-    // SAFETY: `2 + k` < TIMESTAMP_QUERIES, reset by `write_start_timestamp` in this frame's first
-    // submission, which was waited on before this one.
-    unsafe {
-        device.cmd_write_timestamp(
-            cb,
-            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-            query_pool,
-            2 + k,
-        );
     }
 }
 
@@ -747,7 +708,7 @@ impl VulkanContext {
             let c = *chunk;
             self.submit_and_wait("a sample chunk", CHUNK_TIMEOUT, |device, cb| {
                 if first && timed {
-                    write_start_timestamp(device, cb, query_pool);
+                    timestamps::write_start(device, cb, query_pool);
                 }
                 dispatch(
                     device,
@@ -794,7 +755,7 @@ impl VulkanContext {
             CHUNK_TIMEOUT,
             |device, cb| {
                 if no_chunks && timed {
-                    write_start_timestamp(device, cb, query_pool);
+                    timestamps::write_start(device, cb, query_pool);
                 }
                 for &pass in &passes {
                     if let (FramePass::DenoiseInput, Some(raw_rb)) = (pass, raw_rb) {
@@ -845,7 +806,7 @@ impl VulkanContext {
                         }
                     }
                     if timed {
-                        write_pass_timestamp(device, cb, query_pool, pass_index(pass));
+                        timestamps::write_after_pass(device, cb, query_pool, pass);
                     }
                 }
                 barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
@@ -860,16 +821,8 @@ impl VulkanContext {
                 if want_ldr || want_hdr {
                     host_read_barrier(device, cb);
                 }
-                // SAFETY: query 1 of the pool is reset at the frame's start and written once here.
-                unsafe {
-                    if timed {
-                        device.cmd_write_timestamp(
-                            cb,
-                            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                            query_pool,
-                            1,
-                        );
-                    }
+                if timed {
+                    timestamps::write_end(device, cb, query_pool);
                 }
             },
         )?;
@@ -877,52 +830,20 @@ impl VulkanContext {
         let wall_ms = wall.elapsed().as_secs_f64() * 1e3;
 
         if timed {
-            let mut ticks = [0u64; TIMESTAMP_QUERIES as usize];
-            // SAFETY: the queries read are those written by the submissions waited on above (start,
-            // end, and each pass the frame ran); the rest were reset and are not read.
-            let r = unsafe {
-                self.shared.device.get_query_pool_results(
-                    query_pool,
-                    0,
-                    &mut ticks[..2],
-                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-                )
-            };
-            let mut ok = r.is_ok();
-            for &pass in &passes {
-                let k = 2 + pass_index(pass);
-                // SAFETY: as above; query `k` was written after `pass`.
-                let r = unsafe {
-                    self.shared.device.get_query_pool_results(
-                        query_pool,
-                        k,
-                        &mut ticks[k as usize..k as usize + 1],
-                        vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-                    )
-                };
-                ok &= r.is_ok();
-            }
-            if ok {
-                let ms = |from: u64, to: u64| {
-                    (to.wrapping_sub(from) & self.timestamp_mask) as f64
-                        * f64::from(self.timestamp_period)
-                        * 1e-6
-                };
-                let mut timings = Vec::new();
-                let mut previous = ticks[0];
-                for &pass in &passes {
-                    let t = ticks[2 + pass_index(pass) as usize];
-                    timings.push((pass.name(), ms(previous, t)));
-                    previous = t;
-                }
-                if read_back(output) != (false, false) {
-                    timings.push(("read_back", ms(previous, ticks[1])));
-                }
+            let times = timestamps::read_frame(
+                &self.shared.device,
+                query_pool,
+                &passes,
+                read_back(output) != (false, false),
+                self.timestamp_period,
+                self.timestamp_mask,
+            );
+            if let Some((render_ms, passes)) = times {
                 return Ok(FrameTiming {
-                    render_ms: ms(ticks[0], ticks[1]),
+                    render_ms,
                     gpu_timestamps: true,
                     submissions,
-                    passes: timings,
+                    passes,
                 });
             }
         }

@@ -35,6 +35,7 @@ mod resources;
 pub mod scene;
 pub mod spirv;
 pub mod swapchain;
+mod timestamps;
 pub mod traversal;
 
 /// The `ash` Vulkan types (result codes for [`VulkanContext::inject_fault`]).

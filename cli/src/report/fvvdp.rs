@@ -8,7 +8,16 @@ use std::process::Command;
 
 use fovea_core::foveation::display::DisplayGeometry;
 
-use super::sequence::FovVideoVdpScore;
+/// What FovVideoVDP (Mantiuk et al. 2021) said of a test sequence against its reference.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FovVideoVdpScore {
+    /// Just-objectionable differences: 10 is identical, 1 JOD less is preferred by 75 % of viewers.
+    pub jod: f64,
+    /// The metric's own description of its version and settings.
+    pub info: String,
+    /// Its run time, seconds.
+    pub seconds: f64,
+}
 
 /// The scoring script, written next to the frames it scores.
 const SCORE_SCRIPT: &str = include_str!("fvvdp_score.py");

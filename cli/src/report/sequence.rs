@@ -23,7 +23,7 @@ use fovea_scene::pack::PackedScene;
 use indicatif::ProgressBar;
 
 use super::configs::{ConfigKind, UNIFORM_SPP};
-use super::fvvdp::{FovVideoVdp, RawFrames};
+use super::fvvdp::{FovVideoVdp, FovVideoVdpScore, RawFrames};
 use super::median;
 use super::metrics::{self, RegionMap, RegionMeans, REL_MSE_EPSILON};
 use super::saccades::{fovea_lag, saccade_frames, FoveaLag};
@@ -101,17 +101,6 @@ pub struct SequenceResult {
     /// Median milliseconds per frame of fovea's own scoring (FLIP, relMSE, flicker, pooling), not
     /// counting FovVideoVDP.
     pub evaluation_ms: f64,
-}
-
-/// What FovVideoVDP (Mantiuk et al. 2021) said of a test sequence against its reference.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FovVideoVdpScore {
-    /// Just-objectionable differences: 10 is identical, 1 JOD less is preferred by 75 % of viewers.
-    pub jod: f64,
-    /// The metric's own description of its version and settings.
-    pub info: String,
-    /// Its run time, seconds.
-    pub seconds: f64,
 }
 
 /// The sequence part of a scene's report.

@@ -19,7 +19,7 @@ use crate::sampling::ggx_vndf::{
 };
 use glam::{Vec2, Vec3};
 
-use super::BsdfSample;
+use super::sample::BsdfSample;
 
 /// Unpolarised Fresnel reflectance of a dielectric interface (Born and Wolf; pbrt-v4's `FrDielectric`)
 /// for a ray arriving with `cos_i` (clamped to [0, 1], on the side the relative index `eta` is seen

@@ -45,6 +45,7 @@ use crate::scene::{FeatureFlags, Features};
 use glam::{Vec2, Vec3};
 
 use super::dielectric::RoughDielectric;
+use super::sample::BsdfSample;
 pub use crate::sampling::ggx_vndf::ALPHA_MIN;
 
 /// The largest f32 below 1: a rescaled random number stays in [0, 1).
@@ -83,30 +84,6 @@ pub struct DisneyParams {
     pub ior: f32,
     /// The transmission is a thin wall's (straight through, `MATERIAL_THIN_WALLED`).
     pub thin_walled: bool,
-}
-
-/// The result of importance sampling the BRDF.
-#[derive(Clone, Copy, Debug)]
-pub struct BsdfSample {
-    /// Sampled incident direction (local frame, unit).
-    pub wi: Vec3,
-    /// BRDF value `f(wo, wi)` (no cosine).
-    pub f: Vec3,
-    /// Solid-angle pdf of `wi`; 0 means the sample failed and must be discarded.
-    pub pdf: f32,
-}
-
-impl BsdfSample {
-    /// A failed sample (`pdf = 0`).
-    #[inline]
-    #[must_use]
-    pub fn failed() -> Self {
-        Self {
-            wi: Vec3::Z,
-            f: Vec3::ZERO,
-            pdf: 0.0,
-        }
-    }
 }
 
 /// Relative weight of the sheen lobe's albedo against the diffuse lobe's when choosing a lobe; it only

@@ -6,5 +6,7 @@
 //! the cosine factor; `pdf` is a solid-angle density over `wi`.
 pub mod dielectric;
 pub mod disney;
+pub mod sample;
 
-pub use disney::{BsdfSample, DisneyParams, ALPHA_MIN};
+pub use disney::{DisneyParams, ALPHA_MIN};
+pub use sample::BsdfSample;

@@ -28,7 +28,7 @@ use crate::math::lane_mask::{eq_mask, gt_mask, lane_u32, le_mask};
 use crate::scene::features::FEATURE_ALPHA_CUTOUT;
 use crate::scene::{
     leaf_count, leaf_first, Bvh4Node, Features, SceneSource, SceneView, TriangleBlock,
-    BLOCK_LANE_CUTOUT, INVALID_INDEX, SLOT_LEAF,
+    BLOCK_LANE_CUTOUT, SLOT_LEAF,
 };
 
 /// Entries of the traversal stack. A node visit pushes its (up to four) hit children and pops the nearest,
@@ -49,36 +49,8 @@ const ROUND_UP: f32 = 1.0 + 2.0 * GAMMA3;
 /// Scales the (non-negative) entry distance of a slab test down.
 const ROUND_DOWN: f32 = 1.0 - 2.0 * GAMMA3;
 
-/// The closest hit of a ray: `triangle` indexes [`GeometryArrays::triangle_info`](crate::scene::GeometryArrays::triangle_info) (BVH leaf order) and is
-/// [`INVALID_INDEX`] on a miss; `b1`, `b2` are the barycentrics of `v1`, `v2`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    pub t: f32,
-    pub triangle: u32,
-    pub b1: f32,
-    pub b2: f32,
-}
-
-impl Hit {
-    /// No hit (`t` infinite).
-    #[inline]
-    #[must_use]
-    pub fn miss() -> Self {
-        Self {
-            t: f32::INFINITY,
-            triangle: INVALID_INDEX,
-            b1: 0.0,
-            b2: 0.0,
-        }
-    }
-
-    /// Whether this is a hit.
-    #[inline]
-    #[must_use]
-    pub fn is_hit(&self) -> bool {
-        self.triangle != INVALID_INDEX
-    }
-}
+/// A ray's hit on a triangle (a geometry concept, used by shading and the G-buffer too).
+pub use crate::geometry::hit::Hit;
 
 /// `1 / d`, clamped to `±f32::MAX` for zero and tiny `d` (whose true inverse overflows).
 #[inline]
@@ -497,6 +469,7 @@ mod tests {
 
     use super::*;
     use crate::bvh::query::{any_hit, closest_hit};
+    use crate::scene::INVALID_INDEX;
     use crate::scene::{
         leaf_slot, GeometryArrays, Material, MaterialArrays, TriangleBlock, TriangleInfo,
         TrianglePositions, MATERIAL_ALPHA_CUTOUT,

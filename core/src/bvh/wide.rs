@@ -20,12 +20,11 @@
 //! layout.
 use ::wide::{f32x8, i32x8, CmpLe};
 use arrayvec::ArrayVec;
-use bytemuck::{Pod, Zeroable};
 
 use super::traverse::{test_leaf, Hit, SlabInverses};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
-use crate::scene::{Features, SceneSource, SceneView, SLOT_EMPTY, SLOT_LEAF};
+use crate::scene::{Features, SceneSource, SceneView, SLOT_LEAF};
 
 /// Children per [`Bvh8Node`].
 pub const WIDE_ARITY: usize = 8;
@@ -38,49 +37,8 @@ pub const MAX_WIDE_DEPTH: usize = (super::TRAVERSAL_STACK_SIZE - 4) / 3;
 /// and writes at most eight above them.
 pub const WIDE_STACK_SIZE: usize = 7 * MAX_WIDE_DEPTH + WIDE_ARITY;
 
-/// A node of the CPU's 8-wide BVH (224 bytes, 32-byte aligned), node 0 the root. Boxes are stored
-/// structure-of-arrays, one 8-lane vector per bound; `slots` are [`crate::scene::Bvh4Node`] slot words
-/// (an interior node's index here, a leaf's blocks, or [`SLOT_EMPTY`] with an inverted box).
-#[repr(C, align(32))]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct Bvh8Node {
-    pub min_x: [f32; 8],
-    pub max_x: [f32; 8],
-    pub min_y: [f32; 8],
-    pub max_y: [f32; 8],
-    pub min_z: [f32; 8],
-    pub max_z: [f32; 8],
-    pub slots: [u32; 8],
-}
-
-impl Bvh8Node {
-    /// A node with eight empty slots.
-    pub const EMPTY: Self = Self {
-        min_x: [f32::MAX; 8],
-        max_x: [-f32::MAX; 8],
-        min_y: [f32::MAX; 8],
-        max_y: [-f32::MAX; 8],
-        min_z: [f32::MAX; 8],
-        max_z: [-f32::MAX; 8],
-        slots: [SLOT_EMPTY; 8],
-    };
-
-    crate::scene::layout::slot_box_methods!();
-
-    /// The six bound arrays as rows `min_x, max_x, min_y, max_y, min_z, max_z` (row 6 is the slot
-    /// words), so that traversal can index them by axis and ray direction.
-    #[inline(always)]
-    #[must_use]
-    pub fn bound_rows(&self) -> &[[f32; 8]; 7] {
-        bytemuck::cast_ref(self)
-    }
-}
-
-impl Default for Bvh8Node {
-    fn default() -> Self {
-        Self::EMPTY
-    }
-}
+/// The 8-wide node lives with the scene's other layouts.
+pub use crate::scene::layout::Bvh8Node;
 
 /// The per-ray part of the 8-wide slab test (see [`SlabInverses`]).
 struct RayBox8 {

@@ -19,7 +19,7 @@ use glam::{Vec3, Vec4};
 
 use super::ray::Ray;
 use crate::math::lane_mask::{eq_mask, gt_mask, lane, negate_where_negative};
-use crate::scene::{TriangleBlock, TrianglePositions};
+use crate::scene::{Features, SceneSource, SceneView, TriangleBlock, TrianglePositions};
 
 /// The result of one ray-triangle test: `hit` is true if the ray meets the triangle at `0 < t < t_max`;
 /// `b1` and `b2` are then the barycentric coordinates of `v1` and `v2` (`v0`'s is `1 - b1 - b2`).
@@ -371,6 +371,26 @@ impl WatertightRay {
             hit: true,
         }
     }
+}
+
+/// Vertex positions of `triangle`.
+#[inline]
+#[must_use]
+pub fn triangle_vertices<F: Features, S: SceneSource>(
+    scene: &SceneView<F>,
+    source: &S,
+    triangle: u32,
+) -> [Vec3; 3] {
+    let t = source.triangle(scene, triangle);
+    [t.v0.truncate(), t.v1.truncate(), t.v2.truncate()]
+}
+
+/// The unnormalised geometric normal `(v1 - v0) × (v2 - v0)` (its length is twice the area); the front
+/// face is the side it points to (counter-clockwise winding).
+#[inline]
+#[must_use]
+pub fn scaled_geometric_normal(v: &[Vec3; 3]) -> Vec3 {
+    (v[1] - v[0]).cross(v[2] - v[0])
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@ use glam::{Vec2, Vec3};
 
 use super::LightSample;
 use crate::geometry::offset::{offset_ray_origin, triangle_magnitude};
+use crate::geometry::triangle::{scaled_geometric_normal, triangle_vertices};
 use crate::material::alpha::interpolate_uv;
 use crate::material::texture::sample_texture;
 use crate::math::vec3_from;
@@ -12,26 +13,6 @@ use crate::scene::features::{FEATURE_EMISSION_TEXTURE, FEATURE_EMISSIVE_TRIANGLE
 use crate::scene::{
     Features, SceneSource, SceneView, INVALID_INDEX, MATERIAL_DOUBLE_SIDED_EMISSION,
 };
-
-/// Vertex positions of `triangle`.
-#[inline]
-#[must_use]
-pub fn triangle_vertices<F: Features, S: SceneSource>(
-    scene: &SceneView<F>,
-    source: &S,
-    triangle: u32,
-) -> [Vec3; 3] {
-    let t = source.triangle(scene, triangle);
-    [t.v0.truncate(), t.v1.truncate(), t.v2.truncate()]
-}
-
-/// The unnormalised geometric normal `(v1 - v0) × (v2 - v0)` (its length is twice the area); the front
-/// face is the side it points to (counter-clockwise winding).
-#[inline]
-#[must_use]
-pub fn scaled_geometric_normal(v: &[Vec3; 3]) -> Vec3 {
-    (v[1] - v[0]).cross(v[2] - v[0])
-}
 
 /// Radiance emitted by `triangle` at barycentrics (`b1`, `b2`) towards direction `w` (unit, pointing away
 /// from the surface). Zero on the back face of one-sided emitters.

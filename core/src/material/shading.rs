@@ -7,8 +7,8 @@ use super::tangent::{decode_tangent, has_tangent, NO_TANGENT};
 use super::texture::sample_texture_lod;
 use super::vertex_color::interpolate_vertex_color;
 use crate::bsdf::DisneyParams;
-use crate::bvh::traverse::Hit;
-use crate::lights::triangle::{scaled_geometric_normal, triangle_vertices};
+use crate::geometry::triangle::{scaled_geometric_normal, triangle_vertices};
+use crate::geometry::Hit;
 use crate::math::{vec3_from, Frame};
 use crate::scene::features::{
     FEATURE_BASE_COLOR_TEXTURE, FEATURE_EXTENSION_TEXTURES, FEATURE_LOBE_ANISOTROPY,

@@ -105,7 +105,7 @@ mod tests {
     /// triangle; without the feature (a specialised path of a scene without colours) nothing changes.
     #[test]
     fn vertex_colours_multiply_the_base_colour_and_the_cut_out_alpha() {
-        use crate::bvh::traverse::Hit;
+        use crate::geometry::Hit;
         use crate::material::alpha::is_cut_out;
         use crate::material::surface_point;
         use crate::scene::features::FEATURES_ALL;

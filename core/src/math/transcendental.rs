@@ -16,7 +16,9 @@
 //! Domains: `sin`/`cos`/`tan` are accurate for `|x| < 8192` (every angle core computes is within a few
 //! multiples of 2π); the others over all finite inputs.
 
-use super::float::{abs, floor};
+// The exactly rounded operations straight from `libm` (as `super::float` has them), so that this
+// module, which `float` builds on, does not import it back.
+use libm::{fabsf as abs, floorf as floor};
 
 /// 2/π.
 const FRAC_2_PI: f32 = core::f32::consts::FRAC_2_PI;

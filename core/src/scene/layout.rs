@@ -123,7 +123,6 @@ macro_rules! slot_box_methods {
         }
     };
 }
-pub(crate) use slot_box_methods;
 
 /// A node of the 4-wide BVH that both backends traverse (112 bytes), node 0 the root.
 ///
@@ -767,6 +766,54 @@ pub struct TexelOffsets {
     pub blocks: u32,
     pub vertex_colors: u32,
     pub _pad: [u32; 3],
+}
+
+/// A node of the CPU's 8-wide BVH (224 bytes, 32-byte aligned; traversed by [`crate::bvh::wide`]),
+/// node 0 the root. Boxes are stored structure-of-arrays, one 8-lane vector per bound; `slots` are
+/// [`Bvh4Node`] slot words (an interior node's index here, a leaf's blocks, or [`SLOT_EMPTY`] with
+/// an inverted box).
+#[cfg(not(target_arch = "spirv"))]
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Bvh8Node {
+    pub min_x: [f32; 8],
+    pub max_x: [f32; 8],
+    pub min_y: [f32; 8],
+    pub max_y: [f32; 8],
+    pub min_z: [f32; 8],
+    pub max_z: [f32; 8],
+    pub slots: [u32; 8],
+}
+
+#[cfg(not(target_arch = "spirv"))]
+impl Bvh8Node {
+    /// A node with eight empty slots.
+    pub const EMPTY: Self = Self {
+        min_x: [f32::MAX; 8],
+        max_x: [-f32::MAX; 8],
+        min_y: [f32::MAX; 8],
+        max_y: [-f32::MAX; 8],
+        min_z: [f32::MAX; 8],
+        max_z: [-f32::MAX; 8],
+        slots: [SLOT_EMPTY; 8],
+    };
+
+    slot_box_methods!();
+
+    /// The six bound arrays as rows `min_x, max_x, min_y, max_y, min_z, max_z` (row 6 is the slot
+    /// words), so that traversal can index them by axis and ray direction.
+    #[inline(always)]
+    #[must_use]
+    pub fn bound_rows(&self) -> &[[f32; 8]; 7] {
+        bytemuck::cast_ref(self)
+    }
+}
+
+#[cfg(not(target_arch = "spirv"))]
+impl Default for Bvh8Node {
+    fn default() -> Self {
+        Self::EMPTY
+    }
 }
 
 #[cfg(test)]

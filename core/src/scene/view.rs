@@ -8,11 +8,11 @@
 //! [`crate::kernel_abi`] and the kernel's parameter list; the views, uploads and sizes follow from
 //! the group.
 use super::features::{FeatureFlags, Features};
+#[cfg(not(target_arch = "spirv"))]
+use super::layout::Bvh8Node;
 use super::layout::{
     Bvh4Node, Light, Material, SceneGlobals, TextureInfo, TriangleBlock, TriangleInfo,
 };
-#[cfg(not(target_arch = "spirv"))]
-use crate::bvh::wide::Bvh8Node;
 
 /// The geometry: the BVH, the triangles' positions and per-vertex attributes.
 #[derive(Clone, Copy, Default)]

@@ -14,8 +14,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 
 use crate::bvh::closest_hit_with;
-use crate::bvh::traverse::Hit;
 use crate::geometry::triangle::WatertightRay;
+use crate::geometry::Hit;
 use crate::integrator::{pixel_cone_spread, FrameParams};
 use crate::lights::INFINITE_DISTANCE;
 use crate::material::alpha::{interpolate_uv, is_cut_out};

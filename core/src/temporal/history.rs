@@ -39,175 +39,18 @@
 //!
 //! **Bad samples.** A non-finite frame value never joins the history (the pixel keeps what it had); a
 //! finite one is clamped to [`HISTORY_SAMPLE_MAX`], so one huge sample cannot dominate a mean forever.
-use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 
-use super::albedo::{demodulation_albedo, filled_albedo};
+use super::albedo::filled_albedo;
 use super::gbuffer::GBufferTexel;
+use super::params::{TemporalParams, TEMPORAL_CAMERA_MOVED};
 use super::reproject::reproject_history;
-use crate::camera::Camera;
+use super::texel::{HistoryTexel, HISTORY_SAMPLE_MAX};
 use crate::foveation::{owning_block, samples_in_block};
 use crate::integrator::FrameParams;
 use crate::math::color::{is_finite3, luminance};
 use crate::math::float::sqrt;
 use crate::math::vec3_from;
-
-/// [`TemporalParams::flags`]: the previous history and G-buffer hold a frame (else every pixel starts
-/// afresh).
-pub const TEMPORAL_HISTORY_VALID: u32 = 1;
-/// [`TemporalParams::flags`]: the camera differs from the previous frame's (reproject and clamp).
-pub const TEMPORAL_CAMERA_MOVED: u32 = 2;
-
-/// The largest channel value a frame may add to the history; larger finite values are clamped to it.
-pub const HISTORY_SAMPLE_MAX: f32 = 1.0e6;
-
-/// One pixel's history (32 bytes, GPU layout).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct HistoryTexel {
-    /// rgb: the mean lighting (radiance over the albedo the samples saw); w: its weight, in samples of
-    /// this pixel.
-    pub mean: [f32; 4],
-    /// x: the lighting's mean luminance, y: its mean squared luminance (the second moment, for a variance), z: the
-    /// footprint (weighted mean block edge of the samples), w: frames in the history (capped).
-    pub moments: [f32; 4],
-}
-
-impl HistoryTexel {
-    /// No history.
-    pub const EMPTY: Self = Self {
-        mean: [0.0; 4],
-        moments: [0.0; 4],
-    };
-
-    /// The mean lighting: radiance divided by the albedo its samples saw.
-    #[inline]
-    #[must_use]
-    pub fn lighting(&self) -> Vec3 {
-        vec3_from(self.mean)
-    }
-
-    /// The pixel as displayed, over the G-buffer texel `g` of this frame: the mean lighting times the
-    /// pixel's own albedo, alpha 1 (the HDR image's layout).
-    #[inline]
-    #[must_use]
-    pub fn displayed(&self, g: &GBufferTexel) -> [f32; 4] {
-        let c = self.lighting() * demodulation_albedo(g);
-        [c.x, c.y, c.z, 1.0]
-    }
-
-    /// The weight (samples of this pixel behind the mean).
-    #[inline]
-    #[must_use]
-    pub fn weight(&self) -> f32 {
-        self.mean[3]
-    }
-
-    /// The footprint: the weighted mean block edge of the samples, in pixels.
-    #[inline]
-    #[must_use]
-    pub fn footprint(&self) -> f32 {
-        self.moments[2]
-    }
-
-    /// Frames in the history.
-    #[inline]
-    #[must_use]
-    pub fn frames(&self) -> f32 {
-        self.moments[3]
-    }
-
-    /// The luminance variance of the frames' lighting (second moment minus the squared mean).
-    #[inline]
-    #[must_use]
-    pub fn luminance_variance(&self) -> f32 {
-        (self.moments[1] - self.moments[0] * self.moments[0]).max(0.0)
-    }
-
-    /// `self + other · s`, every field (for blending taps).
-    #[inline]
-    #[must_use]
-    pub fn add_scaled(&self, other: &Self, s: f32) -> Self {
-        Self {
-            mean: (Vec4::from(self.mean) + Vec4::from(other.mean) * s).to_array(),
-            moments: (Vec4::from(self.moments) + Vec4::from(other.moments) * s).to_array(),
-        }
-    }
-
-    /// Every field times `s`.
-    #[inline]
-    #[must_use]
-    pub fn scaled(&self, s: f32) -> Self {
-        Self::EMPTY.add_scaled(self, s)
-    }
-}
-
-/// What the temporal pass needs besides the frame (96 bytes, GPU layout; its own binding).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct TemporalParams {
-    /// The previous frame's camera.
-    pub previous_camera: Camera,
-    /// The previous frame's image size (of the previous history and G-buffer).
-    pub previous_size: [u32; 2],
-    /// `TEMPORAL_*` bits.
-    pub flags: u32,
-    /// The history cap in frames while the camera rests (`N`: each frame counts at least `1 / N`).
-    pub max_frames_resting: f32,
-    /// The history cap in frames while the camera moves.
-    pub max_frames_moving: f32,
-    /// The neighbourhood clamp's half-width in standard deviations (`γ`).
-    pub clamp_gamma: f32,
-    /// The fill mode the frame's filled values were made with (`crate::foveation::FILL_*`): which
-    /// albedo their samples saw ([`filled_albedo`]).
-    pub fill_mode: u32,
-    /// The history's weight cap in samples of the pixel while the camera moves (the frame's own weight
-    /// included); the frame cap applies too.
-    pub max_weight_moving: f32,
-}
-
-/// Default [`TemporalParams::max_frames_resting`]: as many frames as the live view used to average.
-pub const DEFAULT_MAX_FRAMES_RESTING: f32 = 4096.0;
-/// Default [`TemporalParams::max_frames_moving`] (kajiya and SVGF keep 8 to 32 frames).
-pub const DEFAULT_MAX_FRAMES_MOVING: f32 = 16.0;
-/// Default [`TemporalParams::max_weight_moving`]: four frames of the paper's fovea (32 spp), sixteen
-/// or more of every coarser region. Measured on a slow pan of Lost Empire (`tests/tests/temporal.rs`'s
-/// benchmark): a fovea history of 16 frames had 1.4x the error of one of 4, the periphery's error
-/// rose by half with 4.
-pub const DEFAULT_MAX_WEIGHT_MOVING: f32 = 128.0;
-/// Default [`TemporalParams::clamp_gamma`].
-pub const DEFAULT_CLAMP_GAMMA: f32 = 1.5;
-
-impl TemporalParams {
-    /// The parameters for `frame`, filled in `fill_mode`, after a frame rendered with `previous` (its
-    /// camera and image size); `None` starts every pixel's history afresh. Default caps and clamp.
-    #[cfg(not(target_arch = "spirv"))]
-    #[must_use]
-    pub fn after(
-        previous: Option<(Camera, [u32; 2])>,
-        frame: &FrameParams,
-        fill_mode: u32,
-    ) -> Self {
-        let (previous_camera, previous_size, flags) = match previous {
-            None => (frame.camera, [frame.width, frame.height], 0),
-            Some((camera, size)) => {
-                let moved = camera != frame.camera || size != [frame.width, frame.height];
-                let flags = TEMPORAL_HISTORY_VALID | if moved { TEMPORAL_CAMERA_MOVED } else { 0 };
-                (camera, size, flags)
-            }
-        };
-        Self {
-            previous_camera,
-            previous_size,
-            flags,
-            max_frames_resting: DEFAULT_MAX_FRAMES_RESTING,
-            max_frames_moving: DEFAULT_MAX_FRAMES_MOVING,
-            clamp_gamma: DEFAULT_CLAMP_GAMMA,
-            fill_mode,
-            max_weight_moving: DEFAULT_MAX_WEIGHT_MOVING,
-        }
-    }
-}
 
 /// A frame's value at one pixel, as it joins the history.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -473,6 +316,7 @@ mod tests {
     use std::vec::Vec;
 
     use super::*;
+    use crate::camera::Camera;
     use crate::foveation::{FoveationParams, FILL_BILINEAR};
     use crate::integrator::IntegratorSettings;
 

@@ -14,11 +14,12 @@
 pub mod albedo;
 pub mod gbuffer;
 pub mod history;
+pub mod params;
 pub mod reproject;
+pub mod texel;
 
 pub use gbuffer::{first_hit_gbuffer, GBufferTexel};
-pub use history::{
-    temporal_accumulate, HistoryTexel, TemporalParams, TEMPORAL_CAMERA_MOVED,
-    TEMPORAL_HISTORY_VALID,
-};
+pub use history::temporal_accumulate;
+pub use params::{TemporalParams, TEMPORAL_CAMERA_MOVED, TEMPORAL_HISTORY_VALID};
 pub use reproject::{reproject_history, Reprojected};
+pub use texel::{HistoryTexel, HISTORY_SAMPLE_MAX};

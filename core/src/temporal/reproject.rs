@@ -19,7 +19,8 @@
 use glam::{Vec2, Vec3};
 
 use super::gbuffer::GBufferTexel;
-use super::history::{HistoryTexel, TemporalParams, TEMPORAL_CAMERA_MOVED, TEMPORAL_HISTORY_VALID};
+use super::params::{TemporalParams, TEMPORAL_CAMERA_MOVED, TEMPORAL_HISTORY_VALID};
+use super::texel::HistoryTexel;
 use crate::integrator::FrameParams;
 use crate::math::float::{abs, exp2, floor};
 use crate::math::vec3_from;

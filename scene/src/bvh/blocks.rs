@@ -1,6 +1,6 @@
 //! Leaf blocks: every leaf's triangles four at a time, in the structure-of-arrays layout traversal tests
 //! them in ([`TriangleBlock`]).
-use fovea_core::bvh::wide::Bvh8Node;
+use fovea_core::scene::Bvh8Node;
 use fovea_core::scene::{
     block_and_lane, is_leaf_word, leaf_count, leaf_first, leaf_slot, triangle_lane, Bvh4Node,
     TriangleBlock, TrianglePositions, BLOCK_LANE_CUTOUT,

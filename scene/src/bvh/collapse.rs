@@ -16,7 +16,7 @@
 //! 4-wide node depths stay below `ceil(MAX_DEPTH / 2) = MAX_NODE_DEPTH + 1`. The same guard holds for the
 //! 8-wide tree (opening more candidates only lowers their heights), whose depth is then within
 //! [`fovea_core::bvh::wide::MAX_WIDE_DEPTH`] too.
-use fovea_core::bvh::wide::Bvh8Node;
+use fovea_core::scene::Bvh8Node;
 use fovea_core::scene::{leaf_slot, Bvh4Node, BvhNode};
 
 use super::{BvhStats, MAX_DEPTH};

@@ -16,8 +16,8 @@ mod collapse;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use fovea_core::bvh::wide::Bvh8Node;
 use fovea_core::bvh::{MAX_NODE_COUNT, TRAVERSAL_STACK_SIZE};
+use fovea_core::scene::Bvh8Node;
 use fovea_core::scene::{
     leaf_count, Bvh4Node, BvhNode, TrianglePositions, MAX_LEAF_TRIANGLES, MAX_LEAF_TRIANGLE_INDEX,
 };
@@ -280,10 +280,10 @@ fn build_over_bounds(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use fovea_core::bvh::wide::Bvh8Node;
     use fovea_core::bvh::{any_hit, closest_hit, Hit};
     use fovea_core::geometry::triangle::WatertightRay;
     use fovea_core::geometry::Ray;
+    use fovea_core::scene::Bvh8Node;
     use fovea_core::scene::{leaf_first, leaf_slot, SLOT_EMPTY};
     use fovea_core::scene::{
         GeometryArrays, Material, MaterialArrays, SceneView, TriangleBlock, TriangleInfo,

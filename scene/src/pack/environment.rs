@@ -7,7 +7,7 @@ use fovea_core::scene::{
     EnvironmentArrays, SceneGlobals, ENVIRONMENT_CONSTANT, ENVIRONMENT_MAP, ENVIRONMENT_NONE,
 };
 
-use super::{ArrayRead, PackedArray};
+use super::array::{ArrayRead, PackedArray};
 use crate::environment::{Environment, EnvironmentTables};
 
 /// The environment arrays, owned (empty unless the environment is a map).

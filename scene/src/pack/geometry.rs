@@ -14,7 +14,7 @@ use fovea_core::scene::{
 };
 use glam::{Vec3, Vec4};
 
-use super::{ArrayRead, PackedArray};
+use super::array::{ArrayRead, PackedArray};
 use crate::bvh::blocks::{name_wide_leaf_blocks, pack_leaf_blocks, LeafBlocks};
 use crate::bvh::{build_bvh_indexed, BvhBuildOptions, BvhStats};
 

@@ -10,9 +10,9 @@ use fovea_core::scene::{
 };
 use glam::Vec3;
 
+use super::array::{ArrayRead, PackedArray};
 use super::geometry::PackedGeometry;
 use super::materials::{mean_texture_color, PackedMaterials};
-use super::{ArrayRead, PackedArray};
 use crate::environment::{build_cdf, Environment};
 use crate::texture::Texture;
 

@@ -11,7 +11,7 @@ use fovea_core::scene::{
 };
 use glam::Vec3;
 
-use super::{ArrayRead, PackedArray};
+use super::array::{ArrayRead, PackedArray};
 use crate::texture::{Texture, NO_MIP_LEVELS};
 
 /// The material arrays, owned.

@@ -3,6 +3,7 @@
 //! textures), [`lights`] (the list and its selection table) and [`environment`]. A [`PackedScene`] is
 //! exactly what the GPU receives ([`PackedScene::gpu_arrays`]); the CPU host reads it through
 //! [`PackedScene::view`].
+pub mod array;
 pub mod environment;
 pub mod geometry;
 pub mod lights;
@@ -15,6 +16,7 @@ use fovea_core::scene::{
 };
 use glam::Vec3;
 
+pub use self::array::{ArrayRead, PackedArray};
 pub use self::environment::PackedEnvironment;
 pub use self::geometry::PackedGeometry;
 pub use self::lights::PackedLights;
@@ -35,44 +37,6 @@ pub struct PackStats {
     pub pack_ms: f64,
     /// Bytes of all packed arrays (what the GPU would hold).
     pub memory_bytes: usize,
-}
-
-/// How the GPU reads one packed array.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ArrayRead {
-    /// Through the scene texel buffer (`fovea_core::scene::source`), which holds every such array, as
-    /// well as through its own storage-buffer binding (for its length).
-    Texels,
-    /// Through its own storage buffer only.
-    Storage,
-}
-
-/// One array of a packed scene as the GPU receives it: its binding in `fovea_core::kernel_abi`, a name
-/// for error messages, how it is read and its bytes.
-#[derive(Clone, Copy, Debug)]
-pub struct PackedArray<'a> {
-    pub binding: u32,
-    pub name: &'static str,
-    pub read: ArrayRead,
-    pub bytes: &'a [u8],
-}
-
-impl<'a> PackedArray<'a> {
-    /// The array `data` at `binding`.
-    #[must_use]
-    pub fn new<T: bytemuck::Pod>(
-        binding: u32,
-        name: &'static str,
-        read: ArrayRead,
-        data: &'a [T],
-    ) -> Self {
-        Self {
-            binding,
-            name,
-            read,
-            bytes: bytemuck::cast_slice(data),
-        }
-    }
 }
 
 /// The packed scene: owned arrays in the GPU layout, grouped as [`SceneView`] groups them.
