@@ -10,7 +10,6 @@ cd "$(dirname "$0")/.."
 ROUNDS=${1:-3}
 BACKENDS=${2:-cpu vulkan}
 FOVEA=${FOVEA:-./target/release/fovea}
-SHARED=${SHARED:-../shared/scenes}
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
 [ -x "$FOVEA" ] || { echo "no $FOVEA: run cargo build --release -p fovea-cli" >&2; exit 1; }
@@ -19,10 +18,10 @@ CORNELL="--eye 0,1,3.9 --target 0,1,0 --fov 38"
 # name|scene|options (resolutions kept small: lavapipe is slow)
 CASES=(
   "cornell (bundled)|assets/cornell_box/CornellBox-Original.obj|$CORNELL --uniform --spp 16,1,1 --resolution 256x256"
-  "cornell mirror|$SHARED/cornell_box_mcguire/CornellBox-Mirror.obj|$CORNELL --uniform --spp 16,1,1 --resolution 256x256"
-  "cornell_stiff|$SHARED/cornell_stiff/cornell_stiff.gltf|--uniform --spp 16,1,1 --resolution 256x256"
-  "veach_mis|$SHARED/veach_mis_pema99/VeachMIS.glb|--uniform --spp 16,1,1 --resolution 256x256"
-  "roughness_scale|$SHARED/roughness_scale_kajiya/scene.gltf|--sky 1,1,1 --uniform --spp 16,1,1 --resolution 256x256"
+  "cornell mirror|assets/cornell_box/CornellBox-Mirror.obj|$CORNELL --uniform --spp 16,1,1 --resolution 256x256"
+  "cornell_stiff|assets/cornell_stiff/cornell_stiff.gltf|--uniform --spp 16,1,1 --resolution 256x256"
+  "veach_mis|assets/veach_mis_pema99/VeachMIS.glb|--uniform --spp 16,1,1 --resolution 256x256"
+  "roughness_scale|assets/roughness_scale_kajiya/scene.gltf|--sky 1,1,1 --uniform --spp 16,1,1 --resolution 256x256"
   "lost_empire|assets/lost_empire/lost_empire.obj|--resolution 960x540"
 )
 

@@ -1737,8 +1737,9 @@ mod tests {
     use super::*;
     use crate::load::load_scene;
 
+    /// The scenes the repository bundles.
     fn scenes() -> PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes")
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets")
     }
 
     fn load(rel: &str) -> LoadedScene {

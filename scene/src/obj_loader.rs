@@ -1052,8 +1052,9 @@ mod tests {
     use crate::load::load_scene;
     use fovea_core::scene::MATERIAL_DOUBLE_SIDED_EMISSION;
 
+    /// The scenes the repository bundles.
     fn scenes() -> PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes")
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets")
     }
 
     fn load_with(rel: &str, options: &LoadOptions) -> LoadedScene {
@@ -1143,7 +1144,7 @@ mod tests {
 
     #[test]
     fn cornell_box_original_obj() {
-        let s = load("cornell_box_mcguire/CornellBox-Original.obj");
+        let s = load("cornell_box/CornellBox-Original.obj");
         assert_eq!(s.triangle_count(), 36);
         let light = material(&s, "light");
         assert_eq!(&light.emission[..3], &[17.0, 12.0, 4.0]);
@@ -1246,7 +1247,28 @@ mod tests {
 
     #[test]
     fn conference_untextured() {
-        let s = load("conference/conference.obj");
+        // Conference (27 MB) does not ship with the repository: `$FOVEA_SCENES`, else
+        // `../shared/scenes`; a missing file is skipped with a note, and fails under `CI=true`.
+        let large = std::env::var_os("FOVEA_SCENES")
+            .filter(|d| !d.is_empty())
+            .map_or_else(
+                || Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes"),
+                PathBuf::from,
+            );
+        let path = large.join("conference/conference.obj");
+        if !path.exists() {
+            let why = format!(
+                "{} is missing (set FOVEA_SCENES to the folder of the large scenes)",
+                path.display()
+            );
+            assert!(
+                std::env::var("CI").as_deref() != Ok("true"),
+                "CI=true: {why}"
+            );
+            eprintln!("skipping: {why}");
+            return;
+        }
+        let s = load_scene(&path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(s.triangle_count(), 331_179);
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
         assert!(s.textures.is_empty());

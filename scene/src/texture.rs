@@ -390,8 +390,7 @@ mod tests {
 
     #[test]
     fn real_png_files_decode() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../shared/scenes/roughness_scale_kajiya");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/roughness_scale_kajiya");
         let t = load_texture_file(&dir.join("127.png"), false, &TextureLimits::default()).unwrap();
         assert_eq!((t.width, t.height), (1, 1));
         assert_eq!(t.texel(0, 0)[3], 255);

@@ -17,9 +17,11 @@ pub fn repo_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// The shared scene folder next to the repository (`../shared/scenes`).
-pub fn shared_scenes() -> PathBuf {
-    repo_root().join("../shared/scenes")
+/// The scenes that ship with the repository (`assets/`): the Cornell boxes, their glTF and stiff
+/// variants, the Veach MIS scene, the roughness sweep, the emissive triangle, the dark Cornell box and
+/// Lost Empire, each with its `SOURCE.md` and licence.
+pub fn bundled_scenes() -> PathBuf {
+    repo_root().join("assets")
 }
 
 /// The bundled Cornell box (CornellBox-Original, 36 triangles, ceiling light).

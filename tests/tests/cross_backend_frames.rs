@@ -1,4 +1,4 @@
-//! Cross-backend frame diffs: every small scene of `../shared/scenes` rendered with the same camera,
+//! Cross-backend frame diffs: every small scene the repository bundles (`assets/`) rendered with the same camera,
 //! seed, gaze and settings on the CPU host and on the Vulkan device (lavapipe in CI), compared in linear
 //! HDR (fraction of pixels within 1e-3 relative, max abs diff) and with FLIP (nv-flip, 67.02 ppd) on the
 //! tone-mapped images. Prints a per-scene table (`-- --nocapture`).
@@ -8,7 +8,7 @@
 //! feature, `--no-specialize`); on each backend the two must be bit-identical.
 //!
 //! Without a Vulkan device the test prints a note and passes, except with `CI=true`. The validation
-//! layer is on and must stay silent. Scenes missing from `../shared/scenes` are skipped with a note.
+//! layer is on and must stay silent.
 use std::path::PathBuf;
 
 use fovea_core::camera::Camera;
@@ -65,7 +65,7 @@ struct SceneCase {
 }
 
 fn cases() -> Vec<SceneCase> {
-    let s = shared_scenes();
+    let s = bundled_scenes();
     let case = |name, rel: &str, environment, view| SceneCase {
         name,
         path: s.join(rel),
@@ -83,7 +83,7 @@ fn cases() -> Vec<SceneCase> {
         ),
         case(
             "mcguire Original",
-            "cornell_box_mcguire/CornellBox-Original.obj",
+            "cornell_box/CornellBox-Original.obj",
             Environment::None,
             View::Cornell,
         ),
@@ -91,20 +91,20 @@ fn cases() -> Vec<SceneCase> {
             mtl_diffuse: MtlDiffuse::Lambert,
             ..case(
                 "mcguire Original, Lambertian",
-                "cornell_box_mcguire/CornellBox-Original.obj",
+                "cornell_box/CornellBox-Original.obj",
                 Environment::None,
                 View::Cornell,
             )
         },
         case(
             "mcguire Mirror",
-            "cornell_box_mcguire/CornellBox-Mirror.obj",
+            "cornell_box/CornellBox-Mirror.obj",
             Environment::None,
             View::Cornell,
         ),
         case(
             "mcguire Sphere",
-            "cornell_box_mcguire/CornellBox-Sphere.obj",
+            "cornell_box/CornellBox-Sphere.obj",
             Environment::None,
             View::Cornell,
         ),
@@ -262,10 +262,6 @@ fn small_scenes_render_alike(traversal: fovea_vulkan::Traversal) {
     let device = ctx.device_description();
     let mut rows = Vec::new();
     for case in cases() {
-        if !case.path.exists() {
-            eprintln!("skipping {}: {} is missing", case.name, case.path.display());
-            continue;
-        }
         let start = std::time::Instant::now();
         let options = LoadOptions {
             mtl_diffuse: case.mtl_diffuse,
@@ -385,11 +381,7 @@ fn lost_empire_full_frame_renders_alike() {
     };
     let log = ctx.validation_log();
     let (w, h) = (1920u32, 1080u32);
-    let path = shared_scenes().join("lost_empire/lost_empire.obj");
-    if !path.exists() {
-        eprintln!("skipping: {} is missing", path.display());
-        return;
-    }
+    let path = bundled_scenes().join("lost_empire/lost_empire.obj");
     let packed = load_packed(&path, &Environment::Constant([1.0, 1.0, 1.0]));
     let cam = lost_empire_camera(60f32.to_radians(), w as f32 / h as f32);
     let frame = frame_params(cam, paper_foveation(w, h), w, h, 7);

@@ -1440,16 +1440,14 @@ fn hardware_traversal_finds_the_software_hits() {
     assert!(ctx.hardware_traversal());
     let log = ctx.validation_log();
     let device = ctx.device_description();
-    let lost_empire = fovea_tests::shared_scenes().join("lost_empire/lost_empire.obj");
-    let mut scenes = vec![("probe scene", probe_scene_packed())];
-    if lost_empire.exists() {
-        scenes.push((
+    let lost_empire = fovea_tests::bundled_scenes().join("lost_empire/lost_empire.obj");
+    let scenes = vec![
+        ("probe scene", probe_scene_packed()),
+        (
             "Lost Empire",
             fovea_tests::load_packed(&lost_empire, &Environment::Constant([1.0; 3])),
-        ));
-    } else {
-        eprintln!("skipping Lost Empire: {} is missing", lost_empire.display());
-    }
+        ),
+    ];
     let mut rows: Vec<Row> = Vec::new();
     let mut rng = Rng(0x4a4d_0001);
     for (name, packed) in &scenes {

@@ -103,7 +103,7 @@ fn image_does_not_depend_on_the_thread_count() {
 
 #[test]
 fn gltf_and_obj_cornell_boxes_agree() {
-    let gltf = shared_scenes().join("cornell_box_gltf/cornell_box.gltf");
+    let gltf = bundled_scenes().join("cornell_box_gltf/cornell_box.gltf");
     let a = load_packed(&gltf, &Environment::None);
     let b = load_packed(&cornell_box_path(), &Environment::None);
     let frame = frame_params(cornell_camera(W, H), FoveationParams::uniform(16), W, H, 5);

@@ -38,26 +38,17 @@ impl Rng {
 /// Scenes with their cameras: McGuire's Cornell boxes (large flat walls, a sphere) and Lost Empire
 /// (225k triangles, alpha cut-outs).
 fn scenes() -> Vec<(&'static str, PackedScene, fovea_core::camera::Camera)> {
-    let s = shared_scenes();
+    let s = bundled_scenes();
     let mut out = Vec::new();
     for (name, rel) in [
-        (
-            "cornell original",
-            "cornell_box_mcguire/CornellBox-Original.obj",
-        ),
-        (
-            "cornell sphere",
-            "cornell_box_mcguire/CornellBox-Sphere.obj",
-        ),
+        ("cornell original", "cornell_box/CornellBox-Original.obj"),
+        ("cornell sphere", "cornell_box/CornellBox-Sphere.obj"),
     ] {
-        let path = s.join(rel);
-        if path.exists() {
-            out.push((
-                name,
-                load_packed(&path, &Environment::None),
-                cornell_camera(W, H),
-            ));
-        }
+        out.push((
+            name,
+            load_packed(&s.join(rel), &Environment::None),
+            cornell_camera(W, H),
+        ));
     }
     let le = repo_root().join("assets/lost_empire/lost_empire.obj");
     out.push((

@@ -1199,7 +1199,7 @@ fn frames_are_finite_without_the_final_guard_on_vulkan() {
         );
         scenes.push((name, adversarial_scene(&env), cam));
     }
-    let stiff = fovea_tests::shared_scenes().join("cornell_stiff/cornell_stiff.gltf");
+    let stiff = fovea_tests::bundled_scenes().join("cornell_stiff/cornell_stiff.gltf");
     if stiff.exists() {
         let mut loaded = fovea_scene::load_scene(&stiff, &Default::default()).unwrap();
         for m in &mut loaded.materials {

@@ -2,8 +2,7 @@
 //! near-specular metal box) and the Veach MIS plates, rendered with MIS, light sampling alone and BSDF
 //! sampling alone; and the precision of accumulating 4096 samples per pixel in f32.
 //!
-//! Figures are printed (`-- --nocapture`). Scenes missing from `../shared/scenes` are skipped with a
-//! note. `FOVEA_HEAVY=1` renders a reference of 32768 spp and 16 seeds per strategy.
+//! Figures are printed (`-- --nocapture`). `FOVEA_HEAVY=1` renders a reference of 32768 spp and 16 seeds per strategy.
 use std::path::PathBuf;
 use std::sync::OnceLock;
 use std::time::Instant;
@@ -103,14 +102,9 @@ struct Stiff {
     depths: &'static [u32],
 }
 
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = fovea_tests::shared_scenes().join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping {rel}: {} is missing", p.display());
-        None
-    }
+/// A scene the repository bundles (`assets/`).
+fn bundled(rel: &str) -> PathBuf {
+    fovea_tests::bundled_scenes().join(rel)
 }
 
 const W: u32 = 48;
@@ -124,7 +118,8 @@ fn stiff_scenes() -> Vec<Stiff> {
     let (w, h) = size();
     let aspect = w as f32 / h as f32;
     let mut out = Vec::new();
-    if let Some(p) = shared("cornell_stiff/cornell_stiff.gltf") {
+    {
+        let p = bundled("cornell_stiff/cornell_stiff.gltf");
         let loaded = load_scene(&p, &LoadOptions::default()).expect("cornell_stiff");
         let scene = pack(loaded, &Environment::None);
         // From above the glossy short box, where its top mirrors the light: the highlight that a
@@ -150,7 +145,8 @@ fn stiff_scenes() -> Vec<Stiff> {
             depths: &[1, 3],
         });
     }
-    if let Some(p) = shared("veach_mis_pema99/VeachMIS.glb") {
+    {
+        let p = bundled("veach_mis_pema99/VeachMIS.glb");
         let mut loaded = load_scene(&p, &LoadOptions::default()).expect("VeachMIS");
         equal_power_spheres(&mut loaded);
         // The plates' lit side: from +x +z (the file has no camera; from -z the plates show their

@@ -340,6 +340,14 @@ fn region_means(a: &[f64]) -> RegionMeans {
     }
 }
 
+/// The seed of configuration `slug`'s frames: `seed` with the slug's hash, so that every
+/// configuration of a sequence has its own random numbers.
+#[must_use]
+pub fn spec_seed(seed: u32, slug: &str) -> u32 {
+    let h = crate::content_hash::fnv1a64(slug.as_bytes());
+    seed ^ (h as u32) ^ ((h >> 32) as u32)
+}
+
 /// Renders and scores every configuration of the sequence.
 pub fn run_sequence(
     renderer: &mut Renderer,
@@ -454,6 +462,12 @@ pub fn run_sequence(
         let mut fovea_flip = Vec::new();
         let mut samples = 0u64;
         let mut previous: Option<FrameImage> = None;
+        // Each configuration draws its own random numbers, so that no comparison between two of them
+        // holds by construction (with one key, uniform's and 32/16/8's foveas would be the same image).
+        let settings = FrameSettings {
+            seed: spec_seed(inputs.settings.seed, &spec.slug),
+            ..inputs.settings
+        };
         for (i, scheduled) in plan.schedule.frames.iter().enumerate() {
             inputs.bar.set_message(format!(
                 "{}: sequence {} (frame {}/{})",
@@ -471,10 +485,8 @@ pub fn run_sequence(
             } else {
                 FoveationParams::uniform(spec.spp[0])
             };
-            let frame = inputs
-                .settings
-                .frame(scheduled.number, view.camera, foveation);
-            let request = inputs.settings.request(
+            let frame = settings.frame(scheduled.number, view.camera, foveation);
+            let request = settings.request(
                 spec.history,
                 spec.denoise,
                 FrameOutput::ReadBack {
