@@ -1,6 +1,6 @@
 //! A foveated SVGF-like denoiser (after Schied et al. 2017, "Spatiotemporal Variance-Guided
-//! Filtering"): three passes of the frame pipeline after the history's resolve, each a function of one
-//! pixel that both hosts run.
+//! Filtering"): three passes of the frame pipeline after the history's resolve (input, the à-trous
+//! steps, output), each a function of one pixel that both hosts run.
 //!
 //! 1. [`denoise_input`]: the pixel's *lighting*, so the filter blurs lighting, not texture: the history's
 //!    where there is one (it is kept demodulated, [`crate::temporal::albedo`]), else the HDR pixel

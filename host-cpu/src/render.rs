@@ -304,7 +304,7 @@ pub fn render_frame(
 }
 
 /// [`render_frame`] with temporal reuse: the frame joins `history` and the returned image is the
-/// history's mean. The statistics list the six passes.
+/// history's mean. The statistics list each pass the frame ran (`FramePass::name`).
 pub fn render_frame_with_history(
     scene: &SceneView,
     frame: &FrameParams,

@@ -2,20 +2,22 @@
 //!
 //! The ash Vulkan host of fovea: it uploads the packed scene of `fovea-scene` once per scene and runs the
 //! rust-gpu kernel (`fovea-gpu-kernel`, built to SPIR-V by `host-vulkan/build.rs`) over it, with the
-//! bindings and push constants of `fovea_core::kernel_abi`. A frame is the CPU host's three passes as
-//! dispatches, plus the tone map:
+//! bindings and push constants of `fovea_core::kernel_abi`. A frame is core's pass list
+//! (`fovea_core::passes::frame_passes`) as dispatches of the kernel entry each pass names, in the same
+//! order as the CPU host runs them:
 //!
 //! 1. **Samples.** The host enumerates the blocks of each region (`owning_block(p).origin == p`) and splits
 //!    them into chunks of at most [`blocks::DEFAULT_MAX_CHUNK_SAMPLES`] samples. Per chunk,
 //!    `render_samples` runs one invocation per sample and `reduce_blocks` one per block (mean of its
 //!    samples, written over the block's footprint of the replicated image). Each chunk is one submission
 //!    waited on with a timeout, so no dispatch runs long and the samples buffer stays small.
-//! 2. **Cell means** (`cell_means`), 3. **fill** (`fill`) and the **tone map** (`tonemap`) run one
-//!    invocation per cell or pixel, then the LDR (and optionally HDR) image is copied back.
+//! 2. Every later pass (cell means, fill, with history the G-buffer, cell albedo, temporal and resolve,
+//!    the denoiser's, the tone map, the view's overlay) runs one invocation per cell or pixel
+//!    (`FramePass::items`), all in one submission, then the 8-bit (and optionally HDR) image is copied
+//!    back.
 //!
-//! The live view (`fovea view`) adds two passes, `accumulate` and `overlay_regions`, keeps the image on
-//! the device and presents it to a window's swapchain ([`present`]); the CPU backend's frames go through
-//! the same presenter from the host.
+//! The live view (`fovea view`) keeps the image on the device and presents it to a window's swapchain
+//! ([`present`]); the CPU backend's frames go through the same presenter from the host.
 //!
 //! `render_ms` comes from GPU timestamps around the whole frame (wall time where the queue has none).
 //! With `FOVEA_VULKAN_VALIDATION=1` the Khronos validation layer is enabled and its warnings and errors are
