@@ -2,10 +2,10 @@
 //! (software traversal) and `FOVEA_KERNEL_RQ_SPV` (ray queries; `include_bytes!(env!(..))`).
 //!
 //! The kernel (`gpu-kernel/`, calling into `core/`) is compiled by rust-gpu, which needs a pinned nightly,
-//! so this script runs `gpu-builder/` (its own workspace, pinned to that nightly) in a nested cargo:
+//! so this script runs `gpu-kernel/builder/` (its own workspace, pinned to that nightly) in a nested cargo:
 //!
 //! ```text
-//! cargo +nightly-2026-08-15 run --release --manifest-path gpu-builder/Cargo.toml \
+//! cargo +nightly-2026-08-15 run --release --manifest-path gpu-kernel/builder/Cargo.toml \
 //!     --target-dir target/gpu-builder -- $OUT_DIR/fovea-kernel.spv $OUT_DIR/fovea-kernel-ray-query.spv
 //! ```
 //!
@@ -22,7 +22,7 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// The nightly rust-gpu 0.11.0 needs (also in `gpu-builder/rust-toolchain.toml` and `scripts/setup.sh`).
+/// The nightly rust-gpu 0.11.0 needs (also in `gpu-kernel/builder/rust-toolchain.toml` and `scripts/setup.sh`).
 const NIGHTLY: &str = "nightly-2026-08-15";
 /// Components of [`NIGHTLY`] that spirv-builder needs.
 const COMPONENTS: [&str; 3] = ["rust-src", "rustc-dev", "llvm-tools"];
@@ -61,10 +61,10 @@ fn main() {
         "gpu-kernel/src",
         "gpu-kernel/Cargo.toml",
         "gpu-kernel/Cargo.lock",
-        "gpu-builder/src",
-        "gpu-builder/Cargo.toml",
-        "gpu-builder/Cargo.lock",
-        "gpu-builder/rust-toolchain.toml",
+        "gpu-kernel/builder/src",
+        "gpu-kernel/builder/Cargo.toml",
+        "gpu-kernel/builder/Cargo.lock",
+        "gpu-kernel/builder/rust-toolchain.toml",
     ] {
         rerun_if_changed(&repo.join(dir));
     }
@@ -103,13 +103,13 @@ fn main() {
     let mut cmd = Command::new(rustup_tool("cargo"));
     cmd.arg(format!("+{NIGHTLY}"))
         .args(["run", "--release", "--quiet", "--manifest-path"])
-        .arg(repo.join("gpu-builder").join("Cargo.toml"))
+        .arg(repo.join("gpu-kernel/builder/Cargo.toml"))
         .arg("--target-dir")
         .arg(repo.join("target").join("gpu-builder"))
         .arg("--")
         .arg(&out)
         .arg(&out_rq)
-        .current_dir(repo.join("gpu-builder"));
+        .current_dir(repo.join("gpu-kernel/builder"));
     sanitise_env(&mut cmd);
 
     let output = match cmd.output() {

@@ -8,7 +8,7 @@ export PATH="$HOME/.cargo/bin:$PATH"
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
 # The kernel and its builder are separate workspaces (the builder pins a nightly without rustfmt).
-rustfmt --edition 2021 --check gpu-kernel/src/*.rs gpu-builder/src/*.rs
+rustfmt --edition 2021 --check gpu-kernel/src/*.rs gpu-kernel/builder/src/*.rs
 echo "== cargo clippy"
 cargo clippy --workspace --all-targets -q -- -D warnings
 # The CPU-only build (scripts/render-default.sh, scripts/slurm/build-portable.sh) has no Vulkan backend.

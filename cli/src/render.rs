@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use fovea_core::foveation::blocks::count_samples;
 use fovea_core::foveation::regions::{FoveationParams, FOVEATION_OK};
+use fovea_core::integrator::FrameParams;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::RenderArgs;
@@ -17,7 +18,7 @@ use crate::output::{
 use crate::partial::{
     identity_lines, largest_spp, samples_in_part, write_part, PartSpec, RenderIdentity,
 };
-use crate::scene_setup::{choose_camera, prepare_scene, Lighting};
+use crate::scene_setup::{choose_camera, prepare_scene, Lighting, PreparedScene};
 use crate::stats::FrameStats;
 
 use crate::schedule::{FrameSchedule, FrameSettings, LonePath, ScheduledFrame};
@@ -293,10 +294,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         None => args.target,
     };
     let mut renderer = Renderer::new(&target, args.quiet)?;
-    let backend_name = renderer.name();
-
     let (eye, target, up) = args.camera.points();
-
     let scene = prepare_scene(
         args.scene.as_deref(),
         args.materials.mtl.as_deref(),
@@ -305,6 +303,101 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         &plan.lighting.point_lights,
         renderer.wants_wide_bvh(),
     )?;
+    run_warnings.extend(describe_scene(args, &scene));
+
+    let settings = plan.settings;
+    let camera = choose_camera(&scene, eye, target, up, args.camera.fov, settings.aspect())?;
+    let cameras = plan.schedule.cameras(camera, |key| {
+        choose_camera(
+            &scene,
+            Some(key.eye),
+            Some(key.target),
+            up,
+            args.camera.fov,
+            settings.aspect(),
+        )
+    })?;
+    renderer.set_scene(&scene.packed, !args.no_specialize)?;
+
+    let mut frames = Vec::new();
+    // Frames whose tone-mapped image is all black (see `BLACK_IMAGE_WARNING`).
+    let mut black_frames = 0usize;
+    for (g, &camera) in plan.schedule.frames.iter().zip(&cameras) {
+        let mut foveation = plan.foveation_template;
+        if !args.foveation.uniform {
+            foveation.gaze = g.gaze;
+        }
+        let frame = settings.frame(g.number, camera, foveation);
+        let bar = progress_bar(args.quiet, &plan, &foveation);
+        if let Some(spec) = plan.samples {
+            frames.push(render_part(
+                args,
+                &plan,
+                spec,
+                &mut renderer,
+                &scene,
+                &frame,
+                &bar,
+            )?);
+            continue;
+        }
+        // The HDR image is needed for EXR output; PNG and the overlay use the backend's tone map.
+        let want_hdr = plan.output_format == ImageFormat::Exr;
+        let request = settings.request(
+            args.history,
+            args.denoise,
+            FrameOutput::ReadBack {
+                want_hdr,
+                want_raw: plan.keep_raw.is_some(),
+            },
+        );
+        let rendered = renderer.render(&scene.packed, &frame, &request, &|n| bar.inc(n))?;
+        bar.finish_and_clear();
+        let (stats, black) = write_frame_outputs(args, &plan, &frame, g.number, rendered)?;
+        black_frames += usize::from(black);
+        frames.push(stats);
+    }
+
+    // A black image from a scene with lights (one without has had its warning): say why, not only
+    // write it. Like the no-light warning, also under --quiet: the output is of no use as it is.
+    if black_frames > 0 && !scene.packed.lights.list.is_empty() {
+        let warning = if frames.len() == 1 {
+            crate::scene_setup::BLACK_IMAGE_WARNING.to_string()
+        } else {
+            format!(
+                "{black_frames} of {} frames: {}",
+                frames.len(),
+                crate::scene_setup::BLACK_IMAGE_WARNING
+            )
+        };
+        eprintln!("warning: {warning}");
+        run_warnings.push(warning);
+    }
+    let wall_ms = wall.elapsed().as_secs_f64() * 1e3;
+    let report = crate::stats::build_report(
+        renderer.name(),
+        &renderer.device_name(),
+        &plan.foveation_template,
+        args.foveation.uniform,
+        plan.radii_px,
+        plan.resolution,
+        &scene,
+        &run_warnings,
+        &frames,
+        wall_ms,
+    );
+    if let Some(p) = &args.stats {
+        crate::stats::write_json(p, &report)?;
+    }
+    if !args.quiet {
+        print_summary(args, plan.resolution, renderer.name(), &frames);
+    }
+    Ok(())
+}
+
+/// Prints what loading the scene found (all of it with `--verbose`, else how many warnings), and
+/// returns the warnings that `--stats` lists: a scene without lights, `--texture-lod` without textures.
+fn describe_scene(args: &RenderArgs, scene: &PreparedScene) -> Vec<String> {
     if args.verbose {
         for w in &scene.warnings {
             eprintln!("warning: {w}");
@@ -337,9 +430,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             scene.warnings.len()
         );
     }
+    let mut warnings = Vec::new();
     if scene.packed.lights.list.is_empty() {
         eprintln!("warning: {}", crate::scene_setup::NO_LIGHT_WARNING);
-        run_warnings.push(crate::scene_setup::NO_LIGHT_WARNING.to_string());
+        warnings.push(crate::scene_setup::NO_LIGHT_WARNING.to_string());
     }
     if args.path.integrator().texture_lod != fovea_core::integrator::path::TEXTURE_LOD_OFF
         && scene.packed.stats.texture_count == 0
@@ -348,197 +442,148 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         if !args.quiet {
             eprintln!("warning: {warning}");
         }
-        run_warnings.push(warning.to_string());
+        warnings.push(warning.to_string());
     }
+    warnings
+}
 
+/// A progress bar over a frame's samples (a part's with `--samples`), hidden under `--quiet` and for
+/// frames of fewer than 2 M samples.
+fn progress_bar(quiet: bool, plan: &Plan, foveation: &FoveationParams) -> ProgressBar {
     let [w, h] = plan.resolution;
-    let settings = plan.settings;
-    let camera = choose_camera(&scene, eye, target, up, args.camera.fov, settings.aspect())?;
-    let cameras = plan.schedule.cameras(camera, |key| {
-        choose_camera(
-            &scene,
-            Some(key.eye),
-            Some(key.target),
-            up,
-            args.camera.fov,
-            settings.aspect(),
+    let total: u64 = match plan.samples {
+        Some(spec) => samples_in_part(w, h, foveation, spec.samples),
+        None => count_samples(w, h, foveation).iter().sum(),
+    };
+    if quiet || total < 2_000_000 {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:40} {percent}% samples ({eta} left)",
         )
-    })?;
-    renderer.set_scene(&scene.packed, !args.no_specialize)?;
-
-    let mut frames = Vec::new();
-    // Frames whose tone-mapped image is all black (see `BLACK_IMAGE_WARNING`).
-    let mut black_frames = 0usize;
-    for (g, &camera) in plan.schedule.frames.iter().zip(&cameras) {
-        let mut foveation = plan.foveation_template;
-        if !args.foveation.uniform {
-            foveation.gaze = g.gaze;
-        }
-        let frame = settings.frame(g.number, camera, foveation);
-        let total: u64 = match plan.samples {
-            Some(spec) => samples_in_part(w, h, &foveation, spec.samples),
-            None => count_samples(w, h, &foveation).iter().sum(),
-        };
-        let bar = if args.quiet || total < 2_000_000 {
-            ProgressBar::hidden()
-        } else {
-            let bar = ProgressBar::new(total);
-            bar.set_style(
-                ProgressStyle::with_template(
-                    "{spinner} [{elapsed_precise}] {bar:40} {percent}% samples ({eta} left)",
-                )
-                .expect("static progress template is valid"),
-            );
-            bar
-        };
-        if let Some(spec) = plan.samples {
-            // The identity first: the scene file and the executable as they are when the work starts.
-            let scene_path = args
-                .scene
-                .clone()
-                .unwrap_or_else(crate::scene_setup::default_scene_path);
-            let scene_bytes =
-                std::fs::read(&scene_path).map_err(|e| FoveaError::file(&scene_path, e))?;
-            let identity = identity_lines(
-                &RenderIdentity::of(&scene_bytes, &scene.packed),
-                &frame,
-                settings.fill_mode,
-            );
-            let (sums, stats) =
-                renderer
-                    .render_sample_range(&scene.packed, &frame, spec.samples, &|n| bar.inc(n))?;
-            bar.finish_and_clear();
-            write_part(&plan.output, &identity, &scene_path, spec, &sums.pixels)?;
-            frames.push(FrameStats {
-                frame: g.number,
-                gaze: foveation.gaze,
-                output: plan.output.clone(),
-                render: stats,
-                extra: None,
-                history_restarted: None,
-            });
-            continue;
-        }
-        // The HDR image is needed for EXR output; PNG and the overlay use the backend's tone map.
-        let want_hdr = plan.output_format == ImageFormat::Exr;
-        let request = settings.request(
-            args.history,
-            args.denoise,
-            FrameOutput::ReadBack {
-                want_hdr,
-                want_raw: plan.keep_raw.is_some(),
-            },
-        );
-        let rendered = renderer.render(&scene.packed, &frame, &request, &|n| bar.inc(n))?;
-        bar.finish_and_clear();
-        let rgb8 = match (rendered.image.rgb8(), &rendered.image.hdr) {
-            (Some(bytes), _) => bytes,
-            (None, Some(hdr)) => tonemapped_rgb8(hdr, args.image.exposure),
-            (None, None) => unreachable!("every backend returns HDR or tone-mapped pixels"),
-        };
-        if rgb8.iter().all(|&byte| byte == 0) {
-            black_frames += 1;
-        }
-
-        let output = if plan.per_frame_outputs {
-            frame_path(&plan.output, g.number)
-        } else {
-            plan.output.clone()
-        };
-        match (plan.output_format, &rendered.image.hdr) {
-            (ImageFormat::Exr, Some(hdr)) => {
-                write_image(&output, ImageFormat::Exr, hdr, args.image.exposure)?
-            }
-            (ImageFormat::Exr, None) => unreachable!("HDR is requested for EXR output"),
-            (ImageFormat::Png, _) => write_png(&output, w, h, &rgb8)?,
-        }
-        if let Some((path, format)) = &plan.keep_raw {
-            let raw = rendered.image.raw_hdr.as_ref().ok_or_else(|| {
-                FoveaError::Backend("the backend kept no image from before the denoiser".into())
-            })?;
-            let path = if plan.per_frame_outputs {
-                frame_path(path, g.number)
-            } else {
-                path.clone()
-            };
-            write_image(&path, *format, raw, args.image.exposure)?;
-        }
-        if let Some(p) = &args.regions_overlay {
-            let p = if plan.per_frame_outputs {
-                frame_path(p, g.number)
-            } else {
-                p.clone()
-            };
-            write_png(&p, w, h, &regions_overlay(&rgb8, w, h, &foveation))?;
-        }
-        frames.push(FrameStats {
-            frame: g.number,
-            gaze: foveation.gaze,
-            output,
-            render: rendered.stats,
-            extra: rendered.extra,
-            history_restarted: args.history.then_some(rendered.history_restarted),
-        });
-    }
-
-    // A black image from a scene with lights (one without has had its warning): say why, not only
-    // write it. Like the no-light warning, also under --quiet: the output is of no use as it is.
-    if black_frames > 0 && !scene.packed.lights.list.is_empty() {
-        let warning = if frames.len() == 1 {
-            crate::scene_setup::BLACK_IMAGE_WARNING.to_string()
-        } else {
-            format!(
-                "{black_frames} of {} frames: {}",
-                frames.len(),
-                crate::scene_setup::BLACK_IMAGE_WARNING
-            )
-        };
-        eprintln!("warning: {warning}");
-        run_warnings.push(warning);
-    }
-    let wall_ms = wall.elapsed().as_secs_f64() * 1e3;
-    let report = crate::stats::build_report(
-        backend_name,
-        &renderer.device_name(),
-        &plan.foveation_template,
-        args.foveation.uniform,
-        plan.radii_px,
-        plan.resolution,
-        &scene,
-        &run_warnings,
-        &frames,
-        wall_ms,
+        .expect("static progress template is valid"),
     );
-    if let Some(p) = &args.stats {
-        crate::stats::write_json(p, &report)?;
+    bar
+}
+
+/// `--samples`: renders the part `spec` of `frame` and writes it (with the identity of the scene
+/// file and the executable as they are when the work starts).
+fn render_part(
+    args: &RenderArgs,
+    plan: &Plan,
+    spec: PartSpec,
+    renderer: &mut Renderer,
+    scene: &PreparedScene,
+    frame: &FrameParams,
+    bar: &ProgressBar,
+) -> Result<FrameStats> {
+    let scene_path = args
+        .scene
+        .clone()
+        .unwrap_or_else(crate::scene_setup::default_scene_path);
+    let scene_bytes = std::fs::read(&scene_path).map_err(|e| FoveaError::file(&scene_path, e))?;
+    let identity = identity_lines(
+        &RenderIdentity::of(&scene_bytes, &scene.packed),
+        frame,
+        plan.settings.fill_mode,
+    );
+    let (sums, stats) =
+        renderer.render_sample_range(&scene.packed, frame, spec.samples, &|n| bar.inc(n))?;
+    bar.finish_and_clear();
+    write_part(&plan.output, &identity, &scene_path, spec, &sums.pixels)?;
+    Ok(FrameStats {
+        frame: frame.frame_index,
+        gaze: frame.foveation.gaze,
+        output: plan.output.clone(),
+        render: stats,
+        extra: None,
+        history_restarted: None,
+    })
+}
+
+/// Writes frame `number`'s outputs (the image, `--keep-raw`, `--regions-overlay`; numbered over a
+/// sequence); returns its statistics and whether its 8-bit image is all black.
+fn write_frame_outputs(
+    args: &RenderArgs,
+    plan: &Plan,
+    frame: &FrameParams,
+    number: u32,
+    rendered: crate::backend::Rendered,
+) -> Result<(FrameStats, bool)> {
+    let [w, h] = plan.resolution;
+    let exposure = plan.settings.exposure_ev;
+    let numbered = |path: &Path| {
+        if plan.per_frame_outputs {
+            frame_path(path, number)
+        } else {
+            path.to_path_buf()
+        }
+    };
+    let rgb8 = match (rendered.image.rgb8(), &rendered.image.hdr) {
+        (Some(bytes), _) => bytes,
+        (None, Some(hdr)) => tonemapped_rgb8(hdr, exposure),
+        (None, None) => unreachable!("every backend returns HDR or tone-mapped pixels"),
+    };
+    let output = numbered(&plan.output);
+    match (plan.output_format, &rendered.image.hdr) {
+        (ImageFormat::Exr, Some(hdr)) => write_image(&output, ImageFormat::Exr, hdr, exposure)?,
+        (ImageFormat::Exr, None) => unreachable!("HDR is requested for EXR output"),
+        (ImageFormat::Png, _) => write_png(&output, w, h, &rgb8)?,
     }
-    if !args.quiet {
-        let last = frames.last().expect("at least one frame");
-        let render_ms: f64 =
-            frames.iter().map(|f| f.render.render_ms).sum::<f64>() / frames.len() as f64;
-        let samples: u64 = last.render.primary_samples;
-        println!(
-            "fovea: {} {}x{} {} on {} in {:.0} ms ({:.2} M samples, {:.2} M paths/s) -> {}",
-            if args.foveation.uniform {
-                "uniform"
-            } else {
-                "foveated"
-            },
+    if let Some((path, format)) = &plan.keep_raw {
+        let raw = rendered.image.raw_hdr.as_ref().ok_or_else(|| {
+            FoveaError::Backend("the backend kept no image from before the denoiser".into())
+        })?;
+        write_image(&numbered(path), *format, raw, exposure)?;
+    }
+    if let Some(p) = &args.regions_overlay {
+        write_png(
+            &numbered(p),
             w,
             h,
-            if frames.len() > 1 {
-                format!("{} frames", frames.len())
-            } else {
-                "1 frame".into()
-            },
-            backend_name,
-            render_ms,
-            samples as f64 / 1e6,
-            samples as f64 / render_ms / 1e3,
-            last.output.display()
-        );
+            &regions_overlay(&rgb8, w, h, &frame.foveation),
+        )?;
     }
-    Ok(())
+    let black = rgb8.iter().all(|&byte| byte == 0);
+    let stats = FrameStats {
+        frame: number,
+        gaze: frame.foveation.gaze,
+        output,
+        render: rendered.stats,
+        extra: rendered.extra,
+        history_restarted: args.history.then_some(rendered.history_restarted),
+    };
+    Ok((stats, black))
+}
+
+/// The line `render` ends with: what was rendered, on what, how fast, and where it went.
+fn print_summary(args: &RenderArgs, [w, h]: [u32; 2], backend: &str, frames: &[FrameStats]) {
+    let last = frames.last().expect("at least one frame");
+    let render_ms: f64 =
+        frames.iter().map(|f| f.render.render_ms).sum::<f64>() / frames.len() as f64;
+    let samples: u64 = last.render.primary_samples;
+    println!(
+        "fovea: {} {}x{} {} on {} in {:.0} ms ({:.2} M samples, {:.2} M paths/s) -> {}",
+        if args.foveation.uniform {
+            "uniform"
+        } else {
+            "foveated"
+        },
+        w,
+        h,
+        if frames.len() > 1 {
+            format!("{} frames", frames.len())
+        } else {
+            "1 frame".into()
+        },
+        backend,
+        render_ms,
+        samples as f64 / 1e6,
+        samples as f64 / render_ms / 1e3,
+        last.output.display()
+    );
 }
 
 /// Fails if an output (`--output`, `--regions-overlay`, `--stats`) names one of the run's input files (the

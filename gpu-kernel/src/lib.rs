@@ -16,7 +16,7 @@
 //! `id.x + id.y · (num_workgroups.x · 64)`, so a host may dispatch up to 65535 workgroups in x and more
 //! rows in y; invocations past the item count return at once.
 //!
-//! Built to SPIR-V by `gpu-builder/` (run from `host-vulkan/build.rs`); on the host it compiles as a plain
+//! Built to SPIR-V by `gpu-kernel/builder/` (run from `host-vulkan/build.rs`); on the host it compiles as a plain
 //! library (the attributes are then inert).
 #![cfg_attr(target_arch = "spirv", no_std)]
 // Entry points take one argument per binding.

@@ -340,7 +340,7 @@ fn every_fixture_is_handled_without_panicking() {
 
 #[test]
 fn fuzz_seeds_load_and_pack() {
-    // The fuzz seeds (fuzz/seeds/{obj,gltf}) are real scenes: the scene file, then the side files after
+    // The fuzz seeds (tests/fuzz/seeds/{obj,gltf}) are real scenes: the scene file, then the side files after
     // a separator line. They must load, so that fuzzing starts from inputs that reach packing.
     const SEP: &[u8] = b"\n#%FOVEA-FILE%#\n";
     fn split(data: &[u8]) -> (&[u8], Option<&[u8]>) {
@@ -350,7 +350,7 @@ fn fuzz_seeds_load_and_pack() {
         }
     }
     for (kind, scene_name) in [("obj", "seed.obj"), ("gltf", "seed.gltf")] {
-        let dir = repo_root().join("fuzz/seeds").join(kind);
+        let dir = repo_root().join("tests/fuzz/seeds").join(kind);
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
             let data = std::fs::read(&path).unwrap();

@@ -912,12 +912,100 @@ fn run_scene(
         out_dir,
         camera,
     };
+    let (mut results, equal_spp, equal_fit) =
+        measure_configs(&measurer, renderer, plan, &paper, bar)?;
+    let sequence = match &plan.sequence {
+        Some(seq) => {
+            let views: Vec<sequence::FrameView> = match &frame_cameras {
+                Some(cameras) => cameras
+                    .iter()
+                    .map(|camera| {
+                        let (camera, image, rgb8) = moving
+                            .iter()
+                            .find(|(c, _, _)| c == camera)
+                            .expect("every camera has its reference");
+                        sequence::FrameView {
+                            camera: *camera,
+                            reference: image,
+                            reference_rgb8: rgb8,
+                        }
+                    })
+                    .collect(),
+                None => vec![
+                    sequence::FrameView {
+                        camera,
+                        reference: &reference,
+                        reference_rgb8: &reference_rgb8,
+                    };
+                    seq.schedule.frames.len()
+                ],
+            };
+            Some(measure_sequence(
+                args,
+                plan,
+                renderer,
+                bar,
+                seq,
+                &scene.packed,
+                &paper,
+                views,
+                &scene_name,
+                out_dir,
+            )?)
+        }
+        None => None,
+    };
+
+    let (base_ms, base_samples) = (results[0].render_ms, results[0].primary_samples);
+    for r in &mut results {
+        r.speedup = base_ms / r.render_ms;
+        r.sample_ratio = base_samples as f64 / r.primary_samples.max(1) as f64;
+    }
+
+    Ok(Some(SceneReport {
+        scene: file.display().to_string(),
+        scene_name,
+        backend: renderer.name(),
+        device: renderer.device_name(),
+        resolution: plan.resolution,
+        gaze: plan.gaze,
+        radii_px: plan.radii_px,
+        display_cm: [plan.display.width_cm, plan.display.height_cm],
+        distance_cm: plan.display.distance_cm,
+        ppd: plan.ppd,
+        reference: "reference.png".into(),
+        reference_spp: plan.reference_spp,
+        reference_cache: reference_cache_path,
+        reference_cached,
+        reference_render_ms,
+        regions: "regions.png".into(),
+        region_pixels: regions.pixels,
+        runs: plan.runs,
+        seed: plan.settings.seed,
+        equal_time_spp: Some(equal_spp),
+        equal_time_fit: equal_fit,
+        wall_ms: 0.0,
+        configs: results,
+        sequence,
+    }))
+}
+
+/// The table's configurations (uniform, the paper's, the user's), the uniform sweep and the uniform
+/// spp that takes 32/16/8's time (fitted to the sweep), measured: the results in the report's order,
+/// and the equal-time spp with its fit.
+fn measure_configs(
+    measurer: &Measurer,
+    renderer: &mut Renderer,
+    plan: &Plan,
+    paper: &FoveationParams,
+    bar: &ProgressBar,
+) -> Result<(Vec<ConfigResult>, u32, f64)> {
+    let [w, h] = plan.resolution;
     // Uniform results by spp: the sweep's 32 spp and an equal-time spp already measured are reused.
     let mut uniform_by_spp: HashMap<u32, ConfigResult> = HashMap::new();
     let mut results = Vec::new();
     let user = plan.user.map(|u| u.around(plan.gaze));
-    for spec in configs::table_configs(&paper, user.as_ref(), plan.settings.integrator.texture_lod)
-    {
+    for spec in configs::table_configs(paper, user.as_ref(), plan.settings.integrator.texture_lod) {
         let r = measurer.measure(renderer, &spec)?;
         if spec.kind == ConfigKind::Uniform {
             uniform_by_spp.insert(spec.foveation.spp[0], r.clone());
@@ -959,101 +1047,58 @@ fn run_scene(
     results.push(equal);
     results.extend(sweep);
 
-    let sequence = match &plan.sequence {
-        Some(seq) => {
-            let metric = if args.no_fovvideovdp {
-                Err("off (--no-fovvideovdp)".to_string())
-            } else {
-                fvvdp::FovVideoVdp::find()
-            };
-            let specs = sequence::sequence_specs(&configs::sweep_spps(plan.sweep_max));
-            let samples: u64 = specs
-                .iter()
-                .map(|s| {
-                    let mut f = if s.foveated {
-                        paper
-                    } else {
-                        FoveationParams::uniform(s.spp[0])
-                    };
-                    f.spp = [s.spp[0], s.spp[1], s.spp[2], 0];
-                    count_samples(w, h, &f).iter().sum::<u64>()
-                })
-                .sum::<u64>()
-                * seq.schedule.frames.len() as u64;
-            bar.inc_length(samples);
-            let views: Vec<sequence::FrameView> = match &frame_cameras {
-                Some(cameras) => cameras
-                    .iter()
-                    .map(|camera| {
-                        let (camera, image, rgb8) = moving
-                            .iter()
-                            .find(|(c, _, _)| c == camera)
-                            .expect("every camera has its reference");
-                        sequence::FrameView {
-                            camera: *camera,
-                            reference: image,
-                            reference_rgb8: rgb8,
-                        }
-                    })
-                    .collect(),
-                None => vec![
-                    sequence::FrameView {
-                        camera,
-                        reference: &reference,
-                        reference_rgb8: &reference_rgb8,
-                    };
-                    seq.schedule.frames.len()
-                ],
-            };
-            let inputs = sequence::SequenceInputs {
-                packed: &scene.packed,
-                settings: plan.settings,
-                paper,
-                display: plan.display,
-                ppd: plan.ppd,
-                views,
-                scene_name: &scene_name,
-                bar,
-                fovvideovdp: metric.as_ref().map_err(Clone::clone),
-                scratch_dir: out_dir,
-            };
-            Some(sequence::run_sequence(renderer, seq, &specs, &inputs)?)
-        }
-        None => None,
+    Ok((results, equal_spp, equal_fit))
+}
+
+/// The sequence of `--gaze-trace`, each configuration rendered frame by frame and scored against
+/// `views`' references.
+#[allow(clippy::too_many_arguments)]
+fn measure_sequence(
+    args: &ReportArgs,
+    plan: &Plan,
+    renderer: &mut Renderer,
+    bar: &ProgressBar,
+    seq: &sequence::SequencePlan,
+    packed: &fovea_scene::pack::PackedScene,
+    paper: &FoveationParams,
+    views: Vec<sequence::FrameView>,
+    scene_name: &str,
+    out_dir: &Path,
+) -> Result<sequence::SequenceReport> {
+    let [w, h] = plan.resolution;
+    let metric = if args.no_fovvideovdp {
+        Err("off (--no-fovvideovdp)".to_string())
+    } else {
+        fvvdp::FovVideoVdp::find()
     };
-
-    let (base_ms, base_samples) = (results[0].render_ms, results[0].primary_samples);
-    for r in &mut results {
-        r.speedup = base_ms / r.render_ms;
-        r.sample_ratio = base_samples as f64 / r.primary_samples.max(1) as f64;
-    }
-
-    Ok(Some(SceneReport {
-        scene: file.display().to_string(),
-        scene_name,
-        backend: renderer.name(),
-        device: renderer.device_name(),
-        resolution: plan.resolution,
-        gaze: plan.gaze,
-        radii_px: plan.radii_px,
-        display_cm: [plan.display.width_cm, plan.display.height_cm],
-        distance_cm: plan.display.distance_cm,
+    let specs = sequence::sequence_specs(&configs::sweep_spps(plan.sweep_max));
+    let samples: u64 = specs
+        .iter()
+        .map(|s| {
+            let mut f = if s.foveated {
+                *paper
+            } else {
+                FoveationParams::uniform(s.spp[0])
+            };
+            f.spp = [s.spp[0], s.spp[1], s.spp[2], 0];
+            count_samples(w, h, &f).iter().sum::<u64>()
+        })
+        .sum::<u64>()
+        * seq.schedule.frames.len() as u64;
+    bar.inc_length(samples);
+    let inputs = sequence::SequenceInputs {
+        packed,
+        settings: plan.settings,
+        paper: *paper,
+        display: plan.display,
         ppd: plan.ppd,
-        reference: "reference.png".into(),
-        reference_spp: plan.reference_spp,
-        reference_cache: reference_cache_path,
-        reference_cached,
-        reference_render_ms,
-        regions: "regions.png".into(),
-        region_pixels: regions.pixels,
-        runs: plan.runs,
-        seed: plan.settings.seed,
-        equal_time_spp: Some(equal_spp),
-        equal_time_fit: equal_fit,
-        wall_ms: 0.0,
-        configs: results,
-        sequence,
-    }))
+        views,
+        scene_name,
+        bar,
+        fovvideovdp: metric.as_ref().map_err(Clone::clone),
+        scratch_dir: out_dir,
+    };
+    sequence::run_sequence(renderer, seq, &specs, &inputs)
 }
 
 /// What measuring a configuration needs.

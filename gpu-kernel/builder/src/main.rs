@@ -13,7 +13,7 @@
 //! `host-vulkan/build.rs` runs this binary; it can also be run by hand:
 //!
 //! ```text
-//! cargo +nightly-2026-08-15 run --release --manifest-path gpu-builder/Cargo.toml \
+//! cargo +nightly-2026-08-15 run --release --manifest-path gpu-kernel/builder/Cargo.toml \
 //!     --target-dir target/gpu-builder -- /tmp/fovea-kernel.spv /tmp/fovea-kernel-rq.spv
 //! ```
 use std::path::{Path, PathBuf};
@@ -30,7 +30,8 @@ fn repo_root() -> PathBuf {
     let here = Path::new(env!("CARGO_MANIFEST_DIR"));
     let root = here
         .parent()
-        .expect("gpu-builder lives in the repository root");
+        .and_then(Path::parent)
+        .expect("the builder lives in gpu-kernel/builder");
     root.canonicalize().unwrap_or_else(|_| root.to_path_buf())
 }
 
