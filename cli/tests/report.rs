@@ -277,12 +277,9 @@ fn a_gaze_trace_is_judged_by_eccentricity_and_over_time() {
     // without history each frame stands alone: the fovea lands as good as it was.
     assert_eq!(jump("uniform"), 1.0);
     assert!((jump("32-16-8") - 1.0).abs() < 0.25, "{}", jump("32-16-8"));
-    // With history the old fixation had converged and the new one starts over: its error jumps.
-    assert!(
-        jump("32-16-8-history") > 1.05,
-        "{}",
-        jump("32-16-8-history")
-    );
+    // With history the old fixation had converged, and the new one has only what the periphery left
+    // there (kept, not restarted; `tests/tests/temporal.rs` checks that it helps): its error still rises.
+    assert!(jump("32-16-8-history") > 1.0, "{}", jump("32-16-8-history"));
     assert!(md.contains("**After a saccade** (1 in the trace"), "{md}");
     // History: the periphery flickers much less than without it.
     let flicker = |slug: &str| regions(&by_slug(slug)["flicker"])[3];

@@ -2,12 +2,12 @@
 //! Filtering"): three passes of the frame pipeline after the history's resolve (input, the à-trous
 //! steps, output), each a function of one pixel that both hosts run.
 //!
-//! 1. [`denoise_input`]: the pixel's *lighting*, so the filter blurs lighting, not texture: the history's
-//!    where there is one (it is kept demodulated, [`crate::temporal::albedo`]), else the HDR pixel
-//!    divided by the albedo its samples saw (the G-buffer's mean over its block); and a luminance
-//!    variance: the history's (its second moment
-//!    over its frames) where it holds at least [`DENOISE_TEMPORAL_FRAMES`] frames, else a spatial one
-//!    from the pixel's block and its eight neighbouring blocks.
+//! 1. [`denoise_input`]: the pixel's *lighting*, so the filter blurs lighting, not texture: with
+//!    history, what the resolve showed over the pixel's own albedo ([`crate::temporal::resolve`]), else
+//!    the HDR pixel divided by the albedo its samples saw (the G-buffer's mean over its block); and a
+//!    luminance variance: the history's (its second moment over its frames) where it holds at least
+//!    [`DENOISE_TEMPORAL_FRAMES`] frames, else a spatial one from the pixel's block and its eight
+//!    neighbouring blocks, each demodulated by its own albedo.
 //! 2. [`denoise_atrous`], [`DENOISE_MAX_PASSES`] times: an à-trous wavelet step (a 5 × 5 B3-spline
 //!    kernel with holes, step `2^k`) whose weights stop at depth and normal edges and at luminance
 //!    differences large against the noise (`σ_l √variance`); the variance is filtered with the squared
@@ -17,11 +17,13 @@
 //!
 //! **Foveated.** How many à-trous steps a pixel takes follows the samples behind it
 //! ([`denoise_passes`]): `spp / b²` of its block (32 in the paper's fovea, 4 in the intermediate ring,
-//! 0.5 in the periphery) or, with history, the history's weight when larger. The fovea at full sample
-//! count is left alone (it keeps every detail it paid for); the periphery, with few samples per block
-//! and low acuity, takes four or five steps, in multiples of its block edge (steps 4 to 32 pixels for
-//! 4 × 4 blocks), whose wide support reconstructs smooth lighting over its block structure rather than
-//! preserving it. A converging history lowers the strength by itself.
+//! 0.5 in the periphery) or, with history, those behind the resolve's blend when more; and at most as
+//! many as the eye resolves at its eccentricity ([`acuity_passes`]). The fovea at full sample count is
+//! left alone (it keeps every detail it paid for); the periphery, with few samples per block and low
+//! acuity, takes four or five steps, in multiples of its block edge (steps 4, 8, 16, 32 pixels for
+//! 4 × 4 blocks) while the fill dominates what it shows, whose wide support reconstructs smooth lighting
+//! over its block structure rather than preserving it. A converging history lowers the strength by
+//! itself.
 //!
 //! **Bad input.** A non-finite HDR value is marked invalid: no neighbour reads it, and it takes its
 //! neighbours' filtered value (or black where it has none). Finite values are clamped to
@@ -143,9 +145,64 @@ fn clean(hdr: &[[f32; 4]], p: usize) -> (Vec3, bool) {
     }
 }
 
+/// The most à-trous steps a pixel `distance` pixels from the gaze may take, for a fovea of radius
+/// `radius_fovea`: acuity falls linearly with eccentricity (the minimum angle of resolution grows as
+/// `ω₀ + m e`, Guenter et al. 2012), so the blur the eye does not see doubles with each doubling of
+/// `1 + d / r_f`: 2 steps at the gaze, 3 at the fovea's edge, 4 at three fovea radii, 5 beyond seven.
+#[inline]
+#[must_use]
+pub fn acuity_passes(distance: f32, radius_fovea: f32) -> u32 {
+    let r = (1.0 + distance / radius_fovea.max(1.0e-3)).max(1.0);
+    let mut passes = 2u32;
+    let mut bound = 2.0f32;
+    while r >= bound && passes < DENOISE_MAX_PASSES {
+        passes += 1;
+        bound *= 2.0;
+    }
+    passes
+}
+
+/// The demodulated value of pixel `q` for the denoiser: with history, the resolved image over the
+/// pixel's own albedo (the lighting [`crate::temporal::resolve`] showed); without, the filled value
+/// over the albedo its samples saw. `None` where it is not finite (or has no history).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn demodulated_at(
+    frame: &FrameParams,
+    hdr: &[[f32; 4]],
+    gbuffer: &[GBufferTexel],
+    cell_albedo: &[[f32; 4]],
+    flags: u32,
+    x: u32,
+    y: u32,
+) -> (Vec3, bool) {
+    let q = (y * frame.width + x) as usize;
+    let (c, valid) = clean(hdr, q);
+    if !valid {
+        return (Vec3::ZERO, false);
+    }
+    let albedo = if flags & DENOISE_WITH_HISTORY != 0 {
+        demodulation_albedo(&gbuffer[q])
+    } else {
+        let mode = if flags & DENOISE_FILL_REPLICATE != 0 {
+            FILL_REPLICATE
+        } else {
+            FILL_BILINEAR
+        };
+        filled_albedo(frame, gbuffer, cell_albedo, mode, x, y)
+    };
+    (c / albedo, true)
+}
+
 /// The first pass at pixel (`x`, `y`): its HDR value demodulated, its variance and its number of
 /// à-trous steps. `history` is read only with [`DENOISE_WITH_HISTORY`] in `flags`; `cell_albedo`
 /// (the cell-albedo pass's buffer, [`crate::temporal::albedo::cell_albedo_at`]) only without it.
+///
+/// **Strength.** The steps a pixel needs follow the samples behind what it shows
+/// ([`denoise_passes`]): `spp / b²` of its block, or with history those of the blend
+/// [`crate::temporal::resolve`] showed, its own samples' weight for their share `s` and the fill
+/// average's (`spp / b²` a frame) for the rest. They are capped by what the eye resolves at the
+/// pixel's eccentricity ([`acuity_passes`]).
 #[allow(clippy::too_many_arguments)]
 #[must_use]
 pub fn denoise_input(
@@ -164,34 +221,25 @@ pub fn denoise_input(
     let b = block.size.max(1);
     let mut samples = samples_in_block(&block, &frame.foveation) as f32 / (b * b) as f32;
     let with_history = flags & DENOISE_WITH_HISTORY != 0;
-    // The value to filter, demodulated. A history already holds lighting (the radiance over the
-    // albedo its samples saw, `crate::temporal::albedo`). A filled value's samples saw their blocks:
-    // divide by the albedo the fill blended from them. `denoise_output` remodulates by the pixel's
-    // own, which puts back texture the blocks blurred.
-    let (demodulated, albedo) = if with_history {
-        let t = &history[p];
-        if !(t.weight() > 0.0) {
-            return DenoiseTexel::INVALID;
-        }
-        (t.lighting(), Vec3::ONE)
-    } else {
-        let (c, valid) = clean(hdr, p);
-        if !valid {
-            return DenoiseTexel::INVALID;
-        }
-        let mode = if flags & DENOISE_FILL_REPLICATE != 0 {
-            FILL_REPLICATE
-        } else {
-            FILL_BILINEAR
-        };
-        let albedo = filled_albedo(frame, gbuffer, cell_albedo, mode, x, y);
-        (c / albedo, albedo)
-    };
+    // The value to filter, demodulated. `denoise_output` remodulates by the pixel's own albedo, which
+    // puts back texture the blocks blurred.
+    let (demodulated, valid) = demodulated_at(frame, hdr, gbuffer, cell_albedo, flags, x, y);
+    if !valid {
+        return DenoiseTexel::INVALID;
+    }
 
     let mut variance = -1.0;
+    // With history, a pixel's own samples (32 a frame in the fovea, one every other frame in the
+    // periphery) are what it shows; the fill's share is spatial.
+    let mut footprint = b;
     if with_history {
         let t = &history[p];
-        samples = samples.max(t.weight());
+        let share =
+            crate::temporal::resolve::own_share(t, b, samples_in_block(&block, &frame.foveation));
+        samples = samples.max(share * t.weight() + (1.0 - share) * samples * t.fill_frames());
+        if share >= 0.5 {
+            footprint = 1;
+        }
         if t.frames() >= DENOISE_TEMPORAL_FRAMES {
             // The variance of the history's mean: its frames' variance over their count.
             variance = t.luminance_variance() / t.frames().max(1.0);
@@ -199,7 +247,7 @@ pub fn denoise_input(
     }
     if variance < 0.0 {
         // Spatially: the luminance of this block and its eight neighbours (one value per block, as
-        // the pixels of a filled block are not independent).
+        // the pixels of a filled block are not independent), each demodulated by its own albedo.
         let (mut sum, mut sum2, mut n) = (0.0f32, 0.0f32, 0.0f32);
         let mut dy = -1i32;
         while dy <= 1 {
@@ -208,15 +256,17 @@ pub fn denoise_input(
                 let qx = x as i32 + dx * b as i32;
                 let qy = y as i32 + dy * b as i32;
                 if qx >= 0 && qy >= 0 && (qx as u32) < w && (qy as u32) < h {
-                    let q = (qy as u32 * w + qx as u32) as usize;
-                    let (cq, ok) = if with_history {
-                        let t = &history[q];
-                        (t.lighting(), t.weight() > 0.0)
-                    } else {
-                        clean(hdr, q)
-                    };
+                    let (cq, ok) = demodulated_at(
+                        frame,
+                        hdr,
+                        gbuffer,
+                        cell_albedo,
+                        flags,
+                        qx as u32,
+                        qy as u32,
+                    );
                     if ok {
-                        let l = luminance(cq / albedo);
+                        let l = luminance(cq);
                         sum += l;
                         sum2 += l * l;
                         n += 1.0;
@@ -229,9 +279,12 @@ pub fn denoise_input(
         let mean = sum / n.max(1.0);
         variance = (sum2 / n.max(1.0) - mean * mean).max(0.0);
     }
+    let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+    let distance = (centre - frame.foveation.gaze()).length();
+    let passes = denoise_passes(samples).min(acuity_passes(distance, frame.foveation.radius_fovea));
     DenoiseTexel {
         color: [demodulated.x, demodulated.y, demodulated.z, variance],
-        info: [denoise_passes(samples) as f32, 1.0, b as f32, 0.0],
+        info: [passes as f32, 1.0, footprint as f32, 0.0],
     }
 }
 
@@ -320,9 +373,11 @@ pub fn denoise_atrous(
     } else {
         DENOISE_MAX_PASSES as f32
     };
+    // The footprint goes on with the texel: every step of a coarse block's pixel is a multiple of it
+    // (4, 8, 16, 32 pixels for a 4 × 4 block).
     DenoiseTexel {
         color: [c.x, c.y, c.z, sum_v / (sum_w * sum_w)],
-        info: [passes, 1.0, 0.0, 0.0],
+        info: [passes, 1.0, centre.info[2], 0.0],
     }
 }
 

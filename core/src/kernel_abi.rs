@@ -79,8 +79,11 @@ pub const BINDING_TEMPORAL: u32 = 29;
 /// The denoiser's texels ([`crate::denoise::DenoiseTexel`]): two halves of one per pixel each, used in
 /// turn by its passes (step `k` reads half `k % 2` and writes the other; `denoise_input` writes half 0).
 pub const BINDING_DENOISE: u32 = 30;
+/// Each pixel's sum of the samples that landed in it this frame (`[r, g, b, count]`, width × height;
+/// [`crate::integrator::add_to_pixel_sum`]), written by `reduce_blocks` and read by `temporal`.
+pub const BINDING_PIXEL_SAMPLES: u32 = 32;
 /// Number of bindings.
-pub const BINDING_COUNT: u32 = 32;
+pub const BINDING_COUNT: u32 = 33;
 
 /// Specialization constant id of `render_samples`' feature mask (`FEATURE_*` bits; default every
 /// feature). The host sets it per scene when it creates the pipeline.

@@ -27,7 +27,9 @@ use fovea_core::foveation::overlay::overlay_rgba8;
 use fovea_core::foveation::OwnedBlock;
 use fovea_core::foveation::{block_extent, block_mean, cell_mean_at, fill_value};
 use fovea_core::glam::{Vec3, Vec4};
-use fovea_core::integrator::{render_sample_stream, FrameParams};
+use fovea_core::integrator::{
+    add_to_pixel_sum, clear_block_pixel_sums, render_sample_stream, FrameParams,
+};
 use fovea_core::kernel_abi::{self, KernelPushConstants, WORKGROUP_SIZE};
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::features::FEATURES_ALL;
@@ -42,7 +44,8 @@ use fovea_core::scene::{
     MaterialArrays, SceneGlobals, SceneView, TextureInfo, TriangleBlock, TriangleInfo,
 };
 use fovea_core::temporal::{
-    first_hit_gbuffer, temporal_accumulate, GBufferTexel, HistoryTexel, TemporalParams,
+    first_hit_gbuffer, resolve_pixel, temporal_accumulate, GBufferTexel, HistoryTexel,
+    TemporalParams,
 };
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
@@ -82,6 +85,7 @@ const _: () = {
     assert!(kernel_abi::BINDING_PREVIOUS_GBUFFER == 28);
     assert!(kernel_abi::BINDING_TEMPORAL == 29);
     assert!(kernel_abi::BINDING_DENOISE == 30);
+    assert!(kernel_abi::BINDING_PIXEL_SAMPLES == 32);
     assert!(kernel_abi::BINDING_PROBE_INPUT == 15);
     assert!(kernel_abi::BINDING_PROBE_OUTPUT == 16);
     assert!(kernel_abi::PROBE_OUTPUT_RECORDS == 2);
@@ -211,7 +215,9 @@ scene_entry_point! {
 }
 
 /// Pass 1b: invocation `j < block_count` averages the `spp` samples of block `j` (summed in order from
-/// zero, like the CPU host) and writes `[mean, 1]` to every pixel of the block's clipped footprint.
+/// zero, like the CPU host) and writes `[mean, 1]` to every pixel of the block's clipped footprint;
+/// and adds each sample to the sum of the pixel it landed in (core's [`add_to_pixel_sum`], the block's
+/// pixels zeroed first), which each pixel's history takes.
 #[spirv(compute(threads(64)))]
 pub fn reduce_blocks(
     #[spirv(global_invocation_id)] id: UVec3,
@@ -221,6 +227,7 @@ pub fn reduce_blocks(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] samples: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 17)] replicated: &mut [[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 32)] pixel_samples: &mut [[f32; 4]],
 ) {
     let j = invocation_index(id, num_workgroups);
     if j >= pc.block_count {
@@ -228,13 +235,16 @@ pub fn reduce_blocks(
     }
     let spp = pc.spp;
     let first = j * spp;
+    let block = blocks[j as usize];
+    clear_block_pixel_sums(pixel_samples, 0, frame, &block);
     let mut sum = Vec3::ZERO;
     for s in 0..spp {
         let v = samples[(first + s) as usize];
-        sum += Vec3::new(v[0], v[1], v[2]);
+        let v = Vec3::new(v[0], v[1], v[2]);
+        sum += v;
+        add_to_pixel_sum(pixel_samples, 0, frame, &block, s, v);
     }
     let value = block_mean(sum, spp);
-    let block = blocks[j as usize];
     let extent = block_extent(&block, frame.width, frame.height);
     for dy in 0..extent[1] {
         let row = (block.origin[1] + dy) * frame.width + block.origin[0];
@@ -367,6 +377,7 @@ pub fn temporal(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 27)] gbuffer: &[GBufferTexel],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 28)] previous_gbuffer: &[GBufferTexel],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 29)] temporal: &TemporalParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 32)] pixel_samples: &[[f32; 4]],
 ) {
     let p = invocation_index(id, num_workgroups);
     if p >= pc.item_count || frame.width == 0 {
@@ -375,6 +386,7 @@ pub fn temporal(
     let texel = temporal_accumulate(
         frame,
         temporal,
+        pixel_samples,
         hdr,
         gbuffer,
         cell_albedo,
@@ -386,23 +398,36 @@ pub fn temporal(
     history[p as usize] = texel;
 }
 
-/// Temporal reuse, after `temporal`: invocation `p < item_count` writes pixel `p`'s history lighting
-/// under its own albedo over the HDR pixel (core's [`HistoryTexel::displayed`]), so that `tonemap`
-/// and a read-back see it.
+/// Temporal reuse, after `temporal`: invocation `p < item_count` writes what is shown of pixel `p`
+/// over its HDR pixel (core's [`resolve_pixel`]: its history where confident, else the fill, under its
+/// own albedo), so that `tonemap` and a read-back see it. In place: a pixel reads only its own filled
+/// value.
 #[spirv(compute(threads(64)))]
 pub fn resolve_history(
     #[spirv(global_invocation_id)] id: UVec3,
     #[spirv(num_workgroups)] num_workgroups: UVec3,
     #[spirv(push_constant)] pc: &KernelPushConstants,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 18)] cell_albedo: &[[f32; 4]],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 19)] hdr: &mut [[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 21)] frame: &FrameParams,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 24)] history: &[HistoryTexel],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 27)] gbuffer: &[GBufferTexel],
 ) {
     let p = invocation_index(id, num_workgroups);
-    if p >= pc.item_count {
+    if p >= pc.item_count || frame.width == 0 {
         return;
     }
-    hdr[p as usize] = history[p as usize].displayed(&gbuffer[p as usize]);
+    let shown = resolve_pixel(
+        frame,
+        history,
+        hdr,
+        gbuffer,
+        cell_albedo,
+        pc.fill_mode,
+        p % frame.width,
+        p / frame.width,
+    );
+    hdr[p as usize] = shown;
 }
 
 /// Denoiser, after the fill or `resolve_history`: invocation `p < item_count` writes pixel `p`'s

@@ -8,7 +8,7 @@ use fovea_core::foveation::blocks::{block_sample_range, for_each_block_in_rows, 
 use fovea_core::foveation::fill::{block_mean, cell_buffer_len, cell_mean_at, fill_value};
 use fovea_core::foveation::overlay::overlay_rgba8;
 use fovea_core::foveation::regions::REGION_COUNT;
-use fovea_core::integrator::{block_sample_range_sum, FrameParams};
+use fovea_core::integrator::{block_sample_range_sum, block_sample_sum_into_pixels, FrameParams};
 use fovea_core::passes::{frame_passes, FrameOutput, FramePass, FrameRequest};
 use fovea_core::post::tonemap::tonemap_to_rgba8;
 use fovea_core::scene::{Features, SceneView};
@@ -21,14 +21,14 @@ use rayon::prelude::*;
 pub use fovea_frame::{FrameImage, RenderStats, RenderedFrame};
 
 /// The most memory the CPU host's frame holds per pixel, in bytes, with history and the denoiser on:
-/// the image and the one kept from before the denoiser, the RGBA8 image, the cell means (at most a third
-/// of a pixel's), two history images (this frame's and the last), two G-buffers and the denoiser's two
-/// halves. `fovea view` refuses a `--size` whose frames would not fit in memory (up front, rather than
+/// the image, the one kept from before the denoiser and the per-pixel sample sums, the RGBA8 image, the
+/// cell means (at most a third of a pixel's), two history images (this frame's and the last), two
+/// G-buffers and the denoiser's two halves. `fovea view` refuses a `--size` whose frames would not fit in memory (up front, rather than
 /// aborting on allocation).
 pub const FRAME_BYTES_PER_PIXEL: u64 = {
     use fovea_core::temporal::{GBufferTexel, HistoryTexel};
     let image = std::mem::size_of::<[f32; 4]>() as u64;
-    2 * image
+    3 * image
         + 4
         + image.div_ceil(3)
         + 2 * std::mem::size_of::<HistoryTexel>() as u64
@@ -55,6 +55,12 @@ pub fn render_frame_passes(
     let (width, height) = (frame.width, frame.height);
     let foveation = &frame.foveation;
     let mut pixels = vec![[0.0f32; 4]; width as usize * height as usize];
+    // With history, the samples pass also sums each pixel's own samples, which its history takes.
+    let mut pixel_samples: Vec<[f32; 4]> = if request.history {
+        vec![[0.0f32; 4]; pixels.len()]
+    } else {
+        Vec::new()
+    };
     let mut cell_means: Vec<[f32; 4]> = Vec::new();
     let mut rgba8: Option<Vec<u32>> = None;
     let mut raw_hdr: Option<FrameImage> = None;
@@ -73,6 +79,7 @@ pub fn render_frame_passes(
                     frame,
                     output: SampleOutput::Mean,
                     replicated: &mut pixels,
+                    pixel_sums: request.history.then_some(pixel_samples.as_mut_slice()),
                     counters: &counters,
                     progress,
                 },
@@ -82,8 +89,12 @@ pub fn render_frame_passes(
             FramePass::GBuffer => history.gbuffer_pass(scene, frame),
             // Over the cell means, which the fill has used: each cell's mean albedo.
             FramePass::CellAlbedo => cell_means = history.cell_albedo_pass(frame),
-            FramePass::Temporal => history.temporal_pass(frame, &temporal, &pixels, &cell_means),
-            FramePass::ResolveHistory => history.resolve_pass(&mut pixels),
+            FramePass::Temporal => {
+                history.temporal_pass(frame, &temporal, &pixel_samples, &pixels, &cell_means)
+            }
+            FramePass::ResolveHistory => {
+                history.resolve_pass(frame, &mut pixels, &cell_means, request.fill_mode)
+            }
             FramePass::DenoiseInput => {
                 if request.output.wants_raw() {
                     raw_hdr = Some(FrameImage {
@@ -227,6 +238,7 @@ pub fn render_sample_range(
             frame,
             output: SampleOutput::RangeSum { first, end },
             replicated: &mut pixels,
+            pixel_sums: None,
             counters: &counters,
             progress,
         },
@@ -342,11 +354,13 @@ enum SampleOutput {
 }
 
 /// The samples pass of [`render_frame_passes`]: every block's samples, band by band (core's walk over
-/// the blocks in each band's rows), written to every pixel of the block.
+/// the blocks in each band's rows), written to every pixel of the block; with `pixel_sums`, each sample
+/// also added to the sum of the pixel it landed in.
 struct SamplePass<'a> {
     frame: &'a FrameParams,
     output: SampleOutput,
     replicated: &'a mut [[f32; 4]],
+    pixel_sums: Option<&'a mut [[f32; 4]]>,
     counters: &'a [AtomicU64; 6],
     progress: &'a (dyn Fn(u64) + Sync),
 }
@@ -359,16 +373,17 @@ impl WithScene for SamplePass<'_> {
             frame,
             output,
             replicated,
+            pixel_sums,
             counters,
             progress,
         } = self;
         let (width, height) = (frame.width, frame.height);
         let foveation = &frame.foveation;
         let band = foveation.block_size[2].max(1);
-        replicated
-            .par_chunks_mut(width as usize * band as usize)
-            .enumerate()
-            .for_each(|(band_index, rows)| {
+        let band_len = width as usize * band as usize;
+        // One band of rows: its blocks' values into `rows` (and their samples into `sums`).
+        let run_band =
+            |band_index: usize, rows: &mut [[f32; 4]], mut sums: Option<&mut [[f32; 4]]>| {
                 let y0 = band_index as u32 * band;
                 let rows_in_band = (rows.len() / width as usize) as u32;
                 let mut local = [0u64; 6];
@@ -377,7 +392,12 @@ impl WithScene for SamplePass<'_> {
                     let spp = samples_in_block(&block, foveation);
                     let (value, traced) = match output {
                         SampleOutput::Mean => {
-                            let sum = block_sample_range_sum(scene, frame, &block, 0, spp);
+                            let sum = match sums.as_deref_mut() {
+                                Some(sums) => block_sample_sum_into_pixels(
+                                    scene, frame, &block, spp, sums, y0,
+                                ),
+                                None => block_sample_range_sum(scene, frame, &block, 0, spp),
+                            };
                             (block_mean(sum, spp), spp)
                         }
                         SampleOutput::RangeSum { first, end } => {
@@ -402,6 +422,17 @@ impl WithScene for SamplePass<'_> {
                 for (c, v) in counters.iter().zip(local) {
                     c.fetch_add(v, Ordering::Relaxed);
                 }
-            });
+            };
+        match pixel_sums {
+            Some(sums) => replicated
+                .par_chunks_mut(band_len)
+                .zip(sums.par_chunks_mut(band_len))
+                .enumerate()
+                .for_each(|(i, (rows, sums))| run_band(i, rows, Some(sums))),
+            None => replicated
+                .par_chunks_mut(band_len)
+                .enumerate()
+                .for_each(|(i, rows)| run_band(i, rows, None)),
+        }
     }
 }

@@ -8,7 +8,8 @@ use fovea_core::integrator::FrameParams;
 use fovea_core::scene::{SceneSlices, SceneView};
 use fovea_core::temporal::albedo::cell_albedo_at;
 use fovea_core::temporal::{
-    first_hit_gbuffer, temporal_accumulate, GBufferTexel, HistoryTexel, TemporalParams,
+    first_hit_gbuffer, resolve_pixel, temporal_accumulate, GBufferTexel, HistoryTexel,
+    TemporalParams,
 };
 use rayon::prelude::*;
 
@@ -101,14 +102,17 @@ impl TemporalHistory {
             .collect()
     }
 
-    /// The temporal pass: `filled` (the frame's filled HDR image) reprojected into each pixel's history
-    /// ([`temporal_accumulate`], with `temporal`, usually [`Self::params_for`]), after
-    /// [`Self::gbuffer_pass`] and the cell-albedo pass (`cell_albedo`,
-    /// [`fovea_core::temporal::albedo::cell_albedo_at`]). This frame's history then becomes the previous one.
+    /// The temporal pass: the previous history reprojected to each pixel and the samples that landed in
+    /// it (`pixel_samples`, the samples pass's per-pixel sums) merged in ([`temporal_accumulate`], with
+    /// `temporal`, usually [`Self::params_for`]; `filled`, the frame's filled HDR image, is the
+    /// neighbourhood clamp's), after [`Self::gbuffer_pass`] and the cell-albedo pass (`cell_albedo`,
+    /// [`fovea_core::temporal::albedo::cell_albedo_at`]). This frame's history then becomes the previous
+    /// one.
     pub fn temporal_pass(
         &mut self,
         frame: &FrameParams,
         temporal: &TemporalParams,
+        pixel_samples: &[[f32; 4]],
         filled: &[[f32; 4]],
         cell_albedo: &[[f32; 4]],
     ) {
@@ -125,6 +129,7 @@ impl TemporalHistory {
                     *texel = temporal_accumulate(
                         frame,
                         temporal,
+                        pixel_samples,
                         filled,
                         gbuffer,
                         cell_albedo,
@@ -139,25 +144,51 @@ impl TemporalHistory {
         self.previous = Some((frame.camera, [w, h]));
     }
 
-    /// The resolve pass: each pixel's history lighting under its own albedo
-    /// ([`HistoryTexel::displayed`]) into `hdr`.
-    pub fn resolve_pass(&self, hdr: &mut [[f32; 4]]) {
-        hdr.par_iter_mut()
-            .zip(self.history.par_iter().zip(self.gbuffer.par_iter()))
-            .for_each(|(out, (texel, g))| *out = texel.displayed(g));
+    /// The resolve pass, in place over `hdr` (the frame's filled image): what is shown of each pixel
+    /// ([`resolve_pixel`]: its history where confident, else the fill, under its own albedo).
+    pub fn resolve_pass(
+        &self,
+        frame: &FrameParams,
+        hdr: &mut [[f32; 4]],
+        cell_albedo: &[[f32; 4]],
+        fill_mode: u32,
+    ) {
+        let w = frame.width as usize;
+        let resolved: Vec<[f32; 4]> = (0..hdr.len())
+            .into_par_iter()
+            .map(|p| {
+                resolve_pixel(
+                    frame,
+                    &self.history,
+                    hdr,
+                    &self.gbuffer,
+                    cell_albedo,
+                    fill_mode,
+                    (p % w) as u32,
+                    (p / w) as u32,
+                )
+            })
+            .collect();
+        hdr.copy_from_slice(&resolved);
     }
 
-    /// Adds `filled` to the history outside a frame (the G-buffer and temporal passes with `temporal`):
-    /// for tests that feed the history images of their own.
+    /// Adds `image` to the history outside a frame, as one sample landing in each pixel (the G-buffer
+    /// and temporal passes with `temporal`, `image` also the clamp's filled image): for tests that feed
+    /// the history values of their own.
     pub fn accumulate(
         &mut self,
         scene: &SceneView,
         frame: &FrameParams,
         temporal: &TemporalParams,
-        filled: &FrameImage,
+        image: &FrameImage,
     ) {
         self.gbuffer_pass(scene, frame);
         let cell_albedo = self.cell_albedo_pass(frame);
-        self.temporal_pass(frame, temporal, &filled.pixels, &cell_albedo);
+        let one_each: Vec<[f32; 4]> = image
+            .pixels
+            .iter()
+            .map(|c| [c[0], c[1], c[2], 1.0])
+            .collect();
+        self.temporal_pass(frame, temporal, &one_each, &image.pixels, &cell_albedo);
     }
 }

@@ -530,6 +530,11 @@ impl VulkanContext {
             (BINDING_SAMPLES, &res.samples, sizes.chunk_samples * PIXEL),
             (BINDING_REPLICATED, &res.replicated, sizes.pixels * PIXEL),
             (
+                BINDING_PIXEL_SAMPLES,
+                &res.pixel_samples,
+                sizes.pixels * PIXEL,
+            ),
+            (
                 BINDING_CELL_MEANS,
                 &res.cell_means,
                 sizes.cells.max(1) * PIXEL,

@@ -46,6 +46,8 @@ pub(crate) struct FrameResources {
     pub samples: GpuBuffer,
     /// The replicated image, which the fill overwrites with the HDR image (bindings 17 and 19).
     pub replicated: GpuBuffer,
+    /// Each pixel's sum of the samples that landed in it (`BINDING_PIXEL_SAMPLES`).
+    pub pixel_samples: GpuBuffer,
     pub cell_means: GpuBuffer,
     pub ldr: GpuBuffer,
     pub ldr_readback: GpuBuffer,
@@ -182,6 +184,13 @@ impl FrameResources {
                 "replicated and HDR image",
                 s.pixels * PIXEL,
                 storage | src,
+                MemoryLocation::GpuOnly,
+            )?,
+            pixel_samples: GpuBuffer::new(
+                sh,
+                "pixel sample sums",
+                s.pixels * PIXEL,
+                storage,
                 MemoryLocation::GpuOnly,
             )?,
             cell_means: GpuBuffer::new(

@@ -23,8 +23,12 @@ use glam::Vec3;
 const W: u32 = 96;
 const H: u32 = 72;
 /// Hardware traversal against the CPU: fraction of pixels within 1e-3 and mean FLIP (see the assertions).
-/// Measured: 100 % on every scene but the Lost Empire crop (99.32 %, mean FLIP 3.7e-4).
-const HARDWARE_MIN_WITHIN: f64 = 0.99;
+/// Measured: 100 % on every scene but the Lost Empire crop: 99.32 % (mean FLIP 3.7e-4) when a block's
+/// samples spread over the whole block; since they land on pixels (issue 50), 98.52 % with seed 7
+/// (FLIP 5.8e-4), and 99.06 % and 99.97 % with seeds 8 and 9. Which rare grazing path flips is luck of
+/// where the samples land, and one flipped sample of a 4 × 4 periphery block (1 sample here) spreads
+/// over the block's fill.
+const HARDWARE_MIN_WITHIN: f64 = 0.98;
 const HARDWARE_MAX_FLIP: f64 = 1e-3;
 
 /// The paper's three regions around the image centre, with few samples (4 / 2 / 1 on 1×1 / 2×2 / 4×4

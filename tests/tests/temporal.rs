@@ -248,8 +248,10 @@ fn the_fovea_leaves_no_blur_trail_and_keeps_its_detail_when_it_moves_on() {
         left_after < 1.3 * left_before,
         "{left_after} vs {left_before}"
     );
+    // The fovea arriving keeps what the periphery left and refines it: better than its first frame
+    // alone.
     assert!(
-        right_first <= 1.05 * right_one,
+        right_first < 0.95 * right_one,
         "{right_first} vs {right_one}"
     );
 }
@@ -291,7 +293,13 @@ fn history_follows_a_panning_camera() {
         rel_mse_where(&with_reuse, &reference, all),
         rel_mse_where(&without, &reference, all),
     );
-    let frames: Vec<f32> = history.texels().iter().map(HistoryTexel::frames).collect();
+    // Frames the pixel's history was carried through (its fill average counts every frame; its own
+    // samples' count only those that brought one, every other frame in the periphery).
+    let frames: Vec<f32> = history
+        .texels()
+        .iter()
+        .map(HistoryTexel::fill_frames)
+        .collect();
     let followed = frames.iter().filter(|&&n| n >= 8.0).count() as f64 / frames.len() as f64;
     eprintln!(
         "panning camera, frame {last}: fovea relMSE with reuse {e_reuse:.3e}, without {e_without:.3e} \

@@ -1,10 +1,12 @@
 //! Foveation (Mohanto et al. 2023, sections 3.1-3.4): the display geometry that turns eccentricity angles
 //! into radii ([`display`]), the three regions and their sampling parameters ([`regions`]), which block of
-//! which region renders each pixel ([`blocks`]) and how the image is filled from one value per block
-//! ([`fill`]), and the overlay that shows the regions ([`overlay`]).
+//! which region renders each pixel ([`blocks`]), which pixel of its block each sample lands in
+//! ([`landing`]), how the image is filled from one value per block ([`fill`]), and the overlay that
+//! shows the regions ([`overlay`]).
 pub mod blocks;
 pub mod display;
 pub mod fill;
+pub mod landing;
 pub mod overlay;
 pub mod regions;
 

@@ -8,7 +8,8 @@ use glam::Vec3;
 pub use path::{trace_path, trace_path_with, IntegratorSettings};
 
 use crate::camera::Camera;
-use crate::foveation::{block_sample_position, FoveationParams, OwnedBlock};
+use crate::foveation::landing::{block_sample_number, landing_pixel, pixel_sample_position};
+use crate::foveation::{samples_in_block, FoveationParams, OwnedBlock};
 use crate::geometry::Ray;
 use crate::rng::SampleRng;
 use crate::scene::{SceneSlices, SceneSource, SceneView};
@@ -29,8 +30,9 @@ pub struct FrameParams {
     pub seed: u32,
 }
 
-/// Renders sample `sample` of `block`: a jittered camera ray over the block's footprint traced by the
-/// path integrator. The random numbers depend only on (block origin, frame, sample, region, seed).
+/// Renders sample `sample` of `block`: a camera ray jittered over the pixel of the block the sample
+/// lands in ([`sample_pixel`]), traced by the path integrator. The random numbers depend only on (block
+/// origin, frame, sample, region, seed).
 #[must_use]
 pub fn render_block_sample<F: crate::scene::Features>(
     scene: &SceneView<F>,
@@ -87,7 +89,64 @@ pub fn pixel_cone_spread(frame: &FrameParams) -> f32 {
     2.0 * crate::math::vec3_from(frame.camera.up).length() / frame.height.max(1) as f32
 }
 
-/// Sample `sample` of `block`'s jittered camera ray and the random numbers its path goes on with.
+/// The pixel of `block` that its sample `sample` of this frame lands in
+/// ([`crate::foveation::landing`]): every pixel of a block in turn, over the frames.
+#[inline]
+#[must_use]
+pub fn sample_pixel(frame: &FrameParams, block: &OwnedBlock, sample: u32) -> [u32; 2] {
+    let spp = samples_in_block(block, &frame.foveation);
+    let number = block_sample_number(frame.frame_index, spp, sample);
+    landing_pixel(block, frame.width, frame.height, frame.seed, number)
+}
+
+/// The index in a buffer of per-pixel values, row-major `frame.width` wide and starting at row
+/// `first_row`, of pixel `pixel`.
+#[inline]
+#[must_use]
+fn pixel_index(frame: &FrameParams, first_row: u32, pixel: [u32; 2]) -> usize {
+    ((pixel[1] - first_row) * frame.width + pixel[0]) as usize
+}
+
+/// Zeroes the per-pixel sample sums (`[r, g, b, count]`, row-major, rows from `first_row`) of
+/// `block`'s pixels, before its samples are added ([`add_to_pixel_sum`]).
+pub fn clear_block_pixel_sums(
+    sums: &mut [[f32; 4]],
+    first_row: u32,
+    frame: &FrameParams,
+    block: &OwnedBlock,
+) {
+    let e = crate::foveation::block_extent(block, frame.width, frame.height);
+    let mut dy = 0;
+    while dy < e[1] {
+        let mut dx = 0;
+        while dx < e[0] {
+            let p = [block.origin[0] + dx, block.origin[1] + dy];
+            sums[pixel_index(frame, first_row, p)] = [0.0; 4];
+            dx += 1;
+        }
+        dy += 1;
+    }
+}
+
+/// Adds the value `v` of `block`'s sample `sample` to the sum of the pixel it landed in
+/// ([`sample_pixel`]; `[r, g, b, count]`, row-major, rows from `first_row`): the samples pass's
+/// per-pixel output, which each pixel's history takes its samples from. Both hosts add a block's
+/// samples in sample order.
+pub fn add_to_pixel_sum(
+    sums: &mut [[f32; 4]],
+    first_row: u32,
+    frame: &FrameParams,
+    block: &OwnedBlock,
+    sample: u32,
+    v: Vec3,
+) {
+    let i = pixel_index(frame, first_row, sample_pixel(frame, block, sample));
+    let s = sums[i];
+    sums[i] = [s[0] + v.x, s[1] + v.y, s[2] + v.z, s[3] + 1.0];
+}
+
+/// Sample `sample` of `block`'s camera ray, jittered over the pixel it lands in, and the random
+/// numbers its path goes on with.
 #[inline]
 #[must_use]
 fn camera_sample(frame: &FrameParams, block: &OwnedBlock, sample: u32) -> (Ray, SampleRng) {
@@ -98,7 +157,7 @@ fn camera_sample(frame: &FrameParams, block: &OwnedBlock, sample: u32) -> (Ray, 
         block.region,
         frame.seed,
     );
-    let film = block_sample_position(block, frame.width, frame.height, rng.next_2d());
+    let film = pixel_sample_position(sample_pixel(frame, block, sample), rng.next_2d());
     let ray = frame.camera.generate_ray(film, frame.width, frame.height);
     (ray, rng)
 }
@@ -148,6 +207,36 @@ pub fn render_block_samples_packet<F: crate::scene::Features>(
             &frame.integrator,
         );
     }
+}
+
+/// The sum of samples `0 .. spp` of `block`, in sample order, each also added to the sum of the pixel
+/// it landed in ([`add_to_pixel_sum`]; the block's pixels zeroed first): the CPU host's samples pass
+/// with per-pixel sums, as the kernel's `reduce_blocks` writes them.
+#[cfg(not(target_arch = "spirv"))]
+#[must_use]
+pub fn block_sample_sum_into_pixels<F: crate::scene::Features>(
+    scene: &SceneView<F>,
+    frame: &FrameParams,
+    block: &OwnedBlock,
+    spp: u32,
+    sums: &mut [[f32; 4]],
+    first_row: u32,
+) -> Vec3 {
+    use crate::bvh::packet::PACKET_SIZE;
+    clear_block_pixel_sums(sums, first_row, frame, block);
+    let mut values = [Vec3::ZERO; PACKET_SIZE];
+    let mut sum = Vec3::ZERO;
+    let mut next = 0;
+    while next < spp {
+        let n = (spp - next).min(PACKET_SIZE as u32) as usize;
+        render_block_samples_packet(scene, frame, block, next, &mut values[..n]);
+        for (k, v) in values[..n].iter().enumerate() {
+            sum += *v;
+            add_to_pixel_sum(sums, first_row, frame, block, next + k as u32, *v);
+        }
+        next += n as u32;
+    }
+    sum
 }
 
 /// The sum of samples `0 .. spp` of `block`, in sample order, their camera rays traced eight at a time

@@ -1,32 +1,29 @@
 //! Each pixel's history and how a frame joins it: the "reproject and accumulate" pass.
 //!
-//! **Lighting, not texture.** The history keeps each pixel's *lighting*: the frame's filled value divided
-//! by the albedo its samples saw (its block's mean, [`super::albedo`]). The displayed pixel is that
-//! lighting times the pixel's own albedo ([`HistoryTexel::displayed`]). Resampling the history while the
-//! camera moves then blurs only lighting, which is smooth, while the texture comes sharp from this
-//! frame's G-buffer; and a periphery pixel converges to its block's lighting under its own texture, not
-//! to the block's blur.
+//! **Samples land on pixels.** Each of a block's samples lands in one pixel of the block
+//! ([`crate::foveation::landing`]), and the samples pass sums them per pixel. A pixel's history takes
+//! exactly the samples that landed in it, each worth one sample of that pixel: the fovea's 32 a frame,
+//! the intermediate ring's 4, and one every other frame in the paper's periphery, whose 8 samples per
+//! 4 × 4 block visit every pixel of the block in two frames. What is kept is therefore always at the
+//! pixel's own resolution; a region's block size decides only how many samples a pixel gets per frame.
+//! No change of region resets a history: when the fovea arrives over a pixel, its 32 samples a frame
+//! join what the periphery left there and soon outweigh it; when the fovea leaves, the pixel keeps its
+//! fine history and adds the periphery's occasional samples to it, each at its real weight. Only a
+//! disocclusion (reprojection finds nothing), the neighbourhood clamp, a new image size or a reset
+//! start a pixel afresh.
 //!
-//! **Weights that respect the footprint.** A frame's filled value at a pixel comes from `spp` samples
-//! spread over its block's `b × b` pixels: it is worth `spp / b²` samples of that pixel (32 in the
-//! paper's fovea, 4 in the intermediate ring, 0.5 in the periphery), and it estimates the pixel blurred
-//! over `b` pixels. The history keeps the weighted mean of its frames' footprints, `f`, and:
-//!
-//! - *the fovea arrives* (a frame finer than the history, `b < f − 1/2`): the history was built from
-//!   blurred estimates and yields; the frame starts it afresh (no blur trail, no block pattern left in
-//!   the fovea);
-//! - *the fovea leaves* (a frame coarser than the history, `b > f`): the frame counts `(f / b)²` of its
-//!   weight, so a periphery frame adds 1/16 of 0.5 samples to a fovea history and the fine history is
-//!   not overwritten by coarse samples.
+//! **Lighting, not texture.** The history keeps each pixel's *lighting*: its samples' mean divided by
+//! its own albedo ([`super::albedo::demodulation_albedo`] of its G-buffer texel, the mean over the
+//! pixel that its jittered samples saw). What is shown is the history's lighting, or where it is not
+//! yet confident the frame's block reconstruction, times the pixel's albedo ([`super::resolve`]).
 //!
 //! **Following the camera.** The history is reprojected ([`super::reproject`]) and its weight scaled by
 //! its validity. While the camera moves, its colour is clamped to the box `μ ± γσ` of this frame's
 //! filled values at the pixel and its eight neighbours, so that what the camera uncovered does not
-//! ghost. The neighbours are adjacent pixels even in coarse blocks: their bilinear fill makes them
-//! alike, so the box is tight, which is what stops a bright object's blur, which coarse blocks spread
-//! over their neighbours, from staying behind it (neighbours one block apart let a thin bright bar's
-//! blur stay 2.4x above the frame's own, `tests/tests/temporal.rs`). While the camera rests nothing is
-//! clamped and the mean converges as the plain running mean did.
+//! ghost; a pixel that got no sample this frame is clamped too. The neighbours are adjacent pixels even
+//! in coarse blocks: their bilinear fill makes them alike, so the box is tight, which is what stops a
+//! bright object's blur, which coarse blocks spread over their neighbours, from staying behind it. While
+//! the camera rests nothing is clamped and the mean converges as a plain running mean.
 //!
 //! **History length.** The history's weight is capped at `(N − 1)` frames (of the larger of the frame's
 //! weight and the history's mean weight per frame), so a frame like the history's count at least
@@ -34,70 +31,68 @@
 //! [`TemporalParams::max_frames_resting`] (4096) while it rests. While the camera moves the weight is
 //! also capped at [`TemporalParams::max_weight_moving`] samples of the pixel (128): each reprojection
 //! blurs the history a little, and a pixel whose frames already bring many samples (the fovea's 32)
-//! gains less from more frames than it loses to their blur, so it keeps four frames while the
-//! periphery's half a sample a frame keeps sixteen (docs/performance.md, "A dense history stays short").
+//! gains less from more frames than it loses to their blur (docs/performance.md, "A dense history
+//! stays short"). Frames without a sample for the pixel do not count.
 //!
-//! **Bad samples.** A non-finite frame value never joins the history (the pixel keeps what it had); a
+//! **Bad samples.** A non-finite sample mean never joins the history (the pixel keeps what it had); a
 //! finite one is clamped to [`HISTORY_SAMPLE_MAX`], so one huge sample cannot dominate a mean forever.
 use glam::{Vec3, Vec4};
 
-use super::albedo::filled_albedo;
+use super::albedo::{demodulation_albedo, filled_albedo};
 use super::gbuffer::GBufferTexel;
 use super::params::{TemporalParams, TEMPORAL_CAMERA_MOVED};
 use super::reproject::reproject_history;
 use super::texel::{HistoryTexel, HISTORY_SAMPLE_MAX};
-use crate::foveation::{owning_block, samples_in_block};
+use crate::foveation::owning_block;
 use crate::integrator::FrameParams;
 use crate::math::color::{is_finite3, luminance};
-use crate::math::float::sqrt;
+use crate::math::float::{abs, sqrt};
 use crate::math::vec3_from;
 
-/// A frame's value at one pixel, as it joins the history.
+/// This frame's samples of one pixel, as they join its history.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameSample {
-    /// The filled radiance divided by `albedo`.
+    /// Their mean radiance divided by the pixel's albedo.
     pub lighting: Vec3,
-    /// The albedo its samples saw ([`filled_albedo`]).
-    pub albedo: Vec3,
-    /// Samples of this pixel it is worth (`spp / b²`).
+    /// How many samples landed in the pixel (0: none, or a non-finite mean).
     pub weight: f32,
-    /// Its footprint: the block edge `b`.
-    pub footprint: f32,
 }
 
-/// The frame's value of pixel (`x`, `y`): `filled` (in fill mode `fill_mode`) at the pixel over the
-/// albedo its samples saw in `gbuffer` (`cell_albedo`: [`super::albedo::cell_albedo_at`]'s buffer), weighted by its block's samples and footprint. A non-finite
-/// value weighs 0; a finite one is clamped to `[0, HISTORY_SAMPLE_MAX]`, before and after the division.
+impl FrameSample {
+    /// No sample.
+    pub const NONE: Self = Self {
+        lighting: Vec3::ZERO,
+        weight: 0.0,
+    };
+}
+
+/// The samples that landed in pixel (`x`, `y`) this frame, from the samples pass's per-pixel sums
+/// (`pixel_samples`: `[r, g, b, count]`, [`crate::integrator::add_to_pixel_sum`]), demodulated by the
+/// pixel's own albedo in `gbuffer`. A non-finite mean weighs 0; a finite one is clamped to
+/// `[0, HISTORY_SAMPLE_MAX]`, before and after the division.
 #[inline]
 #[must_use]
 pub fn frame_sample(
     frame: &FrameParams,
-    filled: &[[f32; 4]],
+    pixel_samples: &[[f32; 4]],
     gbuffer: &[GBufferTexel],
-    cell_albedo: &[[f32; 4]],
-    fill_mode: u32,
     x: u32,
     y: u32,
 ) -> FrameSample {
-    let block = owning_block(x, y, &frame.foveation);
-    let b = block.size.max(1) as f32;
-    let c = vec3_from(filled[(y * frame.width + x) as usize]);
-    let finite = is_finite3(c);
-    let albedo = filled_albedo(frame, gbuffer, cell_albedo, fill_mode, x, y);
+    let p = (y * frame.width + x) as usize;
+    let s = pixel_samples[p];
+    let count = s[3];
+    if !(count > 0.0) {
+        return FrameSample::NONE;
+    }
+    let mean = vec3_from(s) / count;
+    if !is_finite3(mean) {
+        return FrameSample::NONE;
+    }
     let max = Vec3::splat(HISTORY_SAMPLE_MAX);
     FrameSample {
-        lighting: if finite {
-            (c.clamp(Vec3::ZERO, max) / albedo).min(max)
-        } else {
-            Vec3::ZERO
-        },
-        albedo,
-        weight: if finite {
-            samples_in_block(&block, &frame.foveation) as f32 / (b * b)
-        } else {
-            0.0
-        },
-        footprint: b,
+        lighting: (mean.clamp(Vec3::ZERO, max) / demodulation_albedo(&gbuffer[p])).min(max),
+        weight: count,
     }
 }
 
@@ -187,9 +182,83 @@ impl HistoryCap {
     }
 }
 
-/// Merges `sample` into `history` (already reprojected, its weight scaled by its validity): the
-/// footprint rules, the caps and the clamp of the history's colour into `clamp` (see the module
-/// documentation). A sample of weight 0 leaves the history as it is.
+/// `history` with its colours (its own samples' and its fill's) clamped into `clamp`, the luminance
+/// moments kept consistent with the first (the mean's luminance moves; the spread of the samples
+/// around it is kept).
+#[must_use]
+fn clamped(history: &HistoryTexel, clamp: ClampBox) -> HistoryTexel {
+    let fill = history.fill_lighting().max(clamp.lo).min(clamp.hi);
+    let mut out = HistoryTexel {
+        fill: [fill.x, fill.y, fill.z, history.fill_frames()],
+        ..*history
+    };
+    let old = history.lighting();
+    let c = old.max(clamp.lo).min(clamp.hi);
+    if c != old {
+        let l = luminance(c);
+        let variance = history.luminance_variance();
+        out.mean = [c.x, c.y, c.z, history.weight()];
+        out.moments[0] = l;
+        out.moments[1] = l * l + variance;
+    }
+    out
+}
+
+/// The frame's fill at pixel (`x`, `y`) as lighting: the filled value (in fill mode `fill_mode`) over
+/// the albedo its samples saw (`cell_albedo`: [`super::albedo::cell_albedo_at`]'s buffer), clamped to
+/// `[0, HISTORY_SAMPLE_MAX]`; `None` where it is not finite.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+#[must_use]
+pub fn fill_sample(
+    frame: &FrameParams,
+    filled: &[[f32; 4]],
+    gbuffer: &[GBufferTexel],
+    cell_albedo: &[[f32; 4]],
+    fill_mode: u32,
+    x: u32,
+    y: u32,
+) -> Option<Vec3> {
+    let c = vec3_from(filled[(y * frame.width + x) as usize]);
+    if !is_finite3(c) {
+        return None;
+    }
+    let max = Vec3::splat(HISTORY_SAMPLE_MAX);
+    let albedo = filled_albedo(frame, gbuffer, cell_albedo, fill_mode, x, y);
+    Some((c.clamp(Vec3::ZERO, max) / albedo).min(max))
+}
+
+/// Merges the frame's fill lighting `fill` (of blocks `block` pixels wide) into the history's average
+/// of it: a running mean over at most `max_frames` frames. A fill of another block edge than the
+/// average's starts it afresh (a finer fill has less blur, a coarser one another blur).
+#[must_use]
+pub fn blend_fill(
+    history: &HistoryTexel,
+    fill: Option<Vec3>,
+    block: u32,
+    max_frames: f32,
+) -> HistoryTexel {
+    let Some(f) = fill else {
+        return *history;
+    };
+    let same_block = abs(history.fill_block() - block as f32) < 0.5;
+    let n = if same_block {
+        history.fill_frames().min((max_frames - 1.0).max(0.0))
+    } else {
+        0.0
+    };
+    let a = 1.0 / (n + 1.0);
+    let old = history.fill_lighting();
+    let mean = old + (f - old) * a;
+    let mut out = *history;
+    out.fill = [mean.x, mean.y, mean.z, n + 1.0];
+    out.moments[2] = block as f32;
+    out
+}
+
+/// Merges `sample` into `history` (already reprojected, its weight scaled by its validity) after
+/// clamping the history's colour into `clamp`, within the caps (see the module documentation). A
+/// sample of weight 0 leaves the (clamped) history as it is.
 #[must_use]
 pub fn blend_history(
     history: &HistoryTexel,
@@ -197,47 +266,29 @@ pub fn blend_history(
     cap: HistoryCap,
     clamp: ClampBox,
 ) -> HistoryTexel {
-    let max_frames = cap.frames;
+    let history = clamped(history, clamp);
     if !(sample.weight > 0.0) {
-        return *history;
+        return history;
     }
-    let mut w_history = history.weight();
-    let f = history.footprint();
-    let mut w_sample = sample.weight;
-    if w_history > 0.0 {
-        if sample.footprint < f - 0.5 {
-            // The fovea arrives: coarse history yields to finer samples.
-            w_history = 0.0;
-        } else if sample.footprint > f {
-            // The fovea leaves: coarse samples barely touch fine history.
-            let r = f / sample.footprint;
-            w_sample *= r * r;
-        }
-    }
-    // The cap, in frames of the history's own weight per frame (a coarse frame on a fine history
-    // must not shrink it to the coarse frame's scale).
+    let max_frames = cap.frames;
+    let w_sample = sample.weight;
+    // The cap, in frames of the history's own weight per frame (a sparse frame on a dense history
+    // must not shrink it to the sparse frame's scale).
     let per_frame = if history.frames() > 0.0 {
         history.weight() / history.frames()
     } else {
         w_sample
     };
-    w_history = w_history
+    let w_history = history
+        .weight()
         .min((max_frames - 1.0).max(0.0) * w_sample.max(per_frame))
         .min((cap.weight - w_sample).max(0.0));
-    let mut old = history.lighting();
-    let mut old_moments = Vec4::from(history.moments);
-    let clamped = old.max(clamp.lo).min(clamp.hi);
-    if clamped != old {
-        // Keep the luminance moments consistent with the clamped colour.
-        let l = luminance(clamped);
-        old_moments.x = l;
-        old_moments.y = l * l;
-        old = clamped;
-    }
     let total = w_history + w_sample;
     let a = w_sample / total;
+    let old = history.lighting();
+    let old_moments = Vec4::from(history.moments);
     let l = luminance(sample.lighting);
-    let new_moments = Vec4::new(l, l * l, sample.footprint, 0.0);
+    let new_moments = Vec4::new(l, l * l, 0.0, 0.0);
     let mut moments = old_moments + (new_moments - old_moments) * a;
     moments.w = (if w_history > 0.0 {
         history.frames()
@@ -245,21 +296,27 @@ pub fn blend_history(
         0.0
     } + 1.0)
         .min(max_frames);
+    // The fill's block edge is not a moment.
+    moments.z = history.moments[2];
     let mean = old + (sample.lighting - old) * a;
     HistoryTexel {
         mean: [mean.x, mean.y, mean.z, total],
         moments: moments.to_array(),
+        fill: history.fill,
     }
 }
 
-/// The temporal pass for pixel (`x`, `y`): the previous history reprojected to it, this frame's filled
-/// value merged in, the pixel's new history returned ([`HistoryTexel::displayed`] is what is shown).
-/// `cell_albedo` is the cell-albedo pass's buffer ([`super::albedo::cell_albedo_at`]).
+/// The temporal pass for pixel (`x`, `y`): the previous history reprojected to it, the samples that
+/// landed in the pixel this frame (`pixel_samples`, the samples pass's per-pixel sums) merged in, the
+/// pixel's new history returned ([`super::resolve`] says what is shown). While the camera moves the
+/// history is clamped to the neighbourhood of `filled` (the frame's filled image) divided by the
+/// albedo its samples saw (`cell_albedo`: [`super::albedo::cell_albedo_at`]'s buffer).
 #[allow(clippy::too_many_arguments)]
 #[must_use]
 pub fn temporal_accumulate(
     frame: &FrameParams,
     temporal: &TemporalParams,
+    pixel_samples: &[[f32; 4]],
     filled: &[[f32; 4]],
     gbuffer: &[GBufferTexel],
     cell_albedo: &[[f32; 4]],
@@ -278,8 +335,30 @@ pub fn temporal_accumulate(
         y,
     );
     let mut history = reprojected.history;
+    // The own samples' weight follows the reprojection's validity; the fill average, a smooth
+    // estimate normalised over the valid taps, keeps its frame count (as the frame count does).
     history.mean[3] *= reprojected.validity;
-    let sample = frame_sample(
+    let sample = frame_sample(frame, pixel_samples, gbuffer, x, y);
+    let moved = temporal.flags & TEMPORAL_CAMERA_MOVED != 0;
+    let (cap, clamp) = if moved {
+        // The box is of the frame's radiance around the pixel; the history is compared with it as
+        // the filled values' samples saw it.
+        let albedo = filled_albedo(frame, gbuffer, cell_albedo, temporal.fill_mode, x, y);
+        (
+            HistoryCap {
+                frames: temporal.max_frames_moving,
+                weight: temporal.max_weight_moving,
+            },
+            neighbourhood_box(frame, filled, x, y, 1, temporal.clamp_gamma).demodulated(albedo),
+        )
+    } else {
+        (
+            HistoryCap::frames(temporal.max_frames_resting),
+            ClampBox::NONE,
+        )
+    };
+    let history = blend_history(&history, &sample, cap, clamp);
+    let fill = fill_sample(
         frame,
         filled,
         gbuffer,
@@ -288,25 +367,8 @@ pub fn temporal_accumulate(
         x,
         y,
     );
-    let moved = temporal.flags & TEMPORAL_CAMERA_MOVED != 0;
-    let (cap, clamp) = if moved {
-        // The box is of the frame's radiance around the pixel; the history is compared with it as
-        // this pixel's samples would see it.
-        (
-            HistoryCap {
-                frames: temporal.max_frames_moving,
-                weight: temporal.max_weight_moving,
-            },
-            neighbourhood_box(frame, filled, x, y, 1, temporal.clamp_gamma)
-                .demodulated(sample.albedo),
-        )
-    } else {
-        (
-            HistoryCap::frames(temporal.max_frames_resting),
-            ClampBox::NONE,
-        )
-    };
-    blend_history(&history, &sample, cap, clamp)
+    let block = owning_block(x, y, &frame.foveation).size;
+    blend_fill(&history, fill, block, cap.frames)
 }
 
 #[cfg(test)]
@@ -317,27 +379,13 @@ mod tests {
 
     use super::*;
     use crate::camera::Camera;
-    use crate::foveation::{FoveationParams, FILL_BILINEAR};
+    use crate::foveation::FoveationParams;
     use crate::integrator::IntegratorSettings;
 
-    /// `frame_sample` at (`x`, `y`) in bilinear fill, with the cell-albedo pass run over `gbuffer`.
-    fn sample_at(
-        frame: &FrameParams,
-        filled: &[[f32; 4]],
-        gbuffer: &[GBufferTexel],
-        x: u32,
-        y: u32,
-    ) -> FrameSample {
-        let cells = crate::temporal::albedo::test_support::cell_albedo_buffer(frame, gbuffer);
-        frame_sample(frame, filled, gbuffer, &cells, FILL_BILINEAR, x, y)
-    }
-
-    fn sample(v: f32, weight: f32, footprint: f32) -> FrameSample {
+    fn sample(v: f32, weight: f32) -> FrameSample {
         FrameSample {
             lighting: Vec3::splat(v),
-            albedo: Vec3::ONE,
             weight,
-            footprint,
         }
     }
 
@@ -352,7 +400,7 @@ mod tests {
     #[test]
     fn a_resting_pixel_keeps_the_weighted_mean() {
         let values = [1.0f32, 5.0, 2.0, 8.0, 4.0];
-        let samples: Vec<_> = values.iter().map(|&v| sample(v, 32.0, 1.0)).collect();
+        let samples: Vec<_> = values.iter().map(|&v| sample(v, 32.0)).collect();
         let h = run(&samples, 4096.0);
         assert!((h.lighting().x - 4.0).abs() < 1e-5, "{h:?}");
         assert_eq!(h.weight(), 160.0);
@@ -364,41 +412,42 @@ mod tests {
     }
 
     #[test]
-    fn the_fovea_arriving_replaces_coarse_history() {
-        // 50 periphery frames of a blurred value, then one fovea frame.
-        let mut samples = vec![sample(10.0, 0.5, 4.0); 50];
-        samples.push(sample(2.0, 32.0, 1.0));
+    fn the_fovea_arriving_refines_the_history_the_periphery_left() {
+        // 20 periphery frames, each pixel one sample every other frame (of value 10), then the fovea's
+        // 32 a frame (of value 2): the history is not restarted, each sample counts once.
+        let mut samples = Vec::new();
+        for k in 0..20 {
+            samples.push(sample(10.0, if k % 2 == 0 { 1.0 } else { 0.0 }));
+        }
+        samples.push(sample(2.0, 32.0));
         let h = run(&samples, 4096.0);
-        assert_eq!(h.lighting().x, 2.0, "no blur trail");
-        assert_eq!(h.weight(), 32.0);
-        assert_eq!(h.footprint(), 1.0);
-        assert_eq!(h.frames(), 1.0);
-    }
-
-    #[test]
-    fn the_fovea_leaving_does_not_overwrite_fine_history() {
-        let mut samples = vec![sample(2.0, 32.0, 1.0); 10];
-        samples.extend(vec![sample(10.0, 0.5, 4.0); 20]);
-        let h = run(&samples, 4096.0);
-        // 20 periphery frames worth 0.5/16 each against 320 fovea samples: 0.2 % of the mean.
-        assert!(h.lighting().x < 2.02, "{h:?}");
-        assert!(h.footprint() < 1.01);
-        // And the fovea coming back merges with it rather than restarting it.
-        let back = blend_history(
-            &h,
-            &sample(2.0, 32.0, 1.0),
-            HistoryCap::frames(4096.0),
-            ClampBox::NONE,
+        assert_eq!(h.weight(), 42.0);
+        assert!(
+            (h.lighting().x - (10.0 * 10.0 + 2.0 * 32.0) / 42.0).abs() < 1e-4,
+            "{h:?}"
         );
-        assert!(back.weight() > 350.0);
+        // A few fovea frames more and the periphery's share is small.
+        let mut more = samples.clone();
+        more.extend(vec![sample(2.0, 32.0); 9]);
+        let h = run(&more, 4096.0);
+        assert!(h.lighting().x < 2.3, "{h:?}");
     }
 
     #[test]
-    fn the_intermediate_ring_merges_with_its_own_footprint() {
-        let samples = vec![sample(3.0, 4.0, 2.0); 8];
+    fn the_fovea_leaving_keeps_the_fine_history() {
+        let mut samples = vec![sample(2.0, 32.0); 10];
+        // The periphery then adds one sample every other frame, each worth one sample of the pixel.
+        for k in 0..20 {
+            samples.push(sample(10.0, if k % 2 == 0 { 1.0 } else { 0.0 }));
+        }
         let h = run(&samples, 4096.0);
-        assert_eq!(h.weight(), 32.0);
-        assert_eq!(h.footprint(), 2.0);
+        assert_eq!(h.weight(), 330.0);
+        assert!(
+            (h.lighting().x - (2.0 * 320.0 + 100.0) / 330.0).abs() < 1e-4,
+            "{h:?}"
+        );
+        // Frames without a sample do not count.
+        assert_eq!(h.frames(), 20.0);
     }
 
     #[test]
@@ -410,16 +459,16 @@ mod tests {
         let blend = |w: f32| {
             let mut h = HistoryTexel::EMPTY;
             for _ in 0..40 {
-                h = blend_history(&h, &sample(0.0, w, 1.0), cap, ClampBox::NONE);
+                h = blend_history(&h, &sample(0.0, w), cap, ClampBox::NONE);
             }
-            blend_history(&h, &sample(1.0, w, 1.0), cap, ClampBox::NONE)
+            blend_history(&h, &sample(1.0, w), cap, ClampBox::NONE)
         };
         // 32 samples a frame: the frame counts 1/4 (four frames of history).
         let fovea = blend(32.0);
         assert!((fovea.lighting().x - 0.25).abs() < 1e-6, "{fovea:?}");
         assert_eq!(fovea.weight(), 128.0);
-        // Half a sample a frame: the frame cap (1/16) binds, not the weight's.
-        let periphery = blend(0.5);
+        // One sample a frame: the frame cap (1/16) binds, not the weight's.
+        let periphery = blend(1.0);
         assert!(
             (periphery.lighting().x - 1.0 / 16.0).abs() < 1e-6,
             "{periphery:?}"
@@ -428,8 +477,8 @@ mod tests {
 
     #[test]
     fn the_cap_keeps_each_frame_worth_one_nth() {
-        let mut samples = vec![sample(0.0, 1.0, 1.0); 100];
-        samples.push(sample(16.0, 1.0, 1.0));
+        let mut samples = vec![sample(0.0, 1.0); 100];
+        samples.push(sample(16.0, 1.0));
         let h = run(&samples, 16.0);
         assert!((h.lighting().x - 1.0).abs() < 1e-5, "{h:?}");
         assert_eq!(h.weight(), 16.0);
@@ -437,19 +486,26 @@ mod tests {
     }
 
     #[test]
-    fn the_clamp_pulls_ghosts_into_the_box() {
-        let bright = run(&[sample(100.0, 1.0, 1.0); 8], 16.0);
+    fn the_clamp_pulls_ghosts_into_the_box_even_without_a_sample_and_keeps_the_spread() {
+        let mut bright = run(&[sample(90.0, 1.0), sample(110.0, 1.0)], 16.0);
+        let spread = bright.luminance_variance();
+        assert!(spread > 50.0, "{bright:?}");
         let clamp = ClampBox {
             lo: Vec3::splat(0.0),
             hi: Vec3::splat(1.0),
         };
-        let h = blend_history(
-            &bright,
-            &sample(0.5, 1.0, 1.0),
-            HistoryCap::frames(16.0),
-            clamp,
-        );
+        let h = blend_history(&bright, &sample(0.5, 1.0), HistoryCap::frames(16.0), clamp);
         assert!(h.lighting().x <= 1.0, "{h:?}");
+        // A pixel that got no sample this frame is clamped all the same.
+        bright.mean[3] = 2.0;
+        let h = blend_history(&bright, &FrameSample::NONE, HistoryCap::frames(16.0), clamp);
+        assert_eq!(h.lighting(), Vec3::ONE);
+        assert_eq!(h.weight(), 2.0);
+        // The clamp moves the mean, not the samples' spread around it.
+        assert!(
+            (h.luminance_variance() - spread).abs() < 1e-2 * spread,
+            "{h:?}"
+        );
     }
 
     fn tiny_frame(gaze: [f32; 2]) -> FrameParams {
@@ -468,43 +524,34 @@ mod tests {
     fn bad_samples_never_enter_the_history() {
         let frame = tiny_frame([0.5, 0.5]);
         let sky = vec![GBufferTexel::SKY; 64];
-        let mut filled = vec![[1.0f32, 1.0, 1.0, 1.0]; 64];
-        filled[0] = [f32::NAN, 1.0, 1.0, 1.0];
-        filled[1] = [f32::INFINITY, 1.0, 1.0, 1.0];
-        filled[2] = [1.0e30, -5.0, 1.0, 1.0];
-        assert_eq!(sample_at(&frame, &filled, &sky, 0, 0).weight, 0.0);
-        assert_eq!(sample_at(&frame, &filled, &sky, 1, 0).weight, 0.0);
-        let huge = sample_at(&frame, &filled, &sky, 2, 0);
+        let mut sums = vec![[1.0f32, 1.0, 1.0, 1.0]; 64];
+        sums[0] = [f32::NAN, 1.0, 1.0, 1.0];
+        sums[1] = [f32::INFINITY, 1.0, 1.0, 2.0];
+        sums[2] = [2.0e30, -10.0, 2.0, 2.0];
+        sums[3] = [5.0, 5.0, 5.0, 0.0];
+        assert_eq!(frame_sample(&frame, &sums, &sky, 0, 0).weight, 0.0);
+        assert_eq!(frame_sample(&frame, &sums, &sky, 1, 0).weight, 0.0);
+        let huge = frame_sample(&frame, &sums, &sky, 2, 0);
         assert_eq!(huge.lighting, Vec3::new(HISTORY_SAMPLE_MAX, 0.0, 1.0));
-        let h = run(&[sample(1.0, 32.0, 1.0)], 4096.0);
+        assert_eq!(huge.weight, 2.0);
+        // No sample landed: nothing joins.
+        assert_eq!(frame_sample(&frame, &sums, &sky, 3, 0), FrameSample::NONE);
+        let h = run(&[sample(1.0, 32.0)], 4096.0);
         let after = blend_history(
             &h,
-            &sample_at(&frame, &filled, &sky, 0, 0),
+            &frame_sample(&frame, &sums, &sky, 0, 0),
             HistoryCap::frames(4096.0),
             ClampBox::NONE,
         );
         assert_eq!(after, h);
         // The neighbourhood box leaves them out.
-        let b = neighbourhood_box(&frame, &filled, 1, 1, 1, 1.0);
+        let b = neighbourhood_box(&frame, &sums, 1, 1, 1, 1.0);
         assert!(b.lo.is_finite() && b.hi.is_finite(), "{b:?}");
     }
 
     #[test]
-    fn frame_samples_weigh_their_footprint() {
-        // Gaze in a corner of an 8 x 8 image: the far corner is periphery (4 x 4 block, 8 spp).
-        let frame = tiny_frame([0.5, 0.5]);
-        let sky = vec![GBufferTexel::SKY; 64];
-        let filled = vec![[1.0f32; 4]; 64];
-        let fovea = sample_at(&frame, &filled, &sky, 0, 0);
-        assert_eq!((fovea.weight, fovea.footprint), (32.0, 1.0));
-        let periphery = sample_at(&frame, &filled, &sky, 7, 7);
-        assert_eq!((periphery.weight, periphery.footprint), (0.5, 4.0));
-    }
-
-    #[test]
-    fn history_keeps_lighting_and_shows_each_pixel_its_own_texture() {
-        // The periphery's 4 x 4 block at (4, 4) sees a checker of albedos 0.2 and 0.8 (mean 0.5) lit
-        // by 2: its filled value is 1 everywhere.
+    fn a_pixel_takes_its_own_samples_under_its_own_albedo() {
+        // A checker of albedos 0.2 and 0.8 lit by 2: each pixel's samples saw its own albedo.
         let frame = tiny_frame([0.5, 0.5]);
         let wall = |a: f32| GBufferTexel {
             normal_distance: [0.0, 0.0, 1.0, 3.0],
@@ -513,24 +560,17 @@ mod tests {
         let g: Vec<_> = (0..64u32)
             .map(|i| wall(if (i % 8 + i / 8) % 2 == 0 { 0.2 } else { 0.8 }))
             .collect();
-        let filled = vec![[1.0f32; 4]; 64];
-        let s = sample_at(&frame, &filled, &g, 6, 6);
-        assert!((s.albedo.x - 0.5).abs() < 1e-6 && (s.lighting.x - 2.0).abs() < 1e-5);
-        let h = blend_history(
-            &HistoryTexel::EMPTY,
-            &s,
-            HistoryCap::frames(4096.0),
-            ClampBox::NONE,
-        );
-        // Shown with the pixel's own albedo: the checker comes back at full resolution.
-        assert!((h.displayed(&g[6 * 8 + 6])[0] - 0.4).abs() < 1e-5);
-        assert!((h.displayed(&g[6 * 8 + 7])[0] - 1.6).abs() < 1e-5);
-        // A box of radiance becomes a box of lighting under the albedo the samples saw.
-        let b = ClampBox {
-            lo: Vec3::splat(0.5),
-            hi: Vec3::splat(1.0),
+        let sums: Vec<[f32; 4]> = (0..64u32)
+            .map(|i| {
+                let a = if (i % 8 + i / 8) % 2 == 0 { 0.2 } else { 0.8 };
+                // Three samples of radiance 2a each.
+                [6.0 * a, 6.0 * a, 6.0 * a, 3.0]
+            })
+            .collect();
+        for (x, y) in [(6, 6), (7, 6), (0, 0)] {
+            let s = frame_sample(&frame, &sums, &g, x, y);
+            assert!((s.lighting.x - 2.0).abs() < 1e-5, "{s:?}");
+            assert_eq!(s.weight, 3.0);
         }
-        .demodulated(s.albedo);
-        assert_eq!((b.lo.x, b.hi.x), (1.0, 2.0));
     }
 }

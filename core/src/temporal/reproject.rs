@@ -282,6 +282,7 @@ mod tests {
                 h.push(HistoryTexel {
                     mean: [x as f32 + 0.5, y as f32 + 0.5, 0.0, 1.0],
                     moments: [0.0, 0.0, 1.0, 1.0],
+                    fill: [0.0; 4],
                 });
             }
         }

@@ -1,25 +1,29 @@
 //! One pixel's history as it is kept between frames (GPU layout): its mean lighting, weight,
-//! luminance moments, footprint and frame count ([`super::history`] says how a frame joins it).
+//! luminance moments and frame count ([`super::history`] says how a frame joins it, [`super::resolve`]
+//! what is shown of it).
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 
-use super::albedo::demodulation_albedo;
-use super::gbuffer::GBufferTexel;
 use crate::math::vec3_from;
 
 /// The largest channel value a frame may add to the history; larger finite values are clamped to it.
 pub const HISTORY_SAMPLE_MAX: f32 = 1.0e6;
 
-/// One pixel's history (32 bytes, GPU layout).
+/// One pixel's history (48 bytes, GPU layout): its own samples, and the frame's fill at the pixel
+/// averaged over time (the stable block reconstruction [`super::resolve`] falls back on).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct HistoryTexel {
-    /// rgb: the mean lighting (radiance over the albedo the samples saw); w: its weight, in samples of
-    /// this pixel.
+    /// rgb: the mean lighting (the pixel's samples' radiance over its albedo); w: its weight, in samples
+    /// of this pixel.
     pub mean: [f32; 4],
-    /// x: the lighting's mean luminance, y: its mean squared luminance (the second moment, for a variance), z: the
-    /// footprint (weighted mean block edge of the samples), w: frames in the history (capped).
+    /// x: the lighting's mean luminance, y: its mean squared luminance (the second moment, for a
+    /// variance; each frame's samples enter as their mean), z: the block edge of the fill that `fill`
+    /// averages, w: frames in the history (those with a sample of the pixel; capped).
     pub moments: [f32; 4],
+    /// rgb: the frame's fill at the pixel (lighting: the filled value over the albedo its samples
+    /// saw) averaged over frames; w: how many (capped). A new block size starts it afresh.
+    pub fill: [f32; 4],
 }
 
 impl HistoryTexel {
@@ -27,22 +31,14 @@ impl HistoryTexel {
     pub const EMPTY: Self = Self {
         mean: [0.0; 4],
         moments: [0.0; 4],
+        fill: [0.0; 4],
     };
 
-    /// The mean lighting: radiance divided by the albedo its samples saw.
+    /// The mean lighting: the pixel's radiance divided by its albedo.
     #[inline]
     #[must_use]
     pub fn lighting(&self) -> Vec3 {
         vec3_from(self.mean)
-    }
-
-    /// The pixel as displayed, over the G-buffer texel `g` of this frame: the mean lighting times the
-    /// pixel's own albedo, alpha 1 (the HDR image's layout).
-    #[inline]
-    #[must_use]
-    pub fn displayed(&self, g: &GBufferTexel) -> [f32; 4] {
-        let c = self.lighting() * demodulation_albedo(g);
-        [c.x, c.y, c.z, 1.0]
     }
 
     /// The weight (samples of this pixel behind the mean).
@@ -52,10 +48,24 @@ impl HistoryTexel {
         self.mean[3]
     }
 
-    /// The footprint: the weighted mean block edge of the samples, in pixels.
+    /// The fill's lighting averaged over frames.
     #[inline]
     #[must_use]
-    pub fn footprint(&self) -> f32 {
+    pub fn fill_lighting(&self) -> Vec3 {
+        vec3_from(self.fill)
+    }
+
+    /// Frames in the fill's average.
+    #[inline]
+    #[must_use]
+    pub fn fill_frames(&self) -> f32 {
+        self.fill[3]
+    }
+
+    /// The block edge of the fill that [`Self::fill_lighting`] averages.
+    #[inline]
+    #[must_use]
+    pub fn fill_block(&self) -> f32 {
         self.moments[2]
     }
 
@@ -80,6 +90,7 @@ impl HistoryTexel {
         Self {
             mean: (Vec4::from(self.mean) + Vec4::from(other.mean) * s).to_array(),
             moments: (Vec4::from(self.moments) + Vec4::from(other.moments) * s).to_array(),
+            fill: (Vec4::from(self.fill) + Vec4::from(other.fill) * s).to_array(),
         }
     }
 

@@ -1,0 +1,161 @@
+#!/usr/bin/env python3
+"""What the eye sees of temporal reuse: FovVideoVDP over a gaze trace, the eye moving and still.
+
+For each configuration (uniform and foveated, with history and optionally the denoiser) this renders the
+bundled Lost Empire frame by frame with `fovea render --gaze-trace TRACE --history` twice, once over the
+saccade trace and once with the gaze held at the centre for as many frames, and scores each sequence with
+FovVideoVDP 1.2.2 (Mantiuk et al. 2021) against a converged reference, with the per-frame gaze as the
+fixation (the report's display model: sRGB, 200 cd/m2, 1000:1). It also prints the median frame time and,
+for the still gaze, each region's relMSE on the last frame. A benchmark, run by hand; figures go to
+docs/performance.md.
+
+    python3 scripts/bench-eye.py [--fovea target/release/fovea] [--resolution 480x270]
+        [--display-cm 17.712x9.963] [--fps 30] [--backend cpu] [--out bench-eye] [--configs NAME,...]
+
+The default image and display give 28.4 pixels per degree, as 1920x1080 on the default display does.
+It needs FovVideoVDP's environment (`bash scripts/setup-fvvdp.sh`) and installs the OpenEXR package into
+it if missing (the frames are read as linear EXR and tone-mapped as fovea's tone map does).
+"""
+import argparse
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+VENV = Path(os.environ.get("FOVEA_FVVDP_VENV", Path.home() / ".cache/fovea/fvvdp-venv"))
+CONFIGS = {
+    "uniform-1-history": ["--uniform", "--spp", "1,1,1", "--history"],
+    "uniform-2-history": ["--uniform", "--spp", "2,2,2", "--history"],
+    "32-16-8-history": ["--spp", "32,16,8", "--history"],
+    "32-2-1-history": ["--spp", "32,2,1", "--history"],
+    "8-4-2-history": ["--spp", "8,4,2", "--history"],
+    "32-16-8-history-denoised": ["--spp", "32,16,8", "--history", "--denoise"],
+}
+SCORER = r'''
+import json, math, sys, numpy as np, torch, pyfvvdp, OpenEXR
+job = json.load(open(sys.argv[1]))
+def read(p):
+    with OpenEXR.File(p) as f:
+        ch = f.channels()
+        a = ch["RGBA"].pixels if "RGBA" in ch else ch["RGB"].pixels
+        return np.asarray(a, dtype=np.float32)[..., :3]
+def tonemap(c):
+    c = np.nan_to_num(c, nan=0.0, posinf=1e30, neginf=0.0).clip(0, 1e30)
+    l = 0.2126 * c[..., 0] + 0.7152 * c[..., 1] + 0.0722 * c[..., 2]
+    c = (c / (1.0 + l)[..., None]).clip(0, 1)
+    s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
+    return (s * 255.0 + 0.5).astype(np.uint8)
+ref = read(job["reference"])
+frames = [read(p) for p in job["frames"]]
+test = np.stack([tonemap(f) for f in frames])
+n, h, w, _ = test.shape
+refs = np.ascontiguousarray(np.broadcast_to(tonemap(ref), (n, h, w, 3)))
+d = job["display"]
+geometry = pyfvvdp.fvvdp_display_geometry((w, h), distance_m=d["distance_cm"] / 100.0,
+    diagonal_size_inches=math.hypot(d["width_cm"], d["height_cm"]) / 2.54)
+photometry = pyfvvdp.fvvdp_display_photo_eotf(200.0, contrast=1000.0, EOTF="sRGB")
+fv = pyfvvdp.fvvdp(display_photometry=photometry, display_geometry=geometry, foveated=True,
+    heatmap=None, device=torch.device("cuda" if torch.cuda.is_available() else "cpu"), quiet=True)
+fix = torch.tensor(np.asarray(job["fixations"], dtype=np.float32) - 0.5)
+q, _ = fv.predict(test, refs, dim_order="FHWC", frames_per_second=job["fps"], fixation_point=fix)
+# relMSE by region on the last frame, around its gaze.
+last, g = frames[-1].astype(np.float64), job["fixations"][-1]
+yy, xx = np.mgrid[0:h, 0:w]
+dist = np.hypot(xx + 0.5 - g[0], yy + 0.5 - g[1])
+rel = ((last - ref) ** 2 / (ref.astype(np.float64) ** 2 + 1e-2)).mean(-1)
+r1, r2 = job["radii"]
+out = {"jod": float(q), "relmse_all": float(rel.mean()),
+       "relmse_fovea": float(rel[dist < r1].mean()) if (dist < r1).any() else None,
+       "relmse_periphery": float(rel[dist >= r2].mean()) if (dist >= r2).any() else None}
+print(json.dumps(out))
+'''
+
+
+def run(cmd):
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(f"failed: {' '.join(map(str, cmd))}\n{r.stderr}")
+    return r
+
+
+def python_with_exr():
+    py = VENV / "bin" / "python"
+    if not py.exists():
+        sys.exit(f"no FovVideoVDP environment at {VENV}: run bash scripts/setup-fvvdp.sh")
+    if subprocess.run([py, "-c", "import OpenEXR"], capture_output=True).returncode != 0:
+        run([py, "-m", "pip", "install", "-q", "OpenEXR"])
+    return py
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--fovea", default=str(ROOT / "target/release/fovea"))
+    ap.add_argument("--resolution", default="480x270")
+    ap.add_argument("--display-cm", default="17.712x9.963")
+    ap.add_argument("--fps", default="30")
+    ap.add_argument("--backend", default="cpu")
+    ap.add_argument("--trace", default=str(ROOT / "assets/gaze/saccades-2s.csv"))
+    ap.add_argument("--reference-spp", default="512")
+    ap.add_argument("--out", default="bench-eye")
+    ap.add_argument("--configs", default=",".join(CONFIGS))
+    a = ap.parse_args()
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    py = python_with_exr()
+    w, h = map(int, a.resolution.split("x"))
+    display = ["--resolution", a.resolution, "--display-cm", a.display_cm, "-q"]
+    common = [*display, "--backend", a.backend]
+    reference = out / f"reference-{a.resolution}-{a.reference_spp}.exr"
+    if not reference.exists():
+        spp = a.reference_spp
+        run([a.fovea, "render", *display, "--uniform", "--spp", f"{spp},{spp},{spp}", "--seed", "99",
+             "--backend", "cpu", "-o", reference])
+    # The still gaze: the trace's frame count, the gaze at the centre.
+    frames = sum(1 for line in open(a.trace) if line[:1].isdigit())
+    fps = float(a.fps)
+    duration = (frames - 1) / 120.0  # the bundled traces are sampled at 120 Hz
+    n = int(math.floor(duration * fps)) + 1
+    still = out / "still.csv"
+    still.write_text("frame,x,y\n" + "".join(f"{i},{w / 2},{h / 2}\n" for i in range(n)))
+    traces = {"saccades": ["--gaze-trace", a.trace, "--gaze-normalized", "--trace-fps", a.fps],
+              "still": ["--gaze-trace", str(still)]}
+    print(f"| configuration | ms/frame | JOD, saccades | JOD, still | relMSE periphery, still (last frame) |")
+    print("|---|---:|---:|---:|---:|")
+    for name in a.configs.split(","):
+        row = {}
+        for trace, args in traces.items():
+            d = out / name / trace
+            d.mkdir(parents=True, exist_ok=True)
+            stats = d / "stats.json"
+            run([a.fovea, "render", *common, *CONFIGS[name], *args, "-o", d / "f.exr", "--stats", stats])
+            s = json.load(open(stats))
+            job = {
+                "reference": str(reference),
+                "frames": [f["output"] for f in s["frames"]],
+                "fixations": [f["gaze"] for f in s["frames"]],
+                "fps": fps,
+                "radii": s["radii_px"] or [0, 0],
+                "display": {"width_cm": float(a.display_cm.split("x")[0]),
+                            "height_cm": float(a.display_cm.split("x")[1]), "distance_cm": 60.0},
+            }
+            job_path = d / "job.json"
+            job_path.write_text(json.dumps(job))
+            scorer = d / "score.py"
+            scorer.write_text(SCORER)
+            r = json.loads(run([py, scorer, job_path]).stdout.strip().splitlines()[-1])
+            r["ms"] = statistics.median(f["render_ms"] for f in s["frames"])
+            row[trace] = r
+            for f in job["frames"]:
+                os.remove(f)
+        ms = statistics.median([row["saccades"]["ms"], row["still"]["ms"]])
+        p = row["still"]["relmse_periphery"]
+        print(f"| {name} | {ms:.0f} | {row['saccades']['jod']:.2f} | {row['still']['jod']:.2f} | "
+              f"{p:.4f} |" if p is not None else "| - |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
