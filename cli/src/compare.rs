@@ -28,6 +28,9 @@ pub struct Agreement {
     pub rel_mse: f64,
     /// Mean FLIP of the tone-mapped images (FLIP's default 67 pixels per degree).
     pub mean_flip: f64,
+    /// Pixels with a NaN or infinite channel, in the test image and in the reference (they agree
+    /// with nothing, and `max_abs` is over the pixels finite in both).
+    pub non_finite: [usize; 2],
 }
 
 /// The figures of `test` against `reference`, which must be of one size.
@@ -53,11 +56,19 @@ pub fn agreement(test: &FrameImage, reference: &FrameImage, exposure_ev: f32) ->
         nv_flip::DEFAULT_PIXELS_PER_DEGREE,
     );
     let mean_flip = flip.iter().map(|&e| f64::from(e)).sum::<f64>() / n;
+    let bad = |image: &FrameImage| {
+        image
+            .pixels
+            .iter()
+            .filter(|p| !p[..3].iter().all(|c| c.is_finite()))
+            .count()
+    };
     Agreement {
         within,
         max_abs,
         rel_mse,
         mean_flip,
+        non_finite: [bad(test), bad(reference)],
     }
 }
 
@@ -110,17 +121,34 @@ fn means_json(m: RegionMeans) -> serde_json::Value {
 /// Runs `fovea compare`.
 pub fn run(args: &CompareArgs) -> Result<()> {
     for path in [&args.test, &args.reference] {
-        let exr = path
+        let ext = path
             .extension()
             .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        if !exr {
-            return Err(FoveaError::file(
-                path,
-                "compare reads linear HDR .exr images (render with -o NAME.exr); a PNG is tone-mapped \
-                 and 8-bit",
-            ));
-        }
+            .map(str::to_ascii_lowercase);
+        let why = if path.is_dir() {
+            "is a folder; compare reads two linear HDR .exr images".to_string()
+        } else {
+            match ext.as_deref() {
+                Some("exr") => continue,
+                Some("png") => {
+                    "compare reads linear HDR .exr images (render with -o NAME.exr); a PNG \
+                                is tone-mapped and 8-bit"
+                        .to_string()
+                }
+                Some(other) => {
+                    format!("has the extension '.{other}'; compare reads linear HDR .exr images")
+                }
+                None => "has no extension; compare reads linear HDR .exr images (NAME.exr)".into(),
+            }
+        };
+        return Err(FoveaError::file(path, why));
+    }
+    if let Some(json) = &args.json {
+        crate::output::check_json_path(json, "--json")?;
+        crate::output::refuse_overwriting_inputs(
+            &[("--json", json.as_path())],
+            &[args.test.as_path(), args.reference.as_path()],
+        )?;
     }
     let test = read_exr(&args.test)?;
     let reference = read_exr(&args.reference)?;
@@ -170,6 +198,15 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         a.rel_mse,
         a.mean_flip
     );
+    for (count, path) in a.non_finite.iter().zip([&args.test, &args.reference]) {
+        if *count > 0 {
+            println!(
+                "fovea: {count} pixel(s) of '{}' are NaN or infinite (they agree with nothing; max \
+                 abs is over the pixels finite in both)",
+                path.display()
+            );
+        }
+    }
     if let Some((gaze, radii, r)) = &regions {
         let row = |m: RegionMeans| {
             format!(
@@ -199,6 +236,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "max_abs": a.max_abs,
             "rel_mse": a.rel_mse,
             "mean_flip": a.mean_flip,
+            "non_finite_pixels": {"test": a.non_finite[0], "reference": a.non_finite[1]},
         });
         if let Some((gaze, radii, r)) = &regions {
             json["regions"] = serde_json::json!({

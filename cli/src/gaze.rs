@@ -39,13 +39,18 @@
 //! A gaze trace is a CSV file of samples `key,x,y`, one per line, keyed in one of two ways
 //! ([`TraceTiming`]), told apart by the header:
 //!
-//! * `t,x,y` (timed): `t` is seconds from the start of the replay (non-decreasing, not negative);
+//! * `t,x,y` (timed): `t` is seconds (non-decreasing, not negative), counted from the first sample:
+//!   a trace whose clock started long before (Unix-epoch timestamps, as many trackers export them)
+//!   replays from its first sample;
 //! * `frame,x,y` (per frame): `frame` is a frame number (increasing integers).
 //!
-//! A first line whose first field is not a number is a header: `frame` makes the trace per frame, `t`
-//! (or `time`, `seconds`, `timestamp`) timed; without a header, or with another first field, the
-//! command's default applies (`view`: timed, `render`: per frame). `x,y` are in the command's
-//! [`GazeConvention`]. `#` starts a comment, and blank lines are ignored.
+//! Fields are separated by commas (another separator is named in the error). A first line whose first
+//! field is not a number must be a header, `KEY,x,y`: `frame` makes the trace per frame, `t` (or
+//! `time`, `seconds`, `timestamp`) timed; any other first line is an error naming it. Without a header
+//! the command's default applies (`view`: timed, `render`: per frame). `x,y` are in the command's
+//! [`GazeConvention`]. `#` starts a comment, blank lines are ignored, and a UTF-8 byte-order mark is
+//! skipped. A trace holds at most [`MAX_TRACE_SAMPLES`] samples, and `render` makes at most as many
+//! frames of it.
 //!
 //! ```text
 //! t,x,y
@@ -156,6 +161,58 @@ pub fn parse_sample(
     Ok(GazeSample { t, x, y })
 }
 
+/// The timing a header line names (`t,x,y`, `frame,x,y`, case and spaces aside); the error says why
+/// the line is neither a header nor a sample.
+fn parse_header(line: &str) -> Result<TraceTiming, String> {
+    let fields: Vec<String> = line
+        .split(',')
+        .map(|f| f.trim().to_ascii_lowercase())
+        .collect();
+    let neither = || {
+        format!(
+            "{} is neither a header (\"t,x,y\" or \"frame,x,y\") nor a sample of three numbers",
+            quote(line)
+        )
+    };
+    if fields.len() == 1 {
+        if let Some(sep) = other_separator(line) {
+            return Err(format!(
+                "{}: the fields are separated by {sep}; gaze traces separate them by commas",
+                quote(line)
+            ));
+        }
+    }
+    match fields.as_slice() {
+        [key, x, y] if x == "x" && y == "y" => TraceTiming::from_header(key).ok_or_else(neither),
+        [_, _, _] if fields.iter().any(|f| f == "x") && fields.iter().any(|f| f == "y") => {
+            Err(format!(
+                "header {}: the columns must be KEY,x,y in that order (t,x,y or frame,x,y)",
+                quote(line)
+            ))
+        }
+        _ => Err(neither()),
+    }
+}
+
+/// The separator a line without commas uses instead, by name, where it splits the line into three
+/// fields (`;`, tabs, spaces).
+fn other_separator(line: &str) -> Option<&'static str> {
+    let line = line.trim();
+    if line.contains(',') {
+        return None;
+    }
+    let three = |parts: Vec<&str>| parts.iter().filter(|p| !p.is_empty()).count() == 3;
+    if three(line.split(';').map(str::trim).collect()) {
+        Some("semicolons")
+    } else if line.contains('\t') && three(line.split('\t').map(str::trim).collect()) {
+        Some("tabs")
+    } else if three(line.split(' ').collect()) {
+        Some("spaces")
+    } else {
+        None
+    }
+}
+
 /// Parses `t,x,y` into raw `(t, x, y)`; the error describes the problem (without saying where).
 fn parse_fields(
     text: &str,
@@ -170,6 +227,11 @@ fn parse_fields(
     let fields: Vec<&str> = text.split(',').map(str::trim).collect();
     let [t, x, y] = fields[..] else {
         let n = fields.len();
+        if let (1, Some(sep)) = (n, other_separator(text)) {
+            return Err(format!(
+                "the fields are separated by {sep}; {expected}, separated by commas"
+            ));
+        }
         let plural = if n == 1 { "" } else { "s" };
         return Err(format!("{n} field{plural}; {expected}"));
     };
@@ -395,15 +457,35 @@ impl TraceTiming {
     }
 }
 
+/// The frames of a timed trace spanning `span` seconds at `fps` whose clock started at `start`: one
+/// at 0 and one every `1 / fps` up to the span, a frame that falls on the last sample included up to
+/// the rounding of the timestamps (which grows with `start`: Unix-epoch seconds keep about 0.2 µs).
+#[must_use]
+fn timed_frame_count(span: f64, fps: f64, start: f64) -> u64 {
+    let rounding = (start.abs() + span) * 8.0 * f64::EPSILON * fps + 1.0e-9;
+    (span * fps + rounding).floor() as u64 + 1
+}
+
+/// The frames `render` and `report` make of a `--gaze-trace`, and one line saying what may surprise
+/// about them (a timed trace whose clock does not start at 0, a per-frame trace that skips frame
+/// numbers).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TraceFrames {
+    /// Frame numbers and the gaze in pixels of the image.
+    pub frames: Vec<(u32, [f32; 2])>,
+    pub note: Option<String>,
+}
+
 /// `--gaze-trace FILE` for `render` and `report`: its frames and their gaze in pixels of an `image`
-/// (a per-frame trace's lines, or a timed trace sampled at `fps`), with `--gaze-normalized` read as
-/// 0..1 of the image. The errors name the option.
+/// (a per-frame trace's lines, or a timed trace sampled at `fps` from its first sample), with
+/// `--gaze-normalized` read as 0..1 of the image. The errors name the option; a timed trace that
+/// would make more than [`MAX_TRACE_SAMPLES`] frames is refused with its span.
 pub fn read_trace_frames(
     path: &std::path::Path,
     fps: f64,
     normalized: bool,
     image: [u32; 2],
-) -> crate::error::Result<Vec<(u32, [f32; 2])>> {
+) -> crate::error::Result<TraceFrames> {
     use crate::error::FoveaError;
     if !(fps > 0.0 && fps <= 10_000.0) {
         return Err(FoveaError::option(
@@ -418,16 +500,60 @@ pub fn read_trace_frames(
     };
     let trace = GazeTrace::read(path, convention, TraceTiming::Frames)
         .map_err(|e| FoveaError::option("--gaze-trace", e))?;
-    Ok(trace.frames(fps, image))
+    let shown = path.display();
+    let note = match trace.timing {
+        TraceTiming::Seconds => {
+            let span = trace.samples.last().map_or(0.0, |s| s.t);
+            let count = timed_frame_count(span, fps, trace.start) as f64;
+            if count > MAX_TRACE_SAMPLES as f64 {
+                return Err(FoveaError::option(
+                    "--gaze-trace",
+                    format!(
+                        "'{shown}' spans {span} s (timestamps {} to {}): at --trace-fps {fps} that \
+                         is {count} frames, more than {MAX_TRACE_SAMPLES}; lower --trace-fps or cut \
+                         the trace",
+                        trace.start,
+                        trace.start + span
+                    ),
+                ));
+            }
+            (trace.start != 0.0).then(|| {
+                format!(
+                    "gaze trace '{shown}': its timestamps start at {} s; its {count} frames at {fps} \
+                     fps are timed from its first sample",
+                    trace.start
+                )
+            })
+        }
+        TraceTiming::Frames => {
+            let first = trace.samples.first().map_or(0.0, |s| s.t);
+            let last = trace.samples.last().map_or(0.0, |s| s.t);
+            let skipped = (last - first + 1.0) as u64 - trace.samples.len() as u64;
+            (skipped > 0).then(|| {
+                format!(
+                    "gaze trace '{shown}': {} frames from {first} to {last}, skipping {skipped} \
+                     frame number(s); only the frames it gives are rendered",
+                    trace.samples.len()
+                )
+            })
+        }
+    };
+    Ok(TraceFrames {
+        frames: trace.frames(fps, image),
+        note,
+    })
 }
 
 /// A recorded gaze trace (`--gaze-trace FILE`; see the [module documentation](self)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GazeTrace {
-    /// Sorted by `t` (seconds, or frame numbers for [`TraceTiming::Frames`]).
+    /// Sorted by `t` (seconds from the first sample, or frame numbers for [`TraceTiming::Frames`]).
     samples: Vec<RawSample>,
     convention: GazeConvention,
     timing: TraceTiming,
+    /// A timed trace's first timestamp as the file gives it (its samples are kept from it); 0 for a
+    /// per-frame trace.
+    start: f64,
 }
 
 impl GazeTrace {
@@ -452,6 +578,8 @@ impl GazeTrace {
         let mut frame_lines = std::collections::HashMap::new();
         let mut previous_line = 0;
         let mut seen_content = false;
+        // A UTF-8 byte-order mark (spreadsheet exports write one) is not part of the first field.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         for (index, raw) in text.lines().enumerate() {
             let line = index + 1;
             let content = raw.split('#').next().unwrap_or("").trim();
@@ -460,15 +588,15 @@ impl GazeTrace {
             }
             let first_content = !seen_content;
             seen_content = true;
-            let first_field = content.split(',').next().unwrap_or("").trim();
-            if first_content && first_field.parse::<f64>().is_err() {
-                // A header such as `t,x,y` or `frame,x,y`.
-                timing = TraceTiming::from_header(first_field).unwrap_or(timing);
-                continue;
-            }
             let at = |problem: String| {
                 format!("gaze trace '{path_for_messages}' line {line}: {problem}")
             };
+            let first_field = content.split(',').next().unwrap_or("").trim();
+            if first_content && first_field.parse::<f64>().is_err() {
+                // A header: `t,x,y` or `frame,x,y` (their names, in that order).
+                timing = parse_header(content).map_err(at)?;
+                continue;
+            }
             let (t, x, y) = parse_fields(content, convention, timing).map_err(at)?;
             match timing {
                 TraceTiming::Seconds => {
@@ -524,10 +652,19 @@ impl GazeTrace {
                 convention.example()
             ));
         }
+        // A timed trace replays from its first sample, whatever clock its timestamps come from.
+        let start = match timing {
+            TraceTiming::Seconds => samples[0].t,
+            TraceTiming::Frames => 0.0,
+        };
+        for s in &mut samples {
+            s.t -= start;
+        }
         Ok(Self {
             samples,
             convention,
             timing,
+            start,
         })
     }
 
@@ -588,7 +725,8 @@ impl GazeTrace {
                 .collect(),
             TraceTiming::Seconds => {
                 let last = self.samples.last().map_or(0.0, |s| s.t);
-                let count = ((last * fps).floor() as u64 + 1).min(MAX_TRACE_SAMPLES as u64) as u32;
+                let count =
+                    timed_frame_count(last, fps, self.start).min(MAX_TRACE_SAMPLES as u64) as u32;
                 (0..count)
                     .filter_map(|frame| {
                         let s = self.sample_at(f64::from(frame) / fps, image)?;
@@ -635,6 +773,78 @@ mod tests {
     use std::time::Duration;
 
     const WINDOW: [u32; 2] = [800, 600];
+
+    fn frames_of(text: &str, fps: f64) -> crate::error::Result<TraceFrames> {
+        let dir = std::env::temp_dir().join(format!("fovea-gaze-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let path = dir.join(format!("t{n}.csv"));
+        std::fs::write(&path, text).unwrap();
+        let out = read_trace_frames(&path, fps, true, [100, 100]);
+        let _ = std::fs::remove_file(&path);
+        out
+    }
+
+    #[test]
+    fn epoch_timestamps_replay_from_the_first_sample_and_say_so() {
+        // Unix-epoch seconds, as trackers export them: 3 frames at 10 fps, not 17e9.
+        let t = frames_of(
+            "t,x,y\n1700000000.0,0.5,0.5\n1700000000.1,0.2,0.2\n1700000000.2,0.1,0.1\n",
+            10.0,
+        )
+        .unwrap();
+        assert_eq!(t.frames.len(), 3, "{t:?}");
+        assert_eq!(t.frames[0], (0, [50.0, 50.0]));
+        assert!(t.note.unwrap().contains("start at 1700000000 s"));
+        // One sample after 5 s: one frame, not none.
+        let t = frames_of("t,x,y\n5.01,0.5,0.5\n", 30.0).unwrap();
+        assert_eq!(t.frames.len(), 1);
+        // From 0 to 1e9 s: refused with the span, not a million frames.
+        let e = frames_of("t,x,y\n0,0.5,0.5\n1e9,0.5,0.5\n", 30.0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("spans 1000000000 s") && e.contains("--trace-fps"),
+            "{e}"
+        );
+        // A trace that starts at 0 says nothing.
+        assert_eq!(
+            frames_of("t,x,y\n0,0.5,0.5\n1,0.5,0.5\n", 2.0)
+                .unwrap()
+                .note,
+            None
+        );
+    }
+
+    #[test]
+    fn a_per_frame_trace_that_skips_frames_says_so() {
+        let t = frames_of("frame,x,y\n0,0.5,0.5\n1,0.5,0.5\n5,0.5,0.5\n", 30.0).unwrap();
+        assert_eq!(t.frames.iter().map(|f| f.0).collect::<Vec<_>>(), [0, 1, 5]);
+        assert!(t.note.unwrap().contains("skipping 3 frame number(s)"));
+    }
+
+    #[test]
+    fn headers_are_recognised_by_their_names_and_other_first_lines_are_named() {
+        // A byte-order mark before the header.
+        let t = frames_of("\u{feff}t,x,y\n0,0.5,0.5\n", 30.0).unwrap();
+        assert_eq!(t.frames.len(), 1);
+        // A byte-order mark before data: frame 0 is kept, not taken for a header.
+        let t = frames_of("\u{feff}0,0.5,0.5\n1,0.6,0.5\n", 30.0).unwrap();
+        assert_eq!(t.frames.len(), 2);
+        for (text, needle) in [
+            ("time_ms;gx;gy\n0;0.5;0.5\n", "semicolons"),
+            ("hello world\n0,0.5,0.5\n", "neither a header"),
+            ("x,y,t\n0.5,0.5,0\n", "KEY,x,y in that order"),
+            ("t,x,y\n0 0.5 0.5\n", "separated by spaces"),
+            ("t,x,y\n0;0.5;0.5\n", "separated by semicolons"),
+            ("t,x,y\n0\t0.5\t0.5\n", "separated by tabs"),
+        ] {
+            let e = frames_of(text, 30.0).unwrap_err().to_string();
+            assert!(e.contains(needle), "{text:?}: {e}");
+            assert!(e.contains("--gaze-trace"), "{e}");
+        }
+    }
 
     fn loopback() -> SocketAddr {
         SocketAddr::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 0)

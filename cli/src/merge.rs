@@ -2,22 +2,17 @@
 //! image the whole render gives. The parts are checked first ([`crate::partial::check_parts`]): one
 //! render, samples tiled without gap or overlap, each file whole. Nothing is written on refusal.
 use crate::args::MergeArgs;
-use crate::error::{FoveaError, Result};
-use crate::output::{check_output_path, write_image};
+use crate::error::Result;
+use std::path::PathBuf;
+
+use crate::output::{check_output_path, refuse_overwriting_inputs, write_image};
 use crate::partial::{check_parts, largest_spp, PartHeader};
 
 /// Runs `fovea merge`.
 pub fn run(args: &MergeArgs) -> Result<()> {
     let format = check_output_path(&args.output, "--output", true)?;
-    if let Some(p) = args.parts.iter().find(|p| **p == args.output) {
-        return Err(FoveaError::option(
-            "--output",
-            format!(
-                "'{}' is one of the parts; fovea never overwrites its input",
-                p.display()
-            ),
-        ));
-    }
+    let parts: Vec<&std::path::Path> = args.parts.iter().map(PathBuf::as_path).collect();
+    refuse_overwriting_inputs(&[("--output", &args.output)], &parts)?;
     let parts = args
         .parts
         .iter()
@@ -26,6 +21,23 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     let checked = check_parts(parts)?;
     let frame = *checked.frame();
     let image = checked.merged()?;
+    if format == crate::output::ImageFormat::Exr && args.exposure != 0.0 {
+        eprintln!(
+            "warning: --exposure applies to a tone-mapped PNG; the --output EXR is linear and is \
+             written without it"
+        );
+    }
+    let non_finite = image
+        .pixels
+        .iter()
+        .filter(|p| !p[..3].iter().all(|c| c.is_finite()))
+        .count();
+    if non_finite > 0 {
+        eprintln!(
+            "warning: {non_finite} pixel(s) of the merged image are NaN or infinite: the parts' sums \
+             hold non-finite samples (written as they are)"
+        );
+    }
     write_image(&args.output, format, &image, args.exposure)?;
     if !args.quiet {
         println!(

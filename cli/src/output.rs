@@ -47,11 +47,82 @@ pub fn check_output_path(path: &Path, what: &'static str, allow_exr: bool) -> Re
             ))
         }
     };
+    check_writable_file(path, what)?;
+    Ok(format)
+}
+
+/// Checks before any work that `path` can be written: its folder exists and takes new files, and the
+/// path is not a folder itself. The write later is atomic (a temporary sibling, then a rename), so the
+/// folder must take a new file even where `path` exists.
+pub fn check_writable_file(path: &Path, what: &'static str) -> Result<()> {
     let dir = parent_dir(path);
     if !dir.is_dir() {
         return Err(FoveaError::option(what, missing_folder(&dir)));
     }
-    Ok(format)
+    if path.is_dir() {
+        return Err(FoveaError::option(
+            what,
+            format!("'{}' is a folder, not a file", path.display()),
+        ));
+    }
+    check_folder_takes_files(&dir).map_err(|why| FoveaError::option(what, why))
+}
+
+/// Whether new files can be created in the folder `dir` (a probe file, created and removed): the
+/// permission bits do not tell for root, read-only mounts or `/proc`.
+pub fn check_folder_takes_files(dir: &Path) -> std::result::Result<(), String> {
+    let probe = dir.join(format!(".fovea-write-check-{}", std::process::id()));
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(format!(
+            "cannot write into the folder '{}': {e}",
+            dir.display()
+        )),
+    }
+}
+
+/// The file `p` names, symbolic links and `..` resolved: itself if it exists, else its folder's
+/// resolved path with its name (a file still to be written).
+#[must_use]
+pub fn resolved_path(p: &Path) -> PathBuf {
+    if let Ok(c) = p.canonicalize() {
+        return c;
+    }
+    let name = p.file_name().map(PathBuf::from).unwrap_or_default();
+    match parent_dir(p).canonicalize() {
+        Ok(dir) => dir.join(name),
+        Err(_) => p.to_path_buf(),
+    }
+}
+
+/// Refuses, before any work, an output (`option`, path) that is one of the run's `inputs`, compared by
+/// the files they resolve to ([`resolved_path`]): fovea never overwrites its input.
+pub fn refuse_overwriting_inputs(
+    outputs: &[(&'static str, &Path)],
+    inputs: &[&Path],
+) -> Result<()> {
+    let inputs: Vec<(PathBuf, &Path)> = inputs.iter().map(|i| (resolved_path(i), *i)).collect();
+    for (option, output) in outputs {
+        let out = resolved_path(output);
+        if let Some((_, input)) = inputs.iter().find(|(r, _)| *r == out) {
+            return Err(FoveaError::option(
+                option,
+                format!(
+                    "'{}' is an input of this run ('{}'); fovea never overwrites its input",
+                    output.display(),
+                    input.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Why the folder `dir` cannot take an output file: a path through a file names that file, else the
@@ -87,11 +158,7 @@ pub fn check_json_path(p: &Path, option: &'static str) -> Result<()> {
             format!("'{}' must end in .json", p.display()),
         ));
     }
-    let dir = parent_dir(p);
-    if !dir.is_dir() {
-        return Err(FoveaError::option(option, missing_folder(&dir)));
-    }
-    Ok(())
+    check_writable_file(p, option)
 }
 
 /// Writes `bytes_writer`'s output to `path` atomically: a temporary sibling file, then a rename.

@@ -103,6 +103,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         camera: None,
     };
     let schedule = FrameSchedule::read(sequence, still, resolution, LonePath::NumbersFrames, None)?;
+    warnings.extend(schedule.notes.iter().cloned());
     if args.history && schedule.frames.len() < 2 {
         warnings.push(
             "--history accumulates over the frames of a --gaze-trace or --camera-path; a single \
@@ -586,8 +587,9 @@ fn print_summary(args: &RenderArgs, [w, h]: [u32; 2], backend: &str, frames: &[F
     );
 }
 
-/// Fails if an output (`--output`, `--regions-overlay`, `--stats`) names one of the run's input files (the
-/// scene, `--mtl`, `--env-map`, `--gaze-trace`, `--camera-path`): fovea never overwrites its input.
+/// Fails if an output (`--output`, `--regions-overlay`, `--stats`, `--keep-raw`) is one of the run's
+/// input files (the scene, `--mtl`, `--env-map`, `--gaze-trace`, `--camera-path`): fovea never
+/// overwrites its input.
 fn refuse_overwriting_inputs(args: &RenderArgs) -> Result<()> {
     let inputs: Vec<&Path> = [
         args.scene.as_deref(),
@@ -599,29 +601,16 @@ fn refuse_overwriting_inputs(args: &RenderArgs) -> Result<()> {
     .into_iter()
     .flatten()
     .collect();
-    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => a == b,
-    };
-    let outputs = [
+    let outputs: Vec<(&'static str, &Path)> = [
         ("--output", Some(args.output.as_path())),
         ("--regions-overlay", args.regions_overlay.as_deref()),
         ("--stats", args.stats.as_deref()),
         ("--keep-raw", args.keep_raw.as_deref()),
-    ];
-    for (option, output) in outputs {
-        let Some(output) = output else { continue };
-        if let Some(input) = inputs.iter().find(|i| same(i, output)) {
-            return Err(FoveaError::option(
-                option,
-                format!(
-                    "'{}' is an input of this run; fovea never overwrites its input",
-                    input.display()
-                ),
-            ));
-        }
-    }
-    Ok(())
+    ]
+    .into_iter()
+    .filter_map(|(option, p)| p.map(|p| (option, p)))
+    .collect();
+    crate::output::refuse_overwriting_inputs(&outputs, &inputs)
 }
 
 #[cfg(test)]

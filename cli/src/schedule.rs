@@ -42,6 +42,9 @@ pub struct FrameSchedule {
     pub frames: Vec<ScheduledFrame>,
     /// Whether the frames come from files (a trace or a path), so that each gets its own output.
     pub from_files: bool,
+    /// What may surprise about the trace's frames (a clock that does not start at 0, skipped frame
+    /// numbers), one line each, for the command's warnings.
+    pub notes: Vec<String>,
 }
 
 impl FrameSchedule {
@@ -55,13 +58,24 @@ impl FrameSchedule {
         lone_path: LonePath,
         max_frames: Option<u32>,
     ) -> Result<Self> {
+        if max_frames == Some(0) {
+            return Err(FoveaError::option(
+                "--sequence-frames",
+                "renders at least one frame; give 1 or more",
+            ));
+        }
+        let mut notes = Vec::new();
         let trace = match &sequence.gaze_trace {
-            Some(path) => Some(crate::gaze::read_trace_frames(
-                path,
-                sequence.trace_fps,
-                sequence.gaze_normalized,
-                image,
-            )?),
+            Some(path) => {
+                let read = crate::gaze::read_trace_frames(
+                    path,
+                    sequence.trace_fps,
+                    sequence.gaze_normalized,
+                    image,
+                )?;
+                notes.extend(read.note);
+                Some(read.frames)
+            }
             None => None,
         };
         let keys = match (&sequence.camera_path, &trace, lone_path) {
@@ -128,6 +142,7 @@ impl FrameSchedule {
         Ok(Self {
             frames,
             from_files: sequence.gaze_trace.is_some() || sequence.camera_path.is_some(),
+            notes,
         })
     }
 

@@ -524,6 +524,134 @@ fn history_follows_a_moving_gaze_alike_on_the_cpu_and_on_vulkan() {
     }
 }
 
+/// Hostile input to the newer commands (issue 52): no panic, no input overwritten, no silent change,
+/// and every output path checked before the work.
+#[test]
+fn hostile_inputs_are_refused_before_the_work_or_rendered_as_said() {
+    let dir = temp_dir("hostile");
+    let scene = cornell();
+    let scene = scene.to_str().unwrap();
+    let small = [
+        "--resolution",
+        "32x24",
+        "--spp",
+        "2,1,1",
+        "--radii",
+        "4,8",
+        "-q",
+    ];
+    let run = |args: &[&str]| fovea().args(args).output().unwrap();
+    // A timed trace with Unix-epoch timestamps (it used to panic): rendered from its first sample,
+    // and said so.
+    let epoch = dir.join("epoch.csv");
+    std::fs::write(
+        &epoch,
+        "t,x,y\n1700000000.00,10,10\n1700000000.05,12,10\n1700000000.10,14,10\n",
+    )
+    .unwrap();
+    let out = fovea()
+        .args(["render", scene])
+        .args(&small[..small.len() - 1]) // not --quiet: the note is a warning
+        .arg("--gaze-trace")
+        .arg(&epoch)
+        .args(["--trace-fps", "20"])
+        .arg("-o")
+        .arg(dir.join("e.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("start at 1700000000 s"), "{stderr}");
+    for f in 0..3 {
+        assert!(dir.join(format!("e_{f:05}.png")).is_file(), "frame {f}");
+    }
+    // compare never writes its --json over an input; nothing is written.
+    let a = dir.join("a.exr");
+    let b = dir.join("b.exr");
+    for p in [&a, &b] {
+        let out = fovea()
+            .args(["render", scene])
+            .args(small)
+            .arg("-o")
+            .arg(p)
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+    }
+    let before = std::fs::read(&b).unwrap();
+    let out = fovea()
+        .arg("compare")
+        .arg(&a)
+        .arg(&b)
+        .arg("--json")
+        .arg(&b)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("--json"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read(&b).unwrap(),
+        before,
+        "the reference is untouched"
+    );
+    // Through another name of the same file: refused too (by the file, not the string).
+    let linked = dir.join("link.json");
+    std::os::unix::fs::symlink(&b, &linked).unwrap();
+    let out = fovea()
+        .arg("compare")
+        .arg(&a)
+        .arg(&b)
+        .arg("--json")
+        .arg(&linked)
+        .output()
+        .unwrap();
+    assert!(
+        !out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(std::fs::read(&b).unwrap(), before);
+    // compare names what it was given instead of an EXR.
+    for (path, needle) in [
+        (dir.clone(), "is a folder"),
+        (dir.join("noext"), "no extension"),
+    ] {
+        let out = fovea().arg("compare").arg(&path).arg(&b).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && stderr.contains(needle), "{stderr}");
+        assert!(!stderr.contains("a PNG"), "{stderr}");
+    }
+    // Outputs that cannot be written are refused before rendering: an existing folder named like the
+    // image, and a folder that takes no files.
+    let folder_png = dir.join("x.png");
+    std::fs::create_dir_all(&folder_png).unwrap();
+    let out = run(&["render", scene, "-q", "-o", folder_png.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("is a folder"),
+        "{stderr}"
+    );
+    let out = run(&[
+        "render",
+        scene,
+        "-q",
+        "-o",
+        dir.join("ok.png").to_str().unwrap(),
+        "--stats",
+        "/proc/fovea-stats.json",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("cannot write into the folder '/proc'"),
+        "{stderr}"
+    );
+    assert!(!dir.join("ok.png").exists(), "nothing rendered");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `--traversal hardware` renders through the driver's acceleration structures (lavapipe has them) and
 /// reports them in the stats; `auto` on a CPU device keeps software and says why; the CPU backend
 /// refuses hardware traversal.

@@ -71,14 +71,16 @@ pub const AGREEMENT_RELATIVE: f32 = 1e-3;
 pub const AGREEMENT_ABSOLUTE: f32 = 1e-4;
 
 /// Whether two HDR pixels agree on every channel ([`AGREEMENT_RELATIVE`], [`AGREEMENT_ABSOLUTE`]; a NaN
-/// agrees with nothing), and their largest absolute channel difference.
+/// or an infinity agrees with nothing), and their largest finite absolute channel difference.
 #[must_use]
 pub fn pixels_agree(a: &[f32; 4], b: &[f32; 4]) -> (bool, f32) {
     let mut ok = true;
     let mut max_abs = 0f32;
     for c in 0..3 {
         let d = (a[c] - b[c]).abs();
-        max_abs = max_abs.max(d);
+        if d.is_finite() {
+            max_abs = max_abs.max(d);
+        }
         if !(d <= AGREEMENT_ABSOLUTE || d / a[c].abs().max(b[c].abs()) <= AGREEMENT_RELATIVE) {
             ok = false;
         }

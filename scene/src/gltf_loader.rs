@@ -1874,6 +1874,93 @@ mod tests {
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     }
 
+    /// Every numeric field of the mapped material extensions, at values inside its specification
+    /// (extremes included), reaches the material of a whole load as the extension layer made it: no
+    /// later layer (the material sanitiser, packing's preparation) changes it, and nothing is warned
+    /// about. `ior: 0` and diamond's 2.4 used to leave the loader clamped to a specular of 1.
+    #[test]
+    fn extension_values_inside_the_spec_reach_the_material_unchanged() {
+        use crate::load::load_scene_from;
+        use crate::source::MemoryFiles;
+        let cases = [
+            r#"{"KHR_materials_ior":{"ior":0}}"#,
+            r#"{"KHR_materials_ior":{"ior":1}}"#,
+            r#"{"KHR_materials_ior":{"ior":2.4}}"#,
+            r#"{"KHR_materials_ior":{"ior":10}}"#,
+            r#"{"KHR_materials_specular":{"specularFactor":0.3,"specularColorFactor":[1,0.5,0.2]}}"#,
+            r#"{"KHR_materials_specular":{"specularFactor":1},"KHR_materials_ior":{"ior":3}}"#,
+            r#"{"KHR_materials_transmission":{"transmissionFactor":1},"KHR_materials_ior":{"ior":1.33}}"#,
+            r#"{"KHR_materials_transmission":{"transmissionFactor":0.4},"KHR_materials_volume":{"thicknessFactor":2,"attenuationDistance":0.5,"attenuationColor":[1,0.2,0.1]}}"#,
+            r#"{"KHR_materials_clearcoat":{"clearcoatFactor":1,"clearcoatRoughnessFactor":0}}"#,
+            r#"{"KHR_materials_clearcoat":{"clearcoatFactor":0.3,"clearcoatRoughnessFactor":1}}"#,
+            r#"{"KHR_materials_sheen":{"sheenColorFactor":[1,1,1]}}"#,
+            r#"{"KHR_materials_sheen":{"sheenColorFactor":[0.2,0.4,0.6],"sheenRoughnessFactor":0}}"#,
+            r#"{"KHR_materials_anisotropy":{"anisotropyStrength":1}}"#,
+            r#"{"KHR_materials_anisotropy":{"anisotropyStrength":0.25,"anisotropyRotation":0}}"#,
+            r#"{"KHR_materials_unlit":{}}"#,
+        ];
+        let load = |extensions: Option<&str>| {
+            let base = triangle_gltf(TRI, None, "");
+            let json = match extensions {
+                None => base,
+                Some(ext) => {
+                    let map: serde_json::Map<String, serde_json::Value> =
+                        serde_json::from_str(ext).unwrap();
+                    let used: Vec<&String> = map.keys().collect();
+                    base.replacen(
+                        r#""emissiveFactor":[1,1,1]}"#,
+                        &format!(r#""emissiveFactor":[1,1,1],"extensions":{ext}}}"#),
+                        1,
+                    )
+                    .replacen(
+                        r#"{"asset""#,
+                        &format!(
+                            r#"{{"extensionsUsed":{},"asset""#,
+                            serde_json::to_string(&used).unwrap()
+                        ),
+                        1,
+                    )
+                }
+            };
+            let files = MemoryFiles::new().with("d/e.gltf", json);
+            load_scene_from(&files, Path::new("d/e.gltf"), &LoadOptions::default())
+                .unwrap_or_else(|e| panic!("{extensions:?}: {e}"))
+        };
+        let base = load(None).materials[0];
+        for ext in cases {
+            let s = load(Some(ext));
+            assert!(s.warnings.is_empty(), "{ext}: {:?}", s.warnings);
+            let map: serde_json::Map<String, serde_json::Value> =
+                serde_json::from_str(ext).unwrap();
+            let mut expected = base;
+            let applied = crate::gltf_pbr::apply_material_extensions(&map, &mut expected);
+            assert!(applied.unsupported.is_empty(), "{ext}");
+            assert_eq!(s.materials[0], expected, "{ext}");
+        }
+        // A value fovea does not read is named, with what it does instead.
+        for (ext, field) in [
+            (
+                r#"{"KHR_materials_sheen":{"sheenColorFactor":[1,1,1],"sheenRoughnessFactor":0.5}}"#,
+                "sheenRoughnessFactor",
+            ),
+            (
+                r#"{"KHR_materials_anisotropy":{"anisotropyStrength":1,"anisotropyRotation":6.0}}"#,
+                "anisotropyRotation",
+            ),
+        ] {
+            let s = load(Some(ext));
+            assert!(
+                s.warnings.len() == 1 && s.warnings[0].contains(field),
+                "{:?}",
+                s.warnings
+            );
+        }
+        // What the renderer gets: diamond's F0 of 0.17 (specular 2.1) and the infinite index's 1.
+        let specular = |ext| load(Some(ext)).materials[0].specular;
+        assert!((specular(cases[2]) - (1.4f32 / 3.4).powi(2) / 0.08).abs() < 1e-5);
+        assert_eq!(specular(cases[0]), fovea_core::bsdf::disney::SPECULAR_MAX);
+    }
+
     /// A minimal glTF with one triangle in a base64 buffer, optionally with a texture at `image_uri`.
     fn triangle_gltf(
         positions: [[f32; 3]; 3],

@@ -493,7 +493,15 @@ impl LoadedScene {
             fix(&mut m.metallic, 0.0, 1.0, 0.0, "metallic");
             fix(&mut m.roughness, 0.0, 1.0, 1.0, "roughness");
             fix(&mut m.anisotropic, 0.0, 1.0, 0.0, "anisotropic");
-            fix(&mut m.specular, 0.0, 1.0, 0.5, "specular");
+            // The renderer's range (`SPECULAR_MAX`: glTF's index of refraction reaches F0 = 1), not
+            // Burley's 0..1, which undid `KHR_materials_ior` for indices above 1.78.
+            fix(
+                &mut m.specular,
+                0.0,
+                fovea_core::bsdf::disney::SPECULAR_MAX,
+                0.5,
+                "specular",
+            );
             fix(&mut m.specular_tint, 0.0, 1.0, 0.0, "specular tint");
             fix(&mut m.sheen, 0.0, 1.0, 0.0, "sheen");
             fix(&mut m.sheen_tint, 0.0, 1.0, 0.0, "sheen tint");

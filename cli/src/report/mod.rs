@@ -227,6 +227,11 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
         LonePath::NeedsTrace,
         args.sequence_frames,
     )?;
+    if !args.quiet {
+        for n in &schedule.notes {
+            eprintln!("warning: {n}");
+        }
+    }
     Ok(Plan {
         resolution,
         gaze,

@@ -27,13 +27,13 @@
 //! ([`super::albedo`]).
 use glam::Vec3;
 
-use super::albedo::{demodulation_albedo, filled_albedo};
+use super::albedo::demodulation_albedo;
 use super::gbuffer::GBufferTexel;
-use super::texel::{HistoryTexel, HISTORY_SAMPLE_MAX};
+use super::history::fill_sample;
+use super::texel::HistoryTexel;
 use crate::foveation::{owning_block, samples_in_block};
 use crate::integrator::FrameParams;
-use crate::math::color::{is_finite3, luminance};
-use crate::math::vec3_from;
+use crate::math::color::luminance;
 
 /// Pseudo-frames of the prior spread that a pixel's few samples' variance is shrunk towards.
 pub const RESOLVE_PRIOR_FRAMES: f32 = 2.0;
@@ -100,13 +100,8 @@ pub fn resolved_lighting(
     let p = (y * frame.width + x) as usize;
     let h = history[p];
     if !(h.weight() > 0.0) && !(h.fill_frames() > 0.0) {
-        let fill = vec3_from(filled[p]);
-        if !is_finite3(fill) {
-            return Vec3::ZERO;
-        }
-        let max = Vec3::splat(HISTORY_SAMPLE_MAX);
-        return fill.clamp(Vec3::ZERO, max)
-            / filled_albedo(frame, gbuffer, cell_albedo, fill_mode, x, y);
+        return fill_sample(frame, filled, gbuffer, cell_albedo, fill_mode, x, y)
+            .unwrap_or(Vec3::ZERO);
     }
     let block = owning_block(x, y, &frame.foveation);
     let s = own_share(&h, block.size, samples_in_block(&block, &frame.foveation));
