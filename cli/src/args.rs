@@ -120,8 +120,9 @@ pub struct ViewArgs {
     /// datagrams to 127.0.0.1:PORT; see docs/view.md, "Eye-tracker protocol") or `trace` (--gaze-trace).
     #[arg(long, default_value = "mouse", value_name = "SOURCE")]
     pub gaze_source: GazeSourceArg,
-    /// Gaze trace to replay: timed lines `t,x,y` (seconds since the start; the default) or, after a
-    /// header `frame,x,y`, one line per frame; coordinates as for UDP. Implies --gaze-source trace.
+    /// Gaze trace to replay: timed lines `t,x,y` (seconds, counted from the first sample; the default)
+    /// or, after a header `frame,x,y`, one line per frame; coordinates as for UDP; commas between the
+    /// fields; at most 1,000,000 samples. Implies --gaze-source trace.
     #[arg(long, value_name = "FILE.csv")]
     pub gaze_trace: Option<PathBuf>,
     /// Gaze coordinates are window pixels with the origin at the bottom left (as Pupil exports),
@@ -325,6 +326,10 @@ pub struct RenderArgs {
     /// lacks; for comparison (the image is the same).
     #[arg(long)]
     pub no_specialize: bool,
+    /// Check the command line (every option, the output paths, that the scene file can be read) and
+    /// render nothing: what `scripts/slurm/submit.sh` runs before it submits.
+    #[arg(long)]
+    pub dry_run: bool,
     #[command(flatten)]
     pub target: BackendArgs,
     #[command(flatten)]
@@ -636,8 +641,9 @@ pub struct ImageArgs {
 #[derive(Args, Debug, Clone)]
 pub struct SequenceArgs {
     /// CSV gaze trace: lines `frame,x,y` (one frame per line) or, after a header `t,x,y`, timed
-    /// samples rendered at --trace-fps; x,y in image pixels, origin top-left (or --gaze-normalized).
-    /// `render` writes one numbered image per frame.
+    /// samples rendered at --trace-fps from the first sample (Unix-epoch seconds work); x,y in image
+    /// pixels, origin top-left (or --gaze-normalized); commas between the fields; at most 1,000,000
+    /// samples and frames. `render` writes one numbered image per frame.
     #[arg(long, value_name = "FILE.csv")]
     pub gaze_trace: Option<PathBuf>,
     /// Frames per second at which a timed gaze trace (`t,x,y`) is rendered.

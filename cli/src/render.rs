@@ -294,6 +294,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         Some(_) => crate::backend::cpu_target_for_parts(&args.target, "--samples")?,
         None => args.target,
     };
+    if args.dry_run {
+        let scene = args
+            .scene
+            .clone()
+            .unwrap_or_else(crate::scene_setup::default_scene_path);
+        std::fs::File::open(&scene).map_err(|e| FoveaError::file(&scene, e))?;
+        if !args.quiet {
+            println!("fovea: the command line is valid (--dry-run: nothing rendered)");
+        }
+        return Ok(());
+    }
     let mut renderer = Renderer::new(&target, args.quiet)?;
     let (eye, target, up) = args.camera.points();
     let scene = prepare_scene(

@@ -220,7 +220,15 @@ fn parts_merge_to_the_single_render_and_bad_parts_are_refused() {
         "x.fvpart",
         "CPU backend",
     );
-    refused(&["--samples", "40/64"], "x.fvpart", "leave this one empty");
+    // More parts than the frame's 32 samples: every part of the split is refused alike, the ones
+    // that would hold a sample too (1/64 used to render while 0/64 was refused).
+    for part in ["0/64", "1/64", "40/64", "63/64"] {
+        refused(
+            &["--samples", part],
+            "x.fvpart",
+            "parts of the frame's 32 samples",
+        );
+    }
     refused(&["--samples", "8..4"], "x.fvpart", "need 0 <= A < B");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -364,7 +372,13 @@ fn a_slurm_job_array_renders_a_reference_that_equals_the_single_render() {
         .chain(["--threads".into(), "1".into()])
         .collect();
     let out = dir.join("out");
-    let [array, merge] = submit(&slurm, &out, &[], &task_render);
+    // A quoted sbatch option stays one argument (it used to be split at its space).
+    let [array, merge] = submit(
+        &slurm,
+        &out,
+        &["--sbatch", r#"--comment="a fovea split""#],
+        &task_render,
+    );
 
     // Kill task 2 while it runs (each task takes one of the node's CPUs).
     let task = format!("{array}_2");
@@ -432,6 +446,34 @@ fn a_slurm_job_array_renders_a_reference_that_equals_the_single_render() {
         !refused.status.success() && stderr.contains("already holds parts"),
         "{stderr}"
     );
+
+    // Bad render arguments are refused once, before anything is submitted, with fovea's message.
+    let fresh = dir.join("fresh");
+    let mut bad = task_render.clone();
+    bad.extend(["--spp".to_string(), "0,1,1".to_string()]);
+    let refused = slurm
+        .command("bash")
+        .arg(repo().join("scripts/slurm/submit.sh"))
+        .args([
+            "--parts",
+            "4",
+            "--fovea",
+            env!("CARGO_BIN_EXE_fovea"),
+            "--out",
+        ])
+        .arg(&fresh)
+        .arg("--")
+        .args(&bad)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        !refused.status.success()
+            && stderr.contains("nothing was submitted")
+            && stderr.contains("--spp"),
+        "{stderr}"
+    );
+    assert!(!fresh.join("part-0000.fvpart").exists());
 
     let single = dir.join("single.exr");
     run(fovea()

@@ -18,23 +18,40 @@
 #                  --cpus-per-task=32" (the SBATCH_* environment variables work too)
 # RENDER_ARGS are `fovea render`'s for the whole frame, without --samples and -o.
 # Prints the two job ids: "array JOBID" and "merge JOBID".
+# The render arguments are checked once (`fovea render --dry-run`, the first task's command line)
+# before anything is submitted, so that a typo does not fail every task.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
+usage() { sed -n '2,/^# Prints the two job ids/{s/^# \{0,1\}//;p}' "$0"; }
 parts="" out="" image=image.exr fovea=${FOVEA:-} tasks="" extra="" after=""
 while [ $# -gt 0 ]; do
   case $1 in
-    --parts) parts=$2; shift 2 ;;
-    --out) out=$2; shift 2 ;;
-    --image) image=$2; shift 2 ;;
-    --fovea) fovea=$2; shift 2 ;;
-    --tasks) tasks=$2; shift 2 ;;
-    --sbatch) extra=$2; shift 2 ;;
-    --after) after=$2; shift 2 ;;
+    -h|--help) usage; exit 0 ;;
+    --parts|--out|--image|--fovea|--tasks|--sbatch|--after)
+      [ $# -ge 2 ] || { echo "submit.sh: $1 needs a value (see --help)" >&2; exit 2; }
+      case $1 in
+        --parts) parts=$2 ;;
+        --out) out=$2 ;;
+        --image) image=$2 ;;
+        --fovea) fovea=$2 ;;
+        --tasks) tasks=$2 ;;
+        --sbatch) extra=$2 ;;
+        --after) after=$2 ;;
+      esac
+      shift 2 ;;
     --) shift; break ;;
-    *) echo "submit.sh: unknown option '$1' (render options go after --)" >&2; exit 2 ;;
+    *) echo "submit.sh: unknown option '$1' (render options go after --; see --help)" >&2; exit 2 ;;
   esac
 done
-[[ $parts =~ ^[1-9][0-9]*$ ]] || { echo "submit.sh: --parts N (a positive whole number) is required" >&2; exit 2; }
+[[ $parts =~ ^[1-9][0-9]{0,6}$ ]] ||
+  { echo "submit.sh: --parts N (a whole number from 1 to 9999999) is required" >&2; exit 2; }
+if command -v scontrol >/dev/null; then
+  max_array=$(scontrol show config 2>/dev/null | sed -n 's/^MaxArraySize *= *\([0-9]*\).*/\1/p')
+  if [ -n "$max_array" ] && [ "$parts" -gt "$max_array" ]; then
+    echo "submit.sh: --parts $parts: this cluster's MaxArraySize is $max_array" >&2; exit 2
+  fi
+fi
+[ $# -gt 0 ] || { echo "submit.sh: give fovea render's arguments after -- (see --help)" >&2; exit 2; }
 [ -n "$out" ] || { echo "submit.sh: --out DIR is required" >&2; exit 2; }
 [ -n "$fovea" ] || fovea=$(command -v fovea || true)
 [ -n "$fovea" ] && [ -x "$fovea" ] ||
@@ -59,7 +76,17 @@ if [ -z "$tasks" ] && compgen -G "$out/part-*.fvpart" >/dev/null; then
   echo "submit.sh: $out already holds parts (part-*.fvpart); use an empty folder, or --tasks to complete that split" >&2
   exit 2
 fi
-read -r -a sbatch_extra <<<"$extra"
+# The sbatch options, split as a shell would (quotes kept together: --comment="two words").
+sbatch_extra=()
+if [ -n "$extra" ]; then
+  while IFS= read -r -d '' word; do sbatch_extra+=("$word"); done < <(printf '%s' "$extra" | xargs printf '%s\0')
+fi
+# The first task's command line, checked before anything is submitted.
+if ! check=$("$fovea" render "$@" --samples "0/$parts" --dry-run --quiet -o "$out/part-0000.fvpart" 2>&1); then
+  echo "submit.sh: fovea render refuses these arguments; nothing was submitted:" >&2
+  echo "$check" >&2
+  exit 2
+fi
 # The jobs' environment is given explicitly: some sites set SBATCH_EXPORT=NONE.
 export_env="--export=ALL,FOVEA=$fovea,FOVEA_PARTS=$parts,FOVEA_OUT=$out,FOVEA_IMAGE=$image"
 array=${tasks:-0-$((parts - 1))}

@@ -71,9 +71,13 @@ impl PartSpec {
             SampleSelection::Range(_) => None,
             SampleSelection::Part { index, count } => Some([index, count]),
         };
-        if let Some([_, count]) = split.filter(|_| samples[0] == samples[1]) {
+        // A split into more parts than samples leaves some parts empty, whichever this one is: refused
+        // for every part alike, so that no task of such an array renders.
+        if let Some([_, count]) =
+            split.filter(|[_, count]| samples[0] == samples[1] || *count > largest_spp)
+        {
             return Err(format!(
-                "{count} parts of the frame's {largest_spp} samples leave this one empty; split into \
+                "{count} parts of the frame's {largest_spp} samples leave some empty; split into \
                  {largest_spp} parts or fewer"
             ));
         }
