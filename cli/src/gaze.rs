@@ -462,8 +462,8 @@ impl TraceTiming {
 /// the rounding of the timestamps (which grows with `start`: Unix-epoch seconds keep about 0.2 µs).
 #[must_use]
 fn timed_frame_count(span: f64, fps: f64, start: f64) -> u64 {
-    let rounding = (start.abs() + span) * 8.0 * f64::EPSILON * fps + 1.0e-9;
-    (span * fps + rounding).floor() as u64 + 1
+    let rounding = ((start.abs() + span) * 8.0 * f64::EPSILON * fps + 1.0e-9).min(0.5);
+    ((span * fps + rounding).floor() as u64).saturating_add(1)
 }
 
 /// The frames `render` and `report` make of a `--gaze-trace`, and one line saying what may surprise
@@ -822,6 +822,102 @@ mod tests {
         let t = frames_of("frame,x,y\n0,0.5,0.5\n1,0.5,0.5\n5,0.5,0.5\n", 30.0).unwrap();
         assert_eq!(t.frames.iter().map(|f| f.0).collect::<Vec<_>>(), [0, 1, 5]);
         assert!(t.note.unwrap().contains("skipping 3 frame number(s)"));
+    }
+
+    /// A property test of the trace and camera-path readers (run in CI, bounded: `FOVEA_FUZZ_CASES`,
+    /// 3000 by default): random edits of valid files (bytes flipped, inserted, deleted, lines
+    /// repeated, separators and numbers swapped for odd ones) parse or are refused with a message
+    /// naming the file, never a panic; a trace that parses gives frames without a panic either.
+    #[test]
+    fn mutated_traces_and_camera_paths_are_refused_or_read_never_a_panic() {
+        let cases: u64 = std::env::var("FOVEA_FUZZ_CASES")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(3000);
+        let seeds = [
+            "t,x,y\n0,0.5,0.5\n0.0083,0.51,0.49\n0.5,0.2,0.3\n2,0.7,0.6\n",
+            "frame,x,y\n0,10,10\n1,12,9\n# a comment\n\n2,14,8\n",
+            "frame,ex,ey,ez,tx,ty,tz\n0,0,1,3.9,0,1,0\n1,0.1,1,3.9,0,1,0\n",
+        ];
+        let odd = [
+            ",",
+            ";",
+            "\t",
+            " ",
+            "\n",
+            "#",
+            "-",
+            "e",
+            "1e9",
+            "NaN",
+            "inf",
+            "-0",
+            "\u{feff}",
+            "1e308",
+            "18446744073709551616",
+            "0.000000001",
+            "t",
+            "frame",
+        ];
+        let mut rng = crate::content_hash::Fnv1a64::default();
+        let mut next = |n: usize| {
+            rng.write(b"x");
+            (rng.finish() % n.max(1) as u64) as usize
+        };
+        let (mut parsed, mut refused) = (0u64, 0u64);
+        for case in 0..cases {
+            let seed = seeds[case as usize % seeds.len()];
+            let mut text = seed.to_string();
+            for _ in 0..1 + next(4) {
+                let chars: Vec<char> = text.chars().collect();
+                let at = next(chars.len() + 1);
+                let (head, tail): (String, String) =
+                    (chars[..at].iter().collect(), chars[at..].iter().collect());
+                text = match next(5) {
+                    0 => format!("{head}{}{tail}", odd[next(odd.len())]),
+                    1 => format!(
+                        "{head}{}",
+                        tail.chars().skip(1 + next(3)).collect::<String>()
+                    ),
+                    2 => {
+                        let line = text.lines().nth(next(5)).unwrap_or("").to_string();
+                        format!("{text}\n{line}")
+                    }
+                    3 => format!(
+                        "{head}{}{tail}",
+                        char::from_u32(next(0x3000) as u32).unwrap_or('?')
+                    ),
+                    _ => head,
+                };
+            }
+            let result = std::panic::catch_unwind(|| {
+                if seed.starts_with("frame,ex") {
+                    crate::camera_path::parse_camera_path(Path::new("p.csv"), &text)
+                        .map(|k| k.len())
+                        .map_err(|e| e.to_string())
+                } else {
+                    GazeTrace::parse(
+                        "p.csv",
+                        &text,
+                        GazeConvention::Normalized,
+                        TraceTiming::Frames,
+                    )
+                    .map(|t| t.frames(30.0, [64, 48]).len())
+                }
+            });
+            match result {
+                Err(_) => panic!("a panic on {text:?}"),
+                Ok(Err(e)) => {
+                    refused += 1;
+                    assert!(e.contains("p.csv"), "{e}");
+                }
+                Ok(Ok(_)) => parsed += 1,
+            }
+        }
+        assert!(
+            parsed > 0 && refused > 0,
+            "{parsed} parsed, {refused} refused"
+        );
     }
 
     #[test]

@@ -494,6 +494,59 @@ mod tests {
         r.err().expect("an error").to_string()
     }
 
+    /// A property test of the part reader (run in CI, bounded: `FOVEA_FUZZ_CASES`, 3000 by
+    /// default): random byte edits, insertions, deletions and truncations of a real part, read and
+    /// merged, are refused with a message naming the file or read as a part, never a panic.
+    #[test]
+    fn mutated_parts_are_refused_or_read_never_a_panic() {
+        let d = dir("mutate");
+        // Every sample of the frame: unharmed, it merges.
+        let (path, _) = part(&d, "a.fvpart", range(0, 32), 7);
+        let good = std::fs::read(&path).unwrap();
+        let cases: u64 = std::env::var("FOVEA_FUZZ_CASES")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(3000);
+        let mut rng = crate::content_hash::Fnv1a64::default();
+        let mut next = |n: usize| {
+            rng.write(b"x");
+            (rng.finish() % n.max(1) as u64) as usize
+        };
+        let mutated = d.join("m.fvpart");
+        let mut refused = 0u64;
+        for _ in 0..cases {
+            let mut bytes = good.clone();
+            for _ in 0..1 + next(4) {
+                let at = next(bytes.len());
+                match next(4) {
+                    0 => bytes[at] ^= 1 << next(8),
+                    1 => bytes.insert(at, next(256) as u8),
+                    2 => {
+                        bytes.remove(at);
+                    }
+                    _ => bytes.truncate(at),
+                }
+                if bytes.is_empty() {
+                    break;
+                }
+            }
+            std::fs::write(&mutated, &bytes).unwrap();
+            let result = std::panic::catch_unwind(|| {
+                let header = PartHeader::read(&mutated)?;
+                check::check_parts(vec![(mutated.clone(), header)])?.merged()
+            });
+            match result {
+                Err(_) => panic!("a panic on {} mutated bytes", bytes.len()),
+                Ok(Err(e)) => {
+                    refused += 1;
+                    assert!(e.to_string().contains("m.fvpart"), "{e}");
+                }
+                Ok(Ok(_)) => {}
+            }
+        }
+        assert!(refused > cases / 2, "{refused} of {cases} refused");
+    }
+
     #[test]
     fn a_part_reads_back_as_written_and_a_damaged_one_is_refused() {
         let d = dir("roundtrip");
