@@ -801,6 +801,10 @@ pub enum BenchCommand {
         runs: u32,
     },
     /// Generate, build and render a procedural scene of N triangles; report times and peak memory.
+    /// The CPU's specialised render path (only the features the scene uses compiled in) against the
+    /// general one (`--no-specialize`), one frame rendered by each in turn in one process: each
+    /// path's median frame time, their ratio, and whether their images are identical.
+    Paths(Box<PathsArgs>),
     Scale {
         /// Triangles to generate.
         #[arg(long, default_value_t = 10_000_000)]
@@ -814,4 +818,32 @@ pub enum BenchCommand {
         )]
         resolution: Resolution,
     },
+}
+
+/// `fovea bench paths`: the frame both CPU paths render.
+#[derive(Args, Debug, Clone)]
+pub struct PathsArgs {
+    /// Scene file (.gltf, .glb or .obj). Default: the bundled Lost Empire.
+    pub scene: Option<PathBuf>,
+    /// Image size WxH in pixels.
+    #[arg(
+        long,
+        default_value = "1920x1080",
+        value_name = "WxH",
+        allow_hyphen_values = true
+    )]
+    pub resolution: Resolution,
+    /// Rounds; each renders the frame once with each path (the order alternates).
+    #[arg(long, default_value_t = 5, value_parser = whole_number::<u32>)]
+    pub rounds: u32,
+    #[command(flatten)]
+    pub foveation: FoveationArgs,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub lighting: LightingArgs,
+    #[command(flatten)]
+    pub materials: MtlArgs,
+    #[command(flatten)]
+    pub path: PathArgs,
 }

@@ -45,27 +45,30 @@ struct Plan {
     warnings: Vec<String>,
 }
 
-fn plan(args: &RenderArgs) -> Result<Plan> {
-    let resolution = args.resolution.0;
+/// The foveation the options give an image of `resolution` (the gaze at its centre), its region radii
+/// in pixels, and the warnings about options it does not use.
+pub(crate) fn foveation_of(
+    options: &crate::args::FoveationArgs,
+    resolution: [u32; 2],
+) -> Result<(FoveationParams, [f32; 2], Vec<String>)> {
     let [w, h] = resolution;
-    let (spp, blocks) = (args.foveation.spp.0, args.foveation.blocks.0);
+    let (spp, blocks) = (options.spp.0, options.blocks.0);
     let mut warnings = Vec::new();
     // The image fills the display, so pixels per centimetre come from the rendered width.
     let (display, aspect_warning) = values::display_geometry(
-        args.foveation.display.display_cm,
-        args.foveation.display.distance_cm,
+        options.display.display_cm,
+        options.display.distance_cm,
         resolution,
     )?;
-    let radii_px = match args.foveation.radii {
+    let radii_px = match options.radii {
         Some(r) => r.0,
         None => {
             warnings.extend(aspect_warning);
-            values::eccentricity_radii(args.foveation.display.eccentricity, &display)
+            values::eccentricity_radii(options.display.eccentricity, &display)
         }
     };
-
-    let mut foveation_template = if args.foveation.uniform {
-        if spp[1..] != [16, 8] || blocks != [1, 2, 4] || args.foveation.radii.is_some() {
+    let foveation = if options.uniform {
+        if spp[1..] != [16, 8] || blocks != [1, 2, 4] || options.radii.is_some() {
             warnings.push(format!(
                 "--uniform renders every pixel at --spp's first value ({}); the other --spp values, \
                  --blocks and --radii are not used",
@@ -76,6 +79,20 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
     } else {
         FoveationParams::new([0.5 * w as f32, 0.5 * h as f32], radii_px, spp, blocks)
     };
+    if foveation.validate() != FOVEATION_OK {
+        return Err(FoveaError::option(
+            "--spp/--blocks/--radii",
+            "the foveation settings are inconsistent",
+        ));
+    }
+    Ok((foveation, radii_px, warnings))
+}
+
+fn plan(args: &RenderArgs) -> Result<Plan> {
+    let resolution = args.resolution.0;
+    let [w, h] = resolution;
+    let (mut foveation_template, radii_px, mut warnings) =
+        foveation_of(&args.foveation, resolution)?;
     let sequence = &args.sequence;
     if sequence.gaze_trace.is_some() && args.gaze.is_some() {
         return Err(FoveaError::option(

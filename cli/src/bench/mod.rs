@@ -47,6 +47,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             triangles,
             resolution,
         } => bench_scale(*triangles, resolution.0),
+        BenchCommand::Paths(paths) => bench_paths(paths, args.threads),
     })?;
     let threads = pool.current_num_threads();
     let mut figures = figures;
@@ -178,6 +179,105 @@ fn peak_memory_bytes() -> Option<u64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib * 1024)
+}
+
+/// `fovea bench paths`: the specialised and the general CPU path on one frame, alternated, each
+/// `rounds` times: their median render times, the ratio, and whether every image was identical.
+fn bench_paths(args: &crate::args::PathsArgs, threads: Option<usize>) -> Result<serde_json::Value> {
+    let crate::args::PathsArgs {
+        scene,
+        resolution,
+        rounds,
+        foveation,
+        camera,
+        lighting,
+        materials,
+        path,
+    } = args;
+    if *rounds == 0 || *rounds > 1000 {
+        return Err(FoveaError::option("--rounds", "must be 1 to 1000"));
+    }
+    let size = resolution.0;
+    let (foveation, _, _) = crate::render::foveation_of(foveation, size)?;
+    let lighting = crate::scene_setup::Lighting::from_args(lighting)?;
+    let prepared = crate::scene_setup::prepare_scene(
+        scene.as_deref(),
+        materials.mtl.as_deref(),
+        materials.mtl_diffuse.into(),
+        &lighting.environment(scene.is_none()),
+        &lighting.point_lights,
+        true,
+    )?;
+    let settings = crate::schedule::FrameSettings::new(
+        size,
+        path,
+        &crate::args::ImageArgs {
+            exposure: 0.0,
+            seed: 0,
+        },
+    );
+    let (eye, target, up) = camera.points();
+    let cam = crate::scene_setup::choose_camera(
+        &prepared,
+        eye,
+        target,
+        up,
+        camera.fov,
+        settings.aspect(),
+    )?;
+    let frame = settings.frame(0, cam, foveation);
+    let request = settings.request(false, false, crate::backend::FrameOutput::Hdr);
+    let target = crate::args::BackendArgs {
+        backend: crate::args::Backend::Cpu,
+        device: None,
+        traversal: crate::args::Traversal::Auto,
+        threads,
+    };
+    let mut specialised = crate::backend::Renderer::new(&target, true)?;
+    specialised.set_scene(&prepared.packed, true)?;
+    let mut general = crate::backend::Renderer::new(&target, true)?;
+    general.set_scene(&prepared.packed, false)?;
+    let (mut times_s, mut times_g) = (Vec::new(), Vec::new());
+    let mut identical = true;
+    let mut path_features = [0u32; 2];
+    for round in 0..*rounds {
+        let one = |r: &mut crate::backend::Renderer| {
+            r.render(&prepared.packed, &frame, &request, &|_| {})
+        };
+        let (s, g) = if round % 2 == 0 {
+            let s = one(&mut specialised)?;
+            (s, one(&mut general)?)
+        } else {
+            let g = one(&mut general)?;
+            (one(&mut specialised)?, g)
+        };
+        times_s.push(s.stats.render_ms);
+        times_g.push(g.stats.render_ms);
+        path_features = [s.stats.path_features, g.stats.path_features];
+        let pixels = |r: &crate::backend::Rendered| {
+            r.image.hdr.as_ref().map(|h| {
+                h.pixels
+                    .iter()
+                    .flatten()
+                    .map(|v| v.to_bits())
+                    .collect::<Vec<_>>()
+            })
+        };
+        identical &= pixels(&s) == pixels(&g);
+    }
+    let (ms_s, ms_g) = (median(times_s.clone()), median(times_g.clone()));
+    Ok(json!({
+        "scene": scene.as_deref().map_or_else(|| default_scene_path().display().to_string(), |p| p.display().to_string()),
+        "resolution": size,
+        "rounds": rounds,
+        "specialised_features": crate::stats::feature_names(path_features[0]),
+        "specialised_ms": ms_s,
+        "general_ms": ms_g,
+        "speedup": ms_g / ms_s,
+        "specialised_ms_each": times_s,
+        "general_ms_each": times_g,
+        "identical": identical,
+    }))
 }
 
 /// The 10 M-triangle scale run: generate, validate, build + pack, render foveated.

@@ -228,9 +228,14 @@ pub fn fill_sample(
     Some((c.clamp(Vec3::ZERO, max) / albedo).min(max))
 }
 
+/// Frames of a fill average that a fill of another block edge keeps: the old average blurs over other
+/// blocks, but it is far less noisy than one new frame, so it yields over a few frames rather than at
+/// once (the eye's saccades move region borders over many pixels at every fixation).
+pub const FILL_CARRY_FRAMES: f32 = 4.0;
+
 /// Merges the frame's fill lighting `fill` (of blocks `block` pixels wide) into the history's average
-/// of it: a running mean over at most `max_frames` frames. A fill of another block edge than the
-/// average's starts it afresh (a finer fill has less blur, a coarser one another blur).
+/// of it: a running mean over at most `max_frames` frames, or [`FILL_CARRY_FRAMES`] where the average
+/// was of another block edge.
 #[must_use]
 pub fn blend_fill(
     history: &HistoryTexel,
@@ -242,11 +247,12 @@ pub fn blend_fill(
         return *history;
     };
     let same_block = abs(history.fill_block() - block as f32) < 0.5;
-    let n = if same_block {
-        history.fill_frames().min((max_frames - 1.0).max(0.0))
+    let cap = if same_block {
+        max_frames - 1.0
     } else {
-        0.0
+        FILL_CARRY_FRAMES
     };
+    let n = history.fill_frames().min(cap.max(0.0));
     let a = 1.0 / (n + 1.0);
     let old = history.fill_lighting();
     let mean = old + (f - old) * a;
