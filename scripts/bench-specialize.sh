@@ -1,65 +1,50 @@
 #!/usr/bin/env bash
-# Specialised vs general render paths (issue "leave out what a scene does not need"), per scene, on the CPU
-# host and on the Vulkan host, interleaved: for each scene and backend, ROUNDS pairs of renders
-# (specialised, then --no-specialize), the median render_ms of each, their ratio and whether the images
-# are byte-identical.
-# Usage: scripts/bench-specialize.sh [ROUNDS] [BACKENDS]   (defaults: 3, "cpu vulkan")
+# The CPU's specialised render path (only the features a scene uses compiled in) against the general
+# one (--no-specialize), per scene: `fovea bench paths` renders the frame with each path in turn in one
+# process, ROUNDS times each (the order alternating), and prints their medians, the ratio and whether
+# every image was identical. A change to the integrator or the CPU host's sample loop quotes this table
+# in its commit message (docs/performance.md keeps its history).
+# Usage: scripts/bench-specialize.sh [ROUNDS]   (default 5)
 # Needs a release build (cargo build --release -p fovea-cli) and python3.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-ROUNDS=${1:-3}
-BACKENDS=${2:-cpu vulkan}
+ROUNDS=${1:-5}
 FOVEA=${FOVEA:-./target/release/fovea}
+[ -x "$FOVEA" ] || { echo "no $FOVEA: run cargo build --release -p fovea-cli" >&2; exit 1; }
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
-[ -x "$FOVEA" ] || { echo "no $FOVEA: run cargo build --release -p fovea-cli" >&2; exit 1; }
 
 CORNELL="--eye 0,1,3.9 --target 0,1,0 --fov 38"
-# name|scene|options (resolutions kept small: lavapipe is slow)
+# name|scene|options ("-": the bundled Lost Empire with its view and sky, what `fovea render` renders)
 CASES=(
-  "cornell (bundled)|assets/cornell_box/CornellBox-Original.obj|$CORNELL --uniform --spp 16,1,1 --resolution 256x256"
-  "cornell mirror|assets/cornell_box/CornellBox-Mirror.obj|$CORNELL --uniform --spp 16,1,1 --resolution 256x256"
-  "cornell_stiff|assets/cornell_stiff/cornell_stiff.gltf|--uniform --spp 16,1,1 --resolution 256x256"
-  "veach_mis|assets/veach_mis_pema99/VeachMIS.glb|--uniform --spp 16,1,1 --resolution 256x256"
-  "roughness_scale|assets/roughness_scale_kajiya/scene.gltf|--sky 1,1,1 --uniform --spp 16,1,1 --resolution 256x256"
-  "lost_empire|assets/lost_empire/lost_empire.obj|--resolution 960x540"
+  "cornell 960x540 uniform 32|assets/cornell_box/CornellBox-Original.obj|$CORNELL --uniform --spp 32,32,32 --resolution 960x540"
+  "cornell mirror 256x256|assets/cornell_box/CornellBox-Mirror.obj|$CORNELL --uniform --spp 16,16,16 --resolution 256x256"
+  "cornell_stiff 256x256|assets/cornell_stiff/cornell_stiff.gltf|--uniform --spp 16,16,16 --resolution 256x256"
+  "veach_mis 256x256|assets/veach_mis_pema99/VeachMIS.glb|--uniform --spp 16,16,16 --resolution 256x256"
+  "roughness_scale 256x256|assets/roughness_scale_kajiya/scene.gltf|--sky 1,1,1 --uniform --spp 16,16,16 --resolution 256x256"
+  "lost_empire 1920x1080 32/16/8 (the default render)|-|--resolution 1920x1080"
 )
 
+i=0
 for c in "${CASES[@]}"; do
   IFS='|' read -r name scene opts <<<"$c"
-  [ -f "$scene" ] || { echo "skipping $name: $scene missing" >&2; continue; }
-  for backend in $BACKENDS; do
-    for r in $(seq 1 "$ROUNDS"); do
-      for variant in spec gen; do
-        extra=""; [ "$variant" = gen ] && extra="--no-specialize"
-        tag="$(echo "$name" | tr ' ()' '___')-$backend-$variant-$r"
-        # shellcheck disable=SC2086
-        "$FOVEA" render "$scene" $opts --backend "$backend" $extra --quiet \
-          --stats "$OUT/$tag.json" -o "$OUT/$tag.png" >/dev/null 2>"$OUT/$tag.log" ||
-          { echo "render failed: $name $backend $variant" >&2; cat "$OUT/$tag.log" >&2; exit 1; }
-      done
-    done
-  done
+  args=()
+  [ "$scene" = - ] || args=("$scene")
+  # shellcheck disable=SC2086
+  "$FOVEA" bench paths ${args[@]+"${args[@]}"} $opts --rounds "$ROUNDS" --json "$OUT/$i.json" >/dev/null
+  echo "$name" >"$OUT/$i.name"
+  i=$((i + 1))
 done
 
-python3 - "$OUT" "$ROUNDS" "$BACKENDS" <<'PY'
-import glob, json, os, statistics, sys, filecmp
-out, rounds, backends = sys.argv[1], int(sys.argv[2]), sys.argv[3].split()
-names = sorted({os.path.basename(p).rsplit("-", 3)[0] for p in glob.glob(os.path.join(out, "*.json"))})
-print("| scene | features | backend | specialised ms | general ms | speed-up | identical |")
-print("|---|---|---|---|---|---|---|")
-for n in names:
-    for b in backends:
-        spec = [json.load(open(f"{out}/{n}-{b}-spec-{r}.json")) for r in range(1, rounds + 1)
-                if os.path.exists(f"{out}/{n}-{b}-spec-{r}.json")]
-        gen = [json.load(open(f"{out}/{n}-{b}-gen-{r}.json")) for r in range(1, rounds + 1)
-               if os.path.exists(f"{out}/{n}-{b}-gen-{r}.json")]
-        if not spec or not gen:
-            continue
-        ms = statistics.median(d["render_ms"] for d in spec)
-        mg = statistics.median(d["render_ms"] for d in gen)
-        same = all(filecmp.cmp(f"{out}/{n}-{b}-spec-{r}.png", f"{out}/{n}-{b}-gen-{r}.png", shallow=False)
-                   for r in range(1, rounds + 1))
-        feats = ", ".join(spec[0].get("features", []))
-        print(f"| {n} | {feats} | {spec[0]['device'] if b == 'vulkan' else 'cpu'} | {ms:.0f} | {mg:.0f} | {mg / ms:.3f}x | {same} |")
+python3 - "$OUT" "$i" <<'PY'
+import json, sys
+out, n = sys.argv[1], int(sys.argv[2])
+print("| frame | specialised path | specialised ms | general ms | speed-up | identical |")
+print("|---|---|---:|---:|---:|---|")
+for k in range(n):
+    d = json.load(open(f"{out}/{k}.json"))
+    name = open(f"{out}/{k}.name").read().strip()
+    feats = ", ".join(d["specialised_features"])
+    print(f"| {name} | {feats} | {d['specialised_ms']:.0f} | {d['general_ms']:.0f} | "
+          f"{d['speedup']:.3f}x | {d['identical']} |")
 PY
