@@ -201,6 +201,7 @@ impl FrameSettings {
 
     /// The same settings for an image of `size` pixels (the live view's window changes size).
     #[must_use]
+    #[cfg_attr(not(feature = "vulkan"), allow(dead_code))]
     pub fn with_size(self, size: [u32; 2]) -> Self {
         Self { size, ..self }
     }
