@@ -4,8 +4,8 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::values::{
-    whole_number, ArrayTask, BlockTriple, DisplayCm, Eccentricity, PixelPoint, Point3, PointLight,
-    RadiiPx, Resolution, Rgb, SampleSelection, SppTriple,
+    whole_number, ArrayTask, BlockTriple, DisplayCm, Eccentricity, Ipd, PixelPoint, Point3,
+    PointLight, RadiiPx, Resolution, Rgb, SampleSelection, SppTriple,
 };
 
 /// fovea: a foveated real-time path tracer (after Mohanto, Kluge and Staadt 2023).
@@ -269,6 +269,8 @@ pub struct RenderArgs {
     pub gaze: Option<PixelPoint>,
     #[command(flatten)]
     pub sequence: SequenceArgs,
+    #[command(flatten)]
+    pub stereo: StereoArgs,
     /// Temporal reuse over the frames of a --gaze-trace: each frame joins every pixel's history
     /// (weighted by its samples and their footprint, as `fovea view` does) and each output image is
     /// the history's mean, not the frame alone.
@@ -663,6 +665,24 @@ pub struct SequenceArgs {
     /// centre), and `report` needs a trace.
     #[arg(long, value_name = "FILE.csv")]
     pub camera_path: Option<PathBuf>,
+}
+
+/// Both eyes (`render`): each frame is a left and a right view, each with its own camera, gaze,
+/// foveation and history, written as `_left` and `_right` images.
+#[derive(Args, Debug, Clone, Default)]
+pub struct StereoArgs {
+    /// Render both eyes, IPD apart (scene units: 0.064 for a scene in metres), the camera between
+    /// them, both looking its way with its frustum. With a --gaze-trace of both eyes (header
+    /// `t,lx,ly,rx,ry` or `frame,lx,ly,rx,ry`) each eye gets its own gaze; else both get the one.
+    #[arg(long, value_name = "IPD", allow_hyphen_values = true)]
+    pub stereo: Option<Ipd>,
+    /// Render both eyes from each frame's eye poses and frusta, in OpenXR's conventions: lines
+    /// `frame,eye,x,y,z,qx,qy,qz,qw,angle_left,angle_right,angle_up,angle_down` (eye `left` or
+    /// `right`, world position, unit quaternion of the eye looking along -z, angles in radians);
+    /// the foveation radii follow each eye's angles. Without a --gaze-trace the file numbers the
+    /// frames.
+    #[arg(long, value_name = "FILE.csv", conflicts_with = "stereo")]
+    pub stereo_views: Option<PathBuf>,
 }
 
 /// How an OBJ's materials are read (`render`, `view`; `report` takes `--mtl-diffuse` alone).

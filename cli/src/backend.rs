@@ -43,8 +43,9 @@ pub struct CpuRenderer {
     /// The features the CPU path is specialised for: the scene's, derived once in `set_scene`, or
     /// every feature (`--no-specialize`).
     features: fovea_core::scene::FeatureFlags,
-    /// Each pixel's history, for frames rendered with temporal reuse.
-    history: Box<fovea_cpu::TemporalHistory>,
+    /// Each view's pixel histories, for frames rendered with temporal reuse (indexed by
+    /// [`FrameRequest::view`], made on a view's first frame).
+    histories: Vec<fovea_cpu::TemporalHistory>,
     /// The last frame rendered for the window ([`FrameOutput::Present`]).
     presented: Option<RenderedFrame>,
 }
@@ -54,10 +55,28 @@ impl CpuRenderer {
         Ok(Self {
             pool: cpu_pool(threads)?,
             features: fovea_core::scene::FeatureFlags::ALL,
-            history: Box::default(),
+            histories: Vec::new(),
             presented: None,
         })
     }
+}
+
+/// View `view`'s history among `histories` (see [`FrameRequest::view`]), made on its first frame.
+fn view_history(
+    histories: &mut Vec<fovea_cpu::TemporalHistory>,
+    view: u32,
+) -> Result<&mut fovea_cpu::TemporalHistory> {
+    if view >= fovea_core::passes::MAX_VIEWS {
+        return Err(FoveaError::Backend(format!(
+            "view {view}: a frame holds at most {} views",
+            fovea_core::passes::MAX_VIEWS
+        )));
+    }
+    let index = view as usize;
+    if histories.len() <= index {
+        histories.resize_with(index + 1, fovea_cpu::TemporalHistory::new);
+    }
+    Ok(&mut histories[index])
 }
 
 /// The Vulkan context and the scene uploaded to it.
@@ -340,7 +359,7 @@ impl Renderer {
     /// Forgets the history: the next frame with temporal reuse starts every pixel afresh.
     pub fn reset_history(&mut self) {
         match self {
-            Self::Cpu(cpu) => cpu.history.reset(),
+            Self::Cpu(cpu) => cpu.histories.iter_mut().for_each(|h| h.reset()),
             #[cfg(feature = "vulkan")]
             Self::Vulkan(v) => v.ctx.reset_history(),
         }
@@ -357,15 +376,10 @@ impl Renderer {
         match self {
             Self::Cpu(cpu) => {
                 let view = packed.view().with_features(cpu.features);
-                let history_restarted = request.history && !cpu.history.continues(frame);
+                let history = view_history(&mut cpu.histories, request.view)?;
+                let history_restarted = request.history && !history.continues(frame);
                 let (image, stats) = cpu.pool.install(|| {
-                    fovea_cpu::render_frame_passes(
-                        &view,
-                        frame,
-                        request,
-                        &mut cpu.history,
-                        progress,
-                    )
+                    fovea_cpu::render_frame_passes(&view, frame, request, history, progress)
                 });
                 let image = match request.output {
                     FrameOutput::Hdr | FrameOutput::ReadBack { .. } => {

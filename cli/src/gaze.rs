@@ -19,6 +19,9 @@
 //!   * [`GazeConvention::PixelsBottomLeft`] (as Pupil Labs exports surface gaze): window pixels,
 //!     origin bottom-left. Values beyond `±1e6` are rejected.
 //!
+//! A datagram may give both eyes' gaze, `t,lx,ly,rx,ry` (the left eye's, then the right's, in the
+//! same convention); the view shows one image, so it fixates between them.
+//!
 //! The viewer drains every pending datagram each frame and uses the newest valid one. A datagram
 //! that is not valid UTF-8, is longer than 512 bytes, or does not match `t,x,y` is dropped, counted
 //! and reported; it never stops the viewer.
@@ -43,6 +46,10 @@
 //!   a trace whose clock started long before (Unix-epoch timestamps, as many trackers export them)
 //!   replays from its first sample;
 //! * `frame,x,y` (per frame): `frame` is a frame number (increasing integers).
+//!
+//! A trace of both eyes names its columns `t,lx,ly,rx,ry` (or `frame,lx,ly,rx,ry`; `left_x, left_y,
+//! right_x, right_y` also do): `render --stereo` gives each eye its own gaze, and a single view
+//! fixates between them.
 //!
 //! Fields are separated by commas (another separator is named in the error). A first line whose first
 //! field is not a number must be a header, `KEY,x,y`: `frame` makes the trace per frame, `t` (or
@@ -151,26 +158,40 @@ pub fn parse_sample(
     convention: GazeConvention,
     window: [u32; 2],
 ) -> Result<GazeSample, String> {
-    let (t, x, y) = parse_fields(text, convention, TraceTiming::Seconds).map_err(|problem| {
-        format!(
-            "malformed gaze datagram {}: {problem}",
-            quote(text.trim_end())
-        )
-    })?;
+    let (t, [x, y], right) =
+        parse_fields(text, convention, TraceTiming::Seconds, None).map_err(|problem| {
+            format!(
+                "malformed gaze datagram {}: {problem}",
+                quote(text.trim_end())
+            )
+        })?;
+    // Both eyes' gaze: the view shows one image, fixated between them.
+    let [x, y] = match right {
+        Some([rx, ry]) => [0.5 * (x + rx), 0.5 * (y + ry)],
+        None => [x, y],
+    };
     let [x, y] = to_window_pixels(convention, x, y, window);
     Ok(GazeSample { t, x, y })
 }
 
-/// The timing a header line names (`t,x,y`, `frame,x,y`, case and spaces aside); the error says why
-/// the line is neither a header nor a sample.
-fn parse_header(line: &str) -> Result<TraceTiming, String> {
+/// The columns of a trace: one gaze per line (`KEY,x,y`), or each eye's (`KEY,lx,ly,rx,ry`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GazeColumns {
+    OneGaze,
+    BothEyes,
+}
+
+/// The timing and columns a header line names (`t,x,y`, `frame,x,y`, `t,lx,ly,rx,ry`, ...; case and
+/// spaces aside); the error says why the line is neither a header nor a sample.
+fn parse_header(line: &str) -> Result<(TraceTiming, GazeColumns), String> {
     let fields: Vec<String> = line
         .split(',')
         .map(|f| f.trim().to_ascii_lowercase())
         .collect();
     let neither = || {
         format!(
-            "{} is neither a header (\"t,x,y\" or \"frame,x,y\") nor a sample of three numbers",
+            "{} is neither a header (\"t,x,y\", \"frame,x,y\", or \"t,lx,ly,rx,ry\" for both eyes) \
+             nor a sample of numbers",
             quote(line)
         )
     };
@@ -182,26 +203,39 @@ fn parse_header(line: &str) -> Result<TraceTiming, String> {
             ));
         }
     }
+    let named = |names: &[&str]| fields[1..].iter().zip(names).all(|(f, n)| f == n);
+    let timing = |key: &str| TraceTiming::from_header(key).ok_or_else(neither);
     match fields.as_slice() {
-        [key, x, y] if x == "x" && y == "y" => TraceTiming::from_header(key).ok_or_else(neither),
+        [key, _, _] if named(&["x", "y"]) => Ok((timing(key)?, GazeColumns::OneGaze)),
+        [key, _, _, _, _]
+            if named(&["lx", "ly", "rx", "ry"])
+                || named(&["left_x", "left_y", "right_x", "right_y"]) =>
+        {
+            Ok((timing(key)?, GazeColumns::BothEyes))
+        }
         [_, _, _] if fields.iter().any(|f| f == "x") && fields.iter().any(|f| f == "y") => {
             Err(format!(
                 "header {}: the columns must be KEY,x,y in that order (t,x,y or frame,x,y)",
                 quote(line)
             ))
         }
+        [_, _, _, _, _] => Err(format!(
+            "header {}: a trace of both eyes names its columns KEY,lx,ly,rx,ry in that order \
+             (t,lx,ly,rx,ry or frame,lx,ly,rx,ry)",
+            quote(line)
+        )),
         _ => Err(neither()),
     }
 }
 
 /// The separator a line without commas uses instead, by name, where it splits the line into three
-/// fields (`;`, tabs, spaces).
+/// or five fields (`;`, tabs, spaces).
 fn other_separator(line: &str) -> Option<&'static str> {
     let line = line.trim();
     if line.contains(',') {
         return None;
     }
-    let three = |parts: Vec<&str>| parts.iter().filter(|p| !p.is_empty()).count() == 3;
+    let three = |parts: Vec<&str>| matches!(parts.iter().filter(|p| !p.is_empty()).count(), 3 | 5);
     if three(line.split(';').map(str::trim).collect()) {
         Some("semicolons")
     } else if line.contains('\t') && three(line.split('\t').map(str::trim).collect()) {
@@ -213,28 +247,50 @@ fn other_separator(line: &str) -> Option<&'static str> {
     }
 }
 
-/// Parses `t,x,y` into raw `(t, x, y)`; the error describes the problem (without saying where).
+/// A line's key (seconds or frame), its gaze (the left eye's of two) and the right eye's, raw.
+type ParsedFields = (f64, [f32; 2], Option<[f32; 2]>);
+
+/// Parses `t,x,y` (or `t,lx,ly,rx,ry`) into raw `(t, [x, y], right eye's [x, y])`; `columns` is the
+/// trace's, or `None` for a datagram, which may give either. The error describes the problem
+/// (without saying where).
 fn parse_fields(
     text: &str,
     convention: GazeConvention,
     timing: TraceTiming,
-) -> Result<(f64, f32, f32), String> {
+    columns: Option<GazeColumns>,
+) -> Result<ParsedFields, String> {
     let (key, example) = match timing {
         TraceTiming::Seconds => ("t", convention.example().to_string()),
         TraceTiming::Frames => ("frame", convention.example().replacen("12.5", "12", 1)),
     };
-    let expected = format!("expected \"{key},x,y\" with three numbers (e.g. \"{example}\")");
+    let expected = match columns {
+        Some(GazeColumns::BothEyes) => {
+            format!("expected \"{key},lx,ly,rx,ry\" with five numbers, as the header says")
+        }
+        _ => format!("expected \"{key},x,y\" with three numbers (e.g. \"{example}\")"),
+    };
     let fields: Vec<&str> = text.split(',').map(str::trim).collect();
-    let [t, x, y] = fields[..] else {
-        let n = fields.len();
+    let n = fields.len();
+    let fits = match columns {
+        None => n == 3 || n == 5,
+        Some(GazeColumns::OneGaze) => n == 3,
+        Some(GazeColumns::BothEyes) => n == 5,
+    };
+    if !fits {
         if let (1, Some(sep)) = (n, other_separator(text)) {
             return Err(format!(
                 "the fields are separated by {sep}; {expected}, separated by commas"
             ));
         }
         let plural = if n == 1 { "" } else { "s" };
+        if n == 5 && columns == Some(GazeColumns::OneGaze) {
+            return Err(format!(
+                "5 fields; {expected}, or for both eyes a first line \"{key},lx,ly,rx,ry\" naming \
+                 the columns"
+            ));
+        }
         return Err(format!("{n} field{plural}; {expected}"));
-    };
+    }
     let number = |name: &str, field: &str| -> Result<f64, String> {
         let value: f64 = field
             .parse()
@@ -248,7 +304,6 @@ fn parse_fields(
             ))
         }
     };
-    let t = number(key, t)?;
     let coordinate = |name: &str, field: &str| -> Result<f32, String> {
         let value = number(name, field)?;
         let (limit, what) = match convention {
@@ -268,9 +323,14 @@ fn parse_fields(
         }
         Ok(value as f32)
     };
-    let x = coordinate("x", x)?;
-    let y = coordinate("y", y)?;
-    Ok((t, x, y))
+    let t = number(key, fields[0])?;
+    let left = [coordinate("x", fields[1])?, coordinate("y", fields[2])?];
+    let right = if n == 5 {
+        Some([coordinate("rx", fields[3])?, coordinate("ry", fields[4])?])
+    } else {
+        None
+    };
+    Ok((t, left, right))
 }
 
 /// `text` in double quotes with escapes, cut to [`MAX_QUOTED_CHARS`] characters.
@@ -435,6 +495,23 @@ struct RawSample {
     t: f64,
     x: f32,
     y: f32,
+    /// The right eye's gaze in a trace of both eyes (`x, y` is then the left eye's).
+    right: Option<[f32; 2]>,
+}
+
+impl RawSample {
+    /// The gaze between the eyes (the only one of a one-gaze trace).
+    fn between(&self) -> [f32; 2] {
+        match self.right {
+            Some([rx, ry]) => [0.5 * (self.x + rx), 0.5 * (self.y + ry)],
+            None => [self.x, self.y],
+        }
+    }
+
+    /// Each eye's gaze: the left's and the right's (one gaze for both where the trace gives one).
+    fn eyes(&self) -> [[f32; 2]; 2] {
+        [[self.x, self.y], self.right.unwrap_or([self.x, self.y])]
+    }
 }
 
 /// How a trace's lines are keyed (see the [module documentation](self)).
@@ -471,8 +548,10 @@ fn timed_frame_count(span: f64, fps: f64, start: f64) -> u64 {
 /// numbers).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TraceFrames {
-    /// Frame numbers and the gaze in pixels of the image.
+    /// Frame numbers and the gaze in pixels of the image (between the eyes for a trace of both).
     pub frames: Vec<(u32, [f32; 2])>,
+    /// For a trace of both eyes, each frame's left and right gaze, in the order of `frames`.
+    pub eyes: Option<Vec<[[f32; 2]; 2]>>,
     pub note: Option<String>,
 }
 
@@ -538,8 +617,16 @@ pub fn read_trace_frames(
             })
         }
     };
+    let eyes = trace.has_both_eyes().then(|| {
+        trace
+            .eye_frames(fps, image)
+            .into_iter()
+            .map(|(_, eyes)| eyes)
+            .collect()
+    });
     Ok(TraceFrames {
         frames: trace.frames(fps, image),
+        eyes,
         note,
     })
 }
@@ -551,6 +638,7 @@ pub struct GazeTrace {
     samples: Vec<RawSample>,
     convention: GazeConvention,
     timing: TraceTiming,
+    columns: GazeColumns,
     /// A timed trace's first timestamp as the file gives it (its samples are kept from it); 0 for a
     /// per-frame trace.
     start: f64,
@@ -572,6 +660,7 @@ impl GazeTrace {
         timing: TraceTiming,
     ) -> Result<Self, String> {
         let mut timing = timing;
+        let mut columns = GazeColumns::OneGaze;
         let mut samples: Vec<RawSample> = Vec::new();
         // Frame number -> the line that gave it (a per-frame trace): two lines for one frame would
         // render it twice.
@@ -594,10 +683,11 @@ impl GazeTrace {
             let first_field = content.split(',').next().unwrap_or("").trim();
             if first_content && first_field.parse::<f64>().is_err() {
                 // A header: `t,x,y` or `frame,x,y` (their names, in that order).
-                timing = parse_header(content).map_err(at)?;
+                (timing, columns) = parse_header(content).map_err(at)?;
                 continue;
             }
-            let (t, x, y) = parse_fields(content, convention, timing).map_err(at)?;
+            let (t, [x, y], right) =
+                parse_fields(content, convention, timing, Some(columns)).map_err(at)?;
             match timing {
                 TraceTiming::Seconds => {
                     if t < 0.0 {
@@ -641,7 +731,7 @@ impl GazeTrace {
             if samples.len() >= MAX_TRACE_SAMPLES {
                 return Err(at(format!("more than {MAX_TRACE_SAMPLES} samples")));
             }
-            samples.push(RawSample { t, x, y });
+            samples.push(RawSample { t, x, y, right });
             previous_line = line;
         }
         if samples.is_empty() {
@@ -664,6 +754,7 @@ impl GazeTrace {
             samples,
             convention,
             timing,
+            columns,
             start,
         })
     }
@@ -692,14 +783,21 @@ impl GazeTrace {
     }
 
     /// The newest sample with `key <= at` (`None` before the first sample), converted to window
-    /// pixels (origin top-left) for a window of `window = [width, height]`. `at` is seconds for a timed
-    /// trace, a frame number for a per-frame one ([`Self::sample_for`] picks).
+    /// pixels (origin top-left) for a window of `window = [width, height]`; for a trace of both eyes,
+    /// the gaze between them. `at` is seconds for a timed trace, a frame number for a per-frame one
+    /// ([`Self::sample_for`] picks).
     #[must_use]
     pub fn sample_at(&self, at: f64, window: [u32; 2]) -> Option<GazeSample> {
-        let count = self.samples.partition_point(|sample| sample.t <= at);
-        let sample = self.samples.get(count.checked_sub(1)?)?;
-        let [x, y] = to_window_pixels(self.convention, sample.x, sample.y, window);
+        let sample = self.raw_at(at)?;
+        let [x, y] = sample.between();
+        let [x, y] = to_window_pixels(self.convention, x, y, window);
         Some(GazeSample { t: sample.t, x, y })
+    }
+
+    /// The newest raw sample with `key <= at`.
+    fn raw_at(&self, at: f64) -> Option<&RawSample> {
+        let count = self.samples.partition_point(|sample| sample.t <= at);
+        self.samples.get(count.checked_sub(1)?)
     }
 
     /// The sample for the replay's `seconds` (a timed trace) or its `frame` (a per-frame trace).
@@ -711,26 +809,45 @@ impl GazeTrace {
         }
     }
 
-    /// The frames `fovea render` renders from this trace, with their gaze in pixels of an `image`:
-    /// a per-frame trace's lines, or a timed trace sampled at `fps` frames per second from 0 to its
-    /// last timestamp.
+    /// The frames `fovea render` renders from this trace, with their gaze in pixels of an `image`
+    /// (between the eyes for a trace of both): a per-frame trace's lines, or a timed trace sampled at
+    /// `fps` frames per second from 0 to its last timestamp.
     #[must_use]
     pub fn frames(&self, fps: f64, image: [u32; 2]) -> Vec<(u32, [f32; 2])> {
-        let convert = |s: &RawSample| to_window_pixels(self.convention, s.x, s.y, image);
+        self.frames_with(fps, |s| {
+            let [x, y] = s.between();
+            to_window_pixels(self.convention, x, y, image)
+        })
+    }
+
+    /// [`Self::frames`] with each eye's gaze, the left's then the right's (the one gaze for both
+    /// where the trace gives one).
+    #[must_use]
+    pub fn eye_frames(&self, fps: f64, image: [u32; 2]) -> Vec<(u32, [[f32; 2]; 2])> {
+        self.frames_with(fps, |s| {
+            s.eyes()
+                .map(|[x, y]| to_window_pixels(self.convention, x, y, image))
+        })
+    }
+
+    /// Whether the trace gives each eye's gaze.
+    #[must_use]
+    pub fn has_both_eyes(&self) -> bool {
+        self.columns == GazeColumns::BothEyes
+    }
+
+    /// The frames of [`Self::frames`], each with `gaze` of its sample.
+    fn frames_with<T>(&self, fps: f64, gaze: impl Fn(&RawSample) -> T) -> Vec<(u32, T)> {
         match self.timing {
-            TraceTiming::Frames => self
-                .samples
-                .iter()
-                .map(|s| (s.t as u32, convert(s)))
-                .collect(),
+            TraceTiming::Frames => self.samples.iter().map(|s| (s.t as u32, gaze(s))).collect(),
             TraceTiming::Seconds => {
                 let last = self.samples.last().map_or(0.0, |s| s.t);
                 let count =
                     timed_frame_count(last, fps, self.start).min(MAX_TRACE_SAMPLES as u64) as u32;
                 (0..count)
                     .filter_map(|frame| {
-                        let s = self.sample_at(f64::from(frame) / fps, image)?;
-                        Some((frame, [s.x, s.y]))
+                        let s = self.raw_at(f64::from(frame) / fps)?;
+                        Some((frame, gaze(s)))
                     })
                     .collect()
             }
@@ -917,6 +1034,60 @@ mod tests {
         assert!(
             parsed > 0 && refused > 0,
             "{parsed} parsed, {refused} refused"
+        );
+    }
+
+    #[test]
+    fn a_trace_of_both_eyes_is_told_apart_by_its_header() {
+        // frames_of reads 0..1 of a 100 x 100 image.
+        let t = frames_of(
+            "frame,lx,ly,rx,ry\n0,0.25,0.5,0.75,0.5\n1,0.5,0.125,0.75,0.375\n",
+            30.0,
+        )
+        .unwrap();
+        assert_eq!(
+            t.frames,
+            [(0, [50.0, 50.0]), (1, [62.5, 25.0])],
+            "between the eyes"
+        );
+        let eyes = t.eyes.expect("both eyes");
+        assert_eq!(eyes[1], [[50.0, 12.5], [75.0, 37.5]]);
+        // Timed, with the long names.
+        let t = frames_of(
+            "t,left_x,left_y,right_x,right_y\n0,0.125,0.125,0.25,0.125\n0.1,0.125,0.125,0.25,0.125\n",
+            30.0,
+        )
+        .unwrap();
+        assert_eq!(t.frames.len(), 4);
+        assert_eq!(t.eyes.unwrap()[3], [[12.5, 12.5], [25.0, 12.5]]);
+        // One gaze: no eyes.
+        assert!(frames_of("frame,x,y\n0,0.5,0.5\n", 30.0)
+            .unwrap()
+            .eyes
+            .is_none());
+        for (text, needle) in [
+            ("frame,x,y\n0,0.2,0.5,0.3,0.5\n", "lx,ly,rx,ry"),
+            ("0,0.2,0.5,0.3,0.5\n", "lx,ly,rx,ry"),
+            ("frame,lx,ly,rx,ry\n0,0.2,0.5\n", "five numbers"),
+            (
+                "frame,rx,ry,lx,ly\n0,0.2,0.5,0.3,0.5\n",
+                "KEY,lx,ly,rx,ry in that order",
+            ),
+            ("frame,lx,ly,rx,ry\n0,0.2,0.5,0.3,nan\n", "rx"),
+        ] {
+            let e = frames_of(text, 30.0).unwrap_err().to_string();
+            assert!(e.contains(needle), "{text:?}: {e}");
+        }
+        // A datagram of both eyes: the view fixates between them.
+        let s = parse_sample(
+            "1.5,0.2,0.4,0.4,0.6",
+            GazeConvention::Normalized,
+            [100, 100],
+        )
+        .unwrap();
+        assert!(
+            (s.x - 30.0).abs() < 1e-4 && (s.y - 50.0).abs() < 1e-4,
+            "{s:?}"
         );
     }
 

@@ -21,6 +21,7 @@ mod report;
 mod scene_setup;
 mod schedule;
 mod stats;
+mod stereo;
 mod values;
 #[cfg_attr(not(feature = "vulkan"), allow(dead_code))]
 mod view;

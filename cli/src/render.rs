@@ -22,6 +22,7 @@ use crate::scene_setup::{choose_camera, prepare_scene, Lighting, PreparedScene};
 use crate::stats::FrameStats;
 
 use crate::schedule::{FrameSchedule, FrameSettings, LonePath, ScheduledFrame};
+use crate::stereo::{eye_path, StereoSource, EYES};
 use crate::values::{self, SampleSelection};
 
 /// Everything `render` needs, parsed and checked before any work starts.
@@ -39,6 +40,8 @@ struct Plan {
     /// `--keep-raw`: where the image before the denoiser goes.
     keep_raw: Option<(PathBuf, ImageFormat)>,
     per_frame_outputs: bool,
+    /// `--stereo`, `--stereo-views`: each frame's two eyes.
+    stereo: Option<StereoSource>,
     settings: FrameSettings,
     lighting: Lighting,
     /// Options that are accepted but do not do what a user may expect (printed unless `--quiet`).
@@ -117,10 +120,20 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
     let still = ScheduledFrame {
         number: args.frame,
         gaze: args.gaze.map_or([0.5 * w as f32, 0.5 * h as f32], |g| g.0),
+        eyes: None,
         camera: None,
     };
-    let schedule = FrameSchedule::read(sequence, still, resolution, LonePath::NumbersFrames, None)?;
+    let mut schedule =
+        FrameSchedule::read(sequence, still, resolution, LonePath::NumbersFrames, None)?;
     warnings.extend(schedule.notes.iter().cloned());
+    let stereo = stereo_of(args, &mut schedule)?;
+    if stereo.is_none() && schedule.frames.iter().any(|f| f.eyes.is_some()) {
+        warnings.push(
+            "the --gaze-trace gives both eyes' gaze; one view is rendered, fixated between them \
+             (--stereo IPD renders each eye with its own)"
+                .to_string(),
+        );
+    }
     if args.history && schedule.frames.len() < 2 {
         warnings.push(
             "--history accumulates over the frames of a --gaze-trace or --camera-path; a single \
@@ -212,6 +225,7 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         radii_px,
         per_frame_outputs: schedule.from_files,
         schedule,
+        stereo,
         output: args.output.clone(),
         output_format,
         samples,
@@ -220,6 +234,49 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         lighting,
         warnings,
     })
+}
+
+/// `--stereo IPD` or `--stereo-views FILE`, read and checked against the frames `schedule` holds; a
+/// views file without a gaze trace or camera path gives the frames (each at the still gaze).
+fn stereo_of(args: &RenderArgs, schedule: &mut FrameSchedule) -> Result<Option<StereoSource>> {
+    let source = match (&args.stereo.stereo, &args.stereo.stereo_views) {
+        (Some(ipd), _) => StereoSource::Separation(ipd.0),
+        (None, Some(path)) => {
+            if args.sequence.camera_path.is_some() {
+                return Err(FoveaError::option(
+                    "--stereo-views",
+                    "gives every frame's eye poses; leave out --camera-path (or use --stereo IPD \
+                     with it)",
+                ));
+            }
+            StereoSource::Views(crate::stereo::read_eye_views(path)?)
+        }
+        (None, None) => return Ok(None),
+    };
+    if let (Some(numbers), false) = (source.frame_numbers(), schedule.from_files) {
+        let still = schedule.frames[0];
+        schedule.frames = numbers
+            .into_iter()
+            .map(|number| ScheduledFrame { number, ..still })
+            .collect();
+        schedule.from_files = true;
+    }
+    if let StereoSource::Views(views) = &source {
+        if let Some(f) = schedule
+            .frames
+            .iter()
+            .find(|f| !views.contains_key(&f.number))
+        {
+            return Err(FoveaError::option(
+                "--stereo-views",
+                format!(
+                    "has no lines for frame {}, which the --gaze-trace renders",
+                    f.number
+                ),
+            ));
+        }
+    }
+    Ok(Some(source))
 }
 
 /// `--samples`: one still frame on the CPU, written as a part (.fvpart) whose range lies within the
@@ -243,6 +300,9 @@ fn check_part_options(
     }
     if args.history {
         return refuse("--history", "accumulates over a sequence");
+    }
+    if args.stereo.stereo.is_some() || args.stereo.stereo_views.is_some() {
+        return refuse("--stereo", "renders two views");
     }
     if args.denoise {
         return refuse(
@@ -352,13 +412,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     // Frames whose tone-mapped image is all black (see `BLACK_IMAGE_WARNING`).
     let mut black_frames = 0usize;
     for (g, &camera) in plan.schedule.frames.iter().zip(&cameras) {
-        let mut foveation = plan.foveation_template;
-        if !args.foveation.uniform {
-            foveation.gaze = g.gaze;
-        }
-        let frame = settings.frame(g.number, camera, foveation);
-        let bar = progress_bar(args.quiet, &plan, &foveation);
         if let Some(spec) = plan.samples {
+            let frame = settings.frame(g.number, camera, foveation_at(&plan, args, g.gaze));
+            let bar = progress_bar(args.quiet, &plan, &frame.foveation);
             frames.push(render_part(
                 args,
                 &plan,
@@ -380,11 +436,45 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 want_raw: plan.keep_raw.is_some(),
             },
         );
-        let rendered = renderer.render(&scene.packed, &frame, &request, &|n| bar.inc(n))?;
-        bar.finish_and_clear();
-        let (stats, black) = write_frame_outputs(args, &plan, &frame, g.number, rendered)?;
-        black_frames += usize::from(black);
-        frames.push(stats);
+        // One view, or each eye in turn as a view of the frame, with its own history.
+        let views: Vec<(Option<usize>, FrameParams)> = match &plan.stereo {
+            None => vec![(
+                None,
+                settings.frame(g.number, camera, foveation_at(&plan, args, g.gaze)),
+            )],
+            Some(stereo) => {
+                let eyes = stereo.cameras(g.number, camera, scene.origin)?;
+                (0..EYES)
+                    .map(|view| {
+                        let mut foveation = foveation_at(&plan, args, g.eye_gaze(view));
+                        if let (Some(eye), false, None) = (
+                            stereo.eye_views(g.number),
+                            args.foveation.uniform,
+                            args.foveation.radii,
+                        ) {
+                            // The eye's own angles set its pixels per degree, and so its radii.
+                            [foveation.radius_fovea, foveation.radius_intermediate] = eye_radii(
+                                args.foveation.display.eccentricity.0,
+                                eye[view].focal_px(plan.resolution[0]),
+                            );
+                        }
+                        let frame =
+                            settings.view_frame(g.number, view as u32, eyes[view], foveation);
+                        (Some(view), frame)
+                    })
+                    .collect()
+            }
+        };
+        for (view, frame) in views {
+            let bar = progress_bar(args.quiet, &plan, &frame.foveation);
+            let request = request.for_view(view.unwrap_or(0) as u32);
+            let rendered = renderer.render(&scene.packed, &frame, &request, &|n| bar.inc(n))?;
+            bar.finish_and_clear();
+            let (stats, black) =
+                write_frame_outputs(args, &plan, &frame, g.number, view, rendered)?;
+            black_frames += usize::from(black);
+            frames.push(stats);
+        }
     }
 
     // A black image from a scene with lights (one without has had its warning): say why, not only
@@ -422,6 +512,22 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         print_summary(args, plan.resolution, renderer.name(), &frames);
     }
     Ok(())
+}
+
+/// The run's foveation fixated at `gaze` (a uniform frame has no gaze).
+fn foveation_at(plan: &Plan, args: &RenderArgs, gaze: [f32; 2]) -> FoveationParams {
+    let mut foveation = plan.foveation_template;
+    if !args.foveation.uniform {
+        foveation.gaze = gaze;
+    }
+    foveation
+}
+
+/// The region radii in pixels of an eye whose image has a focal length of `focal_px` pixels, for
+/// regions bounded at `eccentricity` degrees: the paper's `r = (a / 2) · R / A` with `a = 2 d
+/// tan(e / 2)` is `r = f · tan(e / 2)` for the focal length `f = d · R / A` in pixels.
+fn eye_radii(eccentricity: [f32; 2], focal_px: f32) -> [f32; 2] {
+    eccentricity.map(|e| focal_px * (0.5 * e.to_radians()).tan())
 }
 
 /// Prints what loading the scene found (all of it with `--verbose`, else how many warnings), and
@@ -529,6 +635,7 @@ fn render_part(
         render: stats,
         extra: None,
         history_restarted: None,
+        view: None,
     })
 }
 
@@ -539,15 +646,21 @@ fn write_frame_outputs(
     plan: &Plan,
     frame: &FrameParams,
     number: u32,
+    view: Option<usize>,
     rendered: crate::backend::Rendered,
 ) -> Result<(FrameStats, bool)> {
     let [w, h] = plan.resolution;
     let exposure = plan.settings.exposure_ev;
+    // `out.png` → `out_left.png` for an eye, then `out_left_00012.png` for a frame of a sequence.
     let numbered = |path: &Path| {
+        let path = match view {
+            Some(view) => eye_path(path, view),
+            None => path.to_path_buf(),
+        };
         if plan.per_frame_outputs {
-            frame_path(path, number)
+            frame_path(&path, number)
         } else {
-            path.to_path_buf()
+            path
         }
     };
     let rgb8 = match (rendered.image.rgb8(), &rendered.image.hdr) {
@@ -583,6 +696,7 @@ fn write_frame_outputs(
         render: rendered.stats,
         extra: rendered.extra,
         history_restarted: args.history.then_some(rendered.history_restarted),
+        view: view.map(|v| fovea_core::passes::STEREO_VIEW_NAMES[v]),
     };
     Ok((stats, black))
 }

@@ -21,10 +21,21 @@ use crate::error::{FoveaError, Result};
 pub struct ScheduledFrame {
     /// The frame's number: part of its random-number key, and of its output file's name.
     pub number: u32,
-    /// The fixation, in image pixels.
+    /// The fixation, in image pixels (between the eyes where a trace gives both).
     pub gaze: [f32; 2],
+    /// Each eye's fixation, the left's then the right's, where a trace gives both (`None`: `gaze`
+    /// for both).
+    pub eyes: Option<[[f32; 2]; 2]>,
     /// The camera `--camera-path` gives the frame; `None` keeps the run's own camera.
     pub camera: Option<CameraKey>,
+}
+
+impl ScheduledFrame {
+    /// Eye `view`'s fixation (0 left, 1 right): its own where the trace gives both, else `gaze`.
+    #[must_use]
+    pub fn eye_gaze(&self, view: usize) -> [f32; 2] {
+        self.eyes.map_or(self.gaze, |eyes| eyes[view])
+    }
 }
 
 /// What a `--camera-path` without a `--gaze-trace` means to a command.
@@ -74,7 +85,17 @@ impl FrameSchedule {
                     image,
                 )?;
                 notes.extend(read.note);
-                Some(read.frames)
+                let eyes: Vec<Option<[[f32; 2]; 2]>> = match read.eyes {
+                    Some(eyes) => eyes.into_iter().map(Some).collect(),
+                    None => vec![None; read.frames.len()],
+                };
+                Some(
+                    read.frames
+                        .into_iter()
+                        .zip(eyes)
+                        .map(|((number, gaze), eyes)| (number, gaze, eyes))
+                        .collect::<Vec<_>>(),
+                )
             }
             None => None,
         };
@@ -95,7 +116,7 @@ impl FrameSchedule {
                     .map(|k| k.iter().map(|k| (k.frame, *k)).collect());
                 trace
                     .into_iter()
-                    .map(|(number, gaze)| {
+                    .map(|(number, gaze, eyes)| {
                         let camera = match &by_frame {
                             None => None,
                             Some(by_frame) => Some(*by_frame.get(&number).ok_or_else(|| {
@@ -110,6 +131,7 @@ impl FrameSchedule {
                         Ok(ScheduledFrame {
                             number,
                             gaze,
+                            eyes,
                             camera,
                         })
                     })
@@ -119,8 +141,8 @@ impl FrameSchedule {
                 .iter()
                 .map(|k| ScheduledFrame {
                     number: k.frame,
-                    gaze: still.gaze,
                     camera: Some(*k),
+                    ..still
                 })
                 .collect(),
             (None, None) => vec![still],
@@ -129,8 +151,10 @@ impl FrameSchedule {
             frames.truncate(n as usize);
         }
         for f in &frames {
-            if f.gaze
+            let eyes = f.eyes.unwrap_or([f.gaze; 2]);
+            if eyes
                 .iter()
+                .flatten()
                 .any(|v| v.abs() > crate::values::MAX_GAZE_OFFSET)
             {
                 return Err(FoveaError::option(
@@ -209,6 +233,19 @@ impl FrameSettings {
     /// Frame `number` seen by `camera`, foveated by `foveation`.
     #[must_use]
     pub fn frame(&self, number: u32, camera: Camera, foveation: FoveationParams) -> FrameParams {
+        self.view_frame(number, 0, camera, foveation)
+    }
+
+    /// View `view` (an eye) of frame `number`: seen by its `camera`, foveated around its own gaze,
+    /// with random numbers of its own ([`fovea_core::rng::view_seed`]; view 0's are a single view's).
+    #[must_use]
+    pub fn view_frame(
+        &self,
+        number: u32,
+        view: u32,
+        camera: Camera,
+        foveation: FoveationParams,
+    ) -> FrameParams {
         FrameParams {
             camera,
             foveation,
@@ -216,7 +253,7 @@ impl FrameSettings {
             width: self.size[0],
             height: self.size[1],
             frame_index: number,
-            seed: self.seed,
+            seed: fovea_core::rng::view_seed(self.seed, view),
         }
     }
 
@@ -229,6 +266,7 @@ impl FrameSettings {
             history,
             denoise,
             output,
+            view: 0,
         }
     }
 
@@ -262,6 +300,7 @@ mod tests {
     const STILL: ScheduledFrame = ScheduledFrame {
         number: 7,
         gaze: [5.0, 6.0],
+        eyes: None,
         camera: None,
     };
 

@@ -20,6 +20,8 @@ pub struct FrameStats {
     /// With `--history`: whether this frame started every pixel's history afresh (the first frame,
     /// or one whose history the backend could not continue).
     pub history_restarted: Option<bool>,
+    /// The eye of a stereo frame (`left`, `right`); `None` for a single view.
+    pub view: Option<&'static str>,
 }
 
 /// "AMD EPYC ... (2 threads)" from /proc/cpuinfo where available.
@@ -66,6 +68,9 @@ pub fn build_report(
             });
             if let Some(restarted) = f.history_restarted {
                 frame["history_restarted"] = json!(restarted);
+            }
+            if let Some(view) = f.view {
+                frame["view"] = json!(view);
             }
             frame
         })

@@ -227,6 +227,21 @@ typed_value!(
 );
 
 typed_value!(
+    /// An interpupillary distance in scene units (`render --stereo`): finite, positive, and small
+    /// against the f32 range.
+    Ipd(f32) = |s| {
+        let v: f32 = s.trim().parse().map_err(|_| not_a_number(s.trim()))?;
+        if !(v.is_finite() && v > 0.0 && v <= 1e6) {
+            return Err(format!(
+                "{v} is not a distance between the eyes; give a positive one in scene units (0.064 \
+                 for a scene in metres)"
+            ));
+        }
+        Ok(v)
+    }
+);
+
+typed_value!(
     /// `R1,R2`: region radii in pixels, `0 <= R1 <= R2`.
     RadiiPx([f32; 2]) = |s| {
         let r: [f32; 2] = finite(s, ',')?;

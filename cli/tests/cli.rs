@@ -899,3 +899,318 @@ fn compare_judges_one_exr_against_another() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The fraction of pixels of two EXR files within 1e-3 of each other (`fovea compare`'s rule).
+fn exr_agreement(a: &Path, b: &Path) -> f64 {
+    let (a, b) = (support::read_exr(a), support::read_exr(b));
+    assert_eq!(a.len(), b.len());
+    let within = a
+        .iter()
+        .zip(&b)
+        .filter(|(p, q)| {
+            let p = [p[0], p[1], p[2], 1.0];
+            let q = [q[0], q[1], q[2], 1.0];
+            fovea_frame::pixels_agree(&p, &q).0
+        })
+        .count();
+    within as f64 / a.len() as f64
+}
+
+/// `render --stereo` and `--stereo-views` (issue 49): each eye is the mono render of its own camera
+/// (the right eye with its own random numbers), a views file in OpenXR's conventions gives the
+/// same eye as `--eye`/`--target`/`--fov`, and bad stereo input is refused before any work.
+#[test]
+fn each_eye_of_a_stereo_frame_is_the_render_of_its_own_camera() {
+    let dir = temp_dir("stereo-eyes");
+    let scene = cornell();
+    let common = |cmd: &mut Command| {
+        cmd.args(["render", "--backend", "cpu", "-q", "--resolution", "64x48"])
+            .args(["--spp", "8,4,2", "--radii", "6,14", "--fov", "38"])
+            .arg(&scene);
+    };
+    let run = |extra: &[&str], out: &Path| {
+        let mut cmd = fovea();
+        common(&mut cmd);
+        let o = cmd.args(extra).arg("-o").arg(out).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let stereo = dir.join("s.exr");
+    run(
+        &["--eye", "0,1,3.9", "--target", "0,1,0", "--stereo", "0.2"],
+        &stereo,
+    );
+    let (left, right) = (dir.join("s_left.exr"), dir.join("s_right.exr"));
+    assert!(left.is_file() && right.is_file() && !stereo.exists());
+    let mono_left = dir.join("left.exr");
+    run(&["--eye", "-0.1,1,3.9", "--target", "-0.1,1,0"], &mono_left);
+    // The right eye's seed: fovea_core::rng::view_seed(0, 1).
+    let mono_right = dir.join("right.exr");
+    run(
+        &[
+            "--eye",
+            "0.1,1,3.9",
+            "--target",
+            "0.1,1,0",
+            "--seed",
+            "2246822507",
+        ],
+        &mono_right,
+    );
+    let (l, r) = (
+        exr_agreement(&left, &mono_left),
+        exr_agreement(&right, &mono_right),
+    );
+    eprintln!("left eye against its mono render {l}, right {r}");
+    assert!(l >= 0.999 && r >= 0.999, "{l} {r}");
+    let between = exr_agreement(&left, &right);
+    assert!(between < 0.5, "the eyes see different images: {between}");
+
+    // The same eyes from a views file: identity orientation (looking along -z), the frustum of a
+    // 38° vertical field of view on a 4:3 image.
+    let half_y = 19f64.to_radians();
+    let half_x = (half_y.tan() * 64.0 / 48.0).atan();
+    let views = dir.join("views.csv");
+    std::fs::write(
+        &views,
+        format!(
+            "frame,eye,x,y,z,qx,qy,qz,qw,l,r,u,d\n\
+             0,left,-0.1,1,3.9,0,0,0,1,{},{half_x},{half_y},{}\n\
+             0,right,0.1,1,3.9,0,0,0,1,{},{half_x},{half_y},{}\n",
+            -half_x, -half_y, -half_x, -half_y
+        ),
+    )
+    .unwrap();
+    let from_file = dir.join("v.exr");
+    run(&["--stereo-views", views.to_str().unwrap()], &from_file);
+    let file_left = dir.join("v_left_00000.exr");
+    let f = exr_agreement(&file_left, &mono_left);
+    eprintln!("views file's left eye against its mono render {f}");
+    assert!(f >= 0.999, "{f}");
+
+    // With a history each: the left eye of a stereo sequence is the mono sequence of its camera and
+    // gaze (a history the eyes shared would mix the right eye's frames into it).
+    let binocular = dir.join("binocular.csv");
+    let left_only = dir.join("left-gaze.csv");
+    let (mut both, mut one) = (
+        String::from("frame,lx,ly,rx,ry\n"),
+        String::from("frame,x,y\n"),
+    );
+    for (i, x) in [32, 30, 20, 40].iter().enumerate() {
+        both += &format!("{i},{x},24,{},22\n", x - 4);
+        one += &format!("{i},{x},24\n");
+    }
+    std::fs::write(&binocular, both).unwrap();
+    std::fs::write(&left_only, one).unwrap();
+    let sequence = dir.join("h.exr");
+    run(
+        &[
+            "--eye",
+            "0,1,3.9",
+            "--target",
+            "0,1,0",
+            "--stereo",
+            "0.2",
+            "--history",
+            "--gaze-trace",
+            binocular.to_str().unwrap(),
+        ],
+        &sequence,
+    );
+    let mono_sequence = dir.join("m.exr");
+    run(
+        &[
+            "--eye",
+            "-0.1,1,3.9",
+            "--target",
+            "-0.1,1,0",
+            "--history",
+            "--gaze-trace",
+            left_only.to_str().unwrap(),
+        ],
+        &mono_sequence,
+    );
+    for frame in 1..4 {
+        let a = dir.join(format!("h_left_{frame:05}.exr"));
+        let b = dir.join(format!("m_{frame:05}.exr"));
+        let h = exr_agreement(&a, &b);
+        eprintln!("left eye's history, frame {frame}, against the mono history: {h}");
+        assert!(h >= 0.999, "frame {frame}: {h}");
+    }
+
+    // Refused before any work, naming the option, writing nothing.
+    let trace = dir.join("trace.csv");
+    std::fs::write(&trace, "frame,lx,ly,rx,ry\n0,30,20,34,20\n1,31,20,35,20\n").unwrap();
+    let path = dir.join("path.csv");
+    std::fs::write(&path, "0,0,1,3.9,0,1,0\n1,0,1,3.9,0,1,0\n").unwrap();
+    let bad_out = dir.join("bad.exr");
+    for (extra, needle) in [
+        (vec!["--stereo", "0"], "--stereo"),
+        (vec!["--stereo", "-1"], "--stereo"),
+        (vec!["--stereo", "nan"], "--stereo"),
+        (
+            vec![
+                "--stereo-views",
+                views.to_str().unwrap(),
+                "--camera-path",
+                path.to_str().unwrap(),
+            ],
+            "--stereo-views",
+        ),
+        (
+            vec![
+                "--stereo-views",
+                views.to_str().unwrap(),
+                "--gaze-trace",
+                trace.to_str().unwrap(),
+            ],
+            "frame 1",
+        ),
+        (vec!["--stereo", "0.1", "--samples", "0/2"], "--stereo"),
+        (
+            vec!["--stereo", "0.1", "--stereo-views", views.to_str().unwrap()],
+            "cannot be used with",
+        ),
+    ] {
+        let mut cmd = fovea();
+        common(&mut cmd);
+        let out = if extra.contains(&"--samples") {
+            dir.join("bad.fvpart")
+        } else {
+            bad_out.clone()
+        };
+        let o = cmd.args(&extra).arg("-o").arg(&out).output().unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{extra:?} was accepted");
+        assert!(stderr.contains(needle), "{extra:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        let written: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().starts_with("bad"))
+            .collect();
+        assert!(written.is_empty(), "{extra:?} wrote {written:?}");
+    }
+}
+
+/// Both eyes with a history each over a binocular gaze trace (`frame,lx,ly,rx,ry` by its header), on
+/// the CPU and on Vulkan: every eye's frame agrees between the backends, each eye's history starts
+/// once and then continues although the two views alternate, and each eye is fixated where the
+/// trace says. Twice: the bundled scene with `--stereo`, and the Cornell box seen by eyes that turn
+/// and move with asymmetric frusta from a views file (the reprojection's off-axis film).
+#[test]
+fn both_eyes_keep_their_own_history_alike_on_the_cpu_and_on_vulkan() {
+    let dir = temp_dir("stereo-history");
+    let trace = dir.join("binocular.csv");
+    let mut lines = String::from("frame,lx,ly,rx,ry\n");
+    for (i, (x, y)) in [(80, 45), (78, 46), (60, 40), (61, 41), (90, 50), (89, 52)]
+        .iter()
+        .enumerate()
+    {
+        // The right eye's gaze a little to the left in its image: a near fixation.
+        lines += &format!("{i},{x},{y},{},{y}\n", x - 6);
+    }
+    std::fs::write(&trace, lines).unwrap();
+    // A headset's eyes: asymmetric frusta, the head turning and moving a little each frame.
+    let views = dir.join("views.csv");
+    let mut lines = String::from("frame,eye,x,y,z,qx,qy,qz,qw,l,r,u,d\n");
+    for frame in 0..6 {
+        let yaw = 0.02 * frame as f64;
+        let (qy, qw) = ((0.5 * yaw).sin(), (0.5 * yaw).cos());
+        let x = 0.01 * frame as f64;
+        lines += &format!(
+            "{frame},left,{},1,3.9,0,{qy},0,{qw},-0.45,0.36,0.38,-0.40\n",
+            x - 0.1
+        );
+        lines += &format!(
+            "{frame},right,{},1,3.9,0,{qy},0,{qw},-0.36,0.45,0.38,-0.40\n",
+            x + 0.1
+        );
+    }
+    std::fs::write(&views, lines).unwrap();
+    let cornell = cornell();
+    let runs: [(&str, Vec<&str>); 2] = [
+        ("lost-empire", vec!["--stereo", "0.5"]),
+        (
+            "cornell",
+            vec![
+                cornell.to_str().unwrap(),
+                "--stereo-views",
+                views.to_str().unwrap(),
+            ],
+        ),
+    ];
+    for (name, extra) in runs {
+        let render = |backend: &str| {
+            let out = dir.join(format!("{name}-{backend}.exr"));
+            let stats = dir.join(format!("{name}-{backend}.json"));
+            let run = fovea()
+                .args(["render", "--backend", backend, "--history", "-q"])
+                .args(["--resolution", "160x90", "--spp", "4,2,1"])
+                .args(&extra)
+                .arg("--gaze-trace")
+                .arg(&trace)
+                .arg("-o")
+                .arg(&out)
+                .arg("--stats")
+                .arg(&stats)
+                .env("FOVEA_VULKAN_VALIDATION", "1")
+                .output()
+                .unwrap();
+            (run, stats)
+        };
+        let (cpu, cpu_stats) = render("cpu");
+        assert!(
+            cpu.status.success(),
+            "{}",
+            String::from_utf8_lossy(&cpu.stderr)
+        );
+        let read = |p: &Path| -> serde_json::Value {
+            serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+        };
+        let cpu_json = read(&cpu_stats);
+        let frames = cpu_json["frames"].as_array().unwrap();
+        assert_eq!(frames.len(), 12, "six frames of two eyes");
+        for (k, f) in frames.iter().enumerate() {
+            let (number, eye) = (k / 2, ["left", "right"][k % 2]);
+            assert_eq!(f["view"], eye, "{f}");
+            assert_eq!(f["frame"], number, "{f}");
+            assert_eq!(f["history_restarted"], number == 0, "{f}");
+            let output = f["output"].as_str().unwrap();
+            assert!(
+                output.ends_with(&format!("{name}-cpu_{eye}_{number:05}.exr")),
+                "{output}"
+            );
+        }
+        let x = |k: usize| frames[k]["gaze"][0].as_f64().unwrap();
+        assert_eq!((x(0), x(1)), (80.0, 74.0), "each eye's own gaze");
+        let (gpu, gpu_stats) = render("vulkan");
+        let stderr = String::from_utf8_lossy(&gpu.stderr);
+        if !gpu.status.success()
+            && stderr.contains("Vulkan")
+            && std::env::var("CI").as_deref() != Ok("true")
+        {
+            eprintln!("skipping the Vulkan half: no usable Vulkan device here: {stderr}");
+            return;
+        }
+        assert!(gpu.status.success(), "{stderr}");
+        let gpu_json = read(&gpu_stats);
+        assert_eq!(
+            gpu_json["backend_details"]["validation_messages"],
+            serde_json::json!([])
+        );
+        for (c, g) in frames.iter().zip(gpu_json["frames"].as_array().unwrap()) {
+            assert_eq!(c["history_restarted"], g["history_restarted"], "{g}");
+            let within = exr_agreement(
+                Path::new(c["output"].as_str().unwrap()),
+                Path::new(g["output"].as_str().unwrap()),
+            );
+            eprintln!(
+                "{name} {} frame {}: {:.3} % within 1e-3",
+                c["view"],
+                c["frame"],
+                within * 100.0
+            );
+            assert!(within >= 0.999, "{name} {c} {within}");
+        }
+    }
+}

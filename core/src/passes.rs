@@ -98,9 +98,26 @@ pub struct FrameRequest {
     /// The denoiser's passes after the history's (or the fill's) image.
     pub denoise: bool,
     pub output: FrameOutput,
+    /// Which of the frame's views this is (0 for a single view; 0 and 1 the left and right eyes of
+    /// a stereo frame), below [`MAX_VIEWS`]. Each view keeps its own history, G-buffer and per-frame
+    /// buffers on the host; the scene and its upload are shared by all.
+    pub view: u32,
 }
 
+/// The most views a frame holds: two eyes, or four for a headset with a high-resolution inset per
+/// eye (OpenXR's quad views).
+pub const MAX_VIEWS: u32 = 4;
+
+/// The view names a stereo frame's outputs carry, in [`FrameRequest::view`] order.
+pub const STEREO_VIEW_NAMES: [&str; 2] = ["left", "right"];
+
 impl FrameRequest {
+    /// The same request for view `view` of the frame (see [`Self::view`]).
+    #[must_use]
+    pub const fn for_view(self, view: u32) -> Self {
+        Self { view, ..self }
+    }
+
     /// The passes this request needs.
     #[must_use]
     pub const fn setup(&self) -> FrameSetup {

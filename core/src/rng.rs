@@ -36,6 +36,15 @@ pub fn u32_to_unit_float(bits: u32) -> f32 {
     (bits >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
+/// The seed of view `view` of a frame seeded `seed`: view 0 keeps it (a single view renders as it
+/// always has), the others get their own, so two eyes never draw the same random numbers for the same
+/// pixel (correlated noise would look like a pattern on the screen's plane).
+#[inline]
+#[must_use]
+pub const fn view_seed(seed: u32, view: u32) -> u32 {
+    seed.wrapping_add(view.wrapping_mul(0x85eb_ca6b))
+}
+
 /// The random numbers of one camera sample: a hash of (pixel, frame, sample, region, seed) and a counter
 /// of draws.
 ///

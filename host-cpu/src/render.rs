@@ -340,6 +340,7 @@ fn hdr_request(fill_mode: u32, history: bool) -> FrameRequest {
         history,
         denoise: false,
         output: FrameOutput::Hdr,
+        view: 0,
     }
 }
 

@@ -109,9 +109,15 @@ pub struct VulkanContext {
     pub(crate) timestamp_period: f32,
     /// Mask of the valid timestamp bits.
     pub(crate) timestamp_mask: u64,
+    /// The per-frame buffers of the view being rendered ([`Self::active_view`]).
     pub(crate) frame: Option<FrameResources>,
     /// Size of the last frame rendered (what [`Self::read_back_hdr`] and [`Self::present`] show).
     pub(crate) last_frame_size: Option<(u32, u32)>,
+    /// The view whose buffers `frame` holds ([`fovea_core::passes::FrameRequest::view`]).
+    pub(crate) active_view: u32,
+    /// The other views' buffers and sizes (with their histories), indexed by view; the active
+    /// view's slot is empty.
+    pub(crate) parked_views: Vec<crate::frame::ParkedView>,
     /// The window's swapchain (live view), created by the first [`Self::present`].
     pub(crate) presenter: Option<crate::swapchain::Presenter>,
     pub(crate) poisoned: bool,
@@ -386,6 +392,8 @@ impl VulkanContext {
             },
             frame: None,
             last_frame_size: None,
+            active_view: 0,
+            parked_views: Vec::new(),
             presenter: None,
             poisoned: false,
             injected_fault: None,
@@ -899,6 +907,7 @@ impl Drop for VulkanContext {
             // The swapchain goes before the surface (with the instance, later).
             self.presenter = None;
             self.frame = None;
+            self.parked_views.clear();
             for p in self.pipelines {
                 device.destroy_pipeline(p, None);
             }

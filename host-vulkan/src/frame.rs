@@ -206,6 +206,13 @@ pub(crate) fn scene_texels_write<'a>(
         .texel_buffer_view(view)
 }
 
+/// A view's buffers while another view renders (see [`VulkanContext::select_view`]).
+#[derive(Default)]
+pub(crate) struct ParkedView {
+    pub(crate) frame: Option<FrameResources>,
+    pub(crate) size: Option<(u32, u32)>,
+}
+
 /// A memory barrier after a dispatch: its writes (and reads, for buffers reused next) before the next
 /// dispatch (`COMPUTE_SHADER`) or the readback copies (`TRANSFER`).
 fn barrier(device: &ash::Device, cb: vk::CommandBuffer, dst_stage: vk::PipelineStageFlags) {
@@ -266,11 +273,42 @@ impl VulkanContext {
         )
     }
 
-    /// Forgets the history: the next frame with temporal reuse starts every pixel afresh.
+    /// Forgets the history of every view: the next frame with temporal reuse starts every pixel
+    /// afresh.
     pub fn reset_history(&mut self) {
-        if let Some(t) = self.frame.as_mut().and_then(|f| f.temporal.as_mut()) {
-            t.previous = None;
+        let parked = self.parked_views.iter_mut().map(|p| &mut p.frame);
+        for frame in std::iter::once(&mut self.frame).chain(parked) {
+            if let Some(t) = frame.as_mut().and_then(|f| f.temporal.as_mut()) {
+                t.previous = None;
+            }
         }
+    }
+
+    /// Makes `view`'s buffers (its history, G-buffer and per-frame buffers) the ones the passes
+    /// use, parking the active view's.
+    fn select_view(&mut self, view: u32) -> Result<()> {
+        if view >= fovea_core::passes::MAX_VIEWS {
+            return Err(VulkanError::Invalid(format!(
+                "view {view}: a frame holds at most {} views",
+                fovea_core::passes::MAX_VIEWS
+            )));
+        }
+        if view == self.active_view {
+            return Ok(());
+        }
+        let needed = view.max(self.active_view) as usize + 1;
+        if self.parked_views.len() < needed {
+            self.parked_views.resize_with(needed, ParkedView::default);
+        }
+        self.parked_views[self.active_view as usize] = ParkedView {
+            frame: self.frame.take(),
+            size: self.last_frame_size.take(),
+        };
+        let chosen = std::mem::take(&mut self.parked_views[view as usize]);
+        self.frame = chosen.frame;
+        self.last_frame_size = chosen.size;
+        self.active_view = view;
+        Ok(())
     }
 
     /// [`Self::render_frame_with_progress`], with temporal reuse where `history` holds (see
@@ -295,6 +333,7 @@ impl VulkanContext {
                 want_hdr,
                 want_raw: false,
             },
+            view: 0,
         };
         self.render(scene, frame, &request, progress)
     }
@@ -315,6 +354,7 @@ impl VulkanContext {
         request: &FrameRequest,
         progress: &dyn Fn(u64),
     ) -> Result<(RenderedFrame, GpuRenderStats)> {
+        self.select_view(request.view)?;
         let prepared = self.prepare_frame(scene, frame, request)?;
         let timing = self.dispatch_frame(&prepared.plan, &prepared.sizes, request, progress)?;
         if request.history {

@@ -56,6 +56,7 @@ const RAW: FrameRequest = FrameRequest {
     history: false,
     denoise: false,
     output: FrameOutput::Hdr,
+    view: 0,
 };
 /// The HDR image alone, denoised.
 const DENOISE: FrameRequest = FrameRequest {

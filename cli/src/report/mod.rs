@@ -218,6 +218,7 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
     let still = ScheduledFrame {
         number: 0,
         gaze,
+        eyes: None,
         camera: None,
     };
     let schedule = FrameSchedule::read(
