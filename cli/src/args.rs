@@ -660,9 +660,10 @@ pub struct SequenceArgs {
     #[arg(long)]
     pub gaze_normalized: bool,
     /// CSV camera path with lines `frame,eye_x,eye_y,eye_z,target_x,target_y,target_z` (world
-    /// coordinates): each frame's camera. With a --gaze-trace it must give every frame the trace
-    /// gives; without one, `render` takes its frames from the path (the gaze stays at --gaze or the
-    /// centre), and `report` needs a trace.
+    /// coordinates; a header line names those columns, commas between the fields; at most
+    /// 1,000,000 frames): each frame's camera. With a --gaze-trace it must give every frame the
+    /// trace gives; without one, `render` takes its frames from the path (the gaze stays at --gaze or
+    /// the centre), and `report` needs a trace.
     #[arg(long, value_name = "FILE.csv")]
     pub camera_path: Option<PathBuf>,
 }
@@ -679,7 +680,8 @@ pub struct StereoArgs {
     /// Render both eyes from each frame's eye poses and frusta, in OpenXR's conventions: lines
     /// `frame,eye,x,y,z,qx,qy,qz,qw,angle_left,angle_right,angle_up,angle_down` (eye `left` or
     /// `right`, world position, unit quaternion of the eye looking along -z, angles in radians);
-    /// the foveation radii follow each eye's angles. Without a --gaze-trace the file numbers the
+    /// the foveation radii follow each eye's angles; a header line names those columns, commas
+    /// between the fields; at most 1,000,000 frames. Without a --gaze-trace the file numbers the
     /// frames.
     #[arg(long, value_name = "FILE.csv", conflicts_with = "stereo")]
     pub stereo_views: Option<PathBuf>,

@@ -8,6 +8,17 @@ use crate::error::{FoveaError, Result};
 /// The most frames a camera path may hold.
 pub const MAX_PATH_FRAMES: usize = 1_000_000;
 
+/// A camera path's columns, each with the names its header may give it.
+const CAMERA_PATH_COLUMNS: &[&[&str]] = &[
+    &["frame"],
+    &["eye_x", "ex"],
+    &["eye_y", "ey"],
+    &["eye_z", "ez"],
+    &["target_x", "tx"],
+    &["target_y", "ty"],
+    &["target_z", "tz"],
+];
+
 /// One line of a camera path: where the camera is and what it looks at in one frame (world
 /// coordinates, as `--eye` and `--target`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -22,16 +33,20 @@ pub struct CameraKey {
 pub fn parse_camera_path(path: &Path, text: &str) -> Result<Vec<CameraKey>> {
     let mut out: Vec<CameraKey> = Vec::new();
     let mut seen = std::collections::HashMap::new();
-    for (i, line) in text.lines().enumerate() {
+    let mut first = true;
+    for (i, line) in crate::csv_lines::strip_bom(text).lines().enumerate() {
         let line_no = i + 1;
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if i == 0 && fields.first().is_some_and(|f| f.parse::<f64>().is_err()) {
-            continue; // a header
+        if std::mem::take(&mut first)
+            && crate::csv_lines::is_header(line, CAMERA_PATH_COLUMNS, "a camera path")
+                .map_err(|e| FoveaError::file(path, format!("line {line_no}: {e}")))?
+        {
+            continue;
         }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
         let bad = |what: String| {
             FoveaError::file(
                 path,
@@ -98,6 +113,10 @@ mod tests {
         .unwrap();
         assert_eq!(ok.len(), 2);
         assert_eq!(ok[1].eye, [0.1, 1.0, 4.0]);
+        // A byte-order mark before a data line keeps frame 0 (it was taken for a header).
+        let bom = parse_camera_path(p, "\u{feff}0,0,1,4,0,1,0\n1,0,1,4,0,1,0\n").unwrap();
+        assert_eq!(bom.len(), 2);
+        assert_eq!(bom[0].frame, 0);
         for (text, needle) in [
             ("0,0,1,4,0,1\n", "6 fields"),
             ("0,0,1,4,0,1,x\n", "'x'"),
@@ -105,6 +124,16 @@ mod tests {
             ("0,1,1,1,1,1,1\n", "same point"),
             ("0,0,1,4,0,1,0\n0,0,1,4,0,1,0\n", "lines 1 and 2"),
             ("# nothing\n", "no frame lines"),
+            ("frame,tx,ty,tz,ex,ey,ez\n0,0,1,4,0,1,0\n", "in that order"),
+            (
+                "time,a,b,c,d,e,f\n0,0,1,4,0,1,0\n",
+                "line 1: 'time,a,b,c,d,e,f' is neither",
+            ),
+            ("0;0;1;4;0;1;0\n", "separated by semicolons"),
+            (
+                "0,0,1,4,0,1,0\nframe,ex,ey,ez,tx,ty,tz\n",
+                "line 2: 'frame' is not a frame number",
+            ),
         ] {
             let e = parse_camera_path(p, text).unwrap_err().to_string();
             assert!(e.contains(needle), "{text:?}: {e}");

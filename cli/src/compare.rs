@@ -22,8 +22,9 @@ use fovea_cpu::FrameImage;
 pub struct Agreement {
     /// Share of pixels whose every channel agrees ([`fovea_frame::pixels_agree`]).
     pub within: f64,
-    /// The largest absolute difference of one channel.
-    pub max_abs: f32,
+    /// The largest absolute difference of one channel, over the pixels finite in both images;
+    /// `None` where no pixel is (an image all NaN), never a 0 that would read as "identical".
+    pub max_abs: Option<f32>,
     /// Mean relMSE of the test against the reference.
     pub rel_mse: f64,
     /// Mean FLIP of the tone-mapped images (FLIP's default 67 pixels per degree).
@@ -42,6 +43,13 @@ pub fn agreement(test: &FrameImage, reference: &FrameImage, exposure_ev: f32) ->
         "same size"
     );
     let (within, max_abs) = fovea_frame::agreement(test, reference);
+    let finite = |p: &[f32; 4]| p[..3].iter().all(|c| c.is_finite());
+    let any_finite_pair = test
+        .pixels
+        .iter()
+        .zip(&reference.pixels)
+        .any(|(a, b)| finite(a) && finite(b));
+    let max_abs = any_finite_pair.then_some(max_abs);
     let n = test.pixels.len().max(1) as f64;
     let rel_mse = rel_mse_map(test, reference)
         .iter()
@@ -56,13 +64,7 @@ pub fn agreement(test: &FrameImage, reference: &FrameImage, exposure_ev: f32) ->
         nv_flip::DEFAULT_PIXELS_PER_DEGREE,
     );
     let mean_flip = flip.iter().map(|&e| f64::from(e)).sum::<f64>() / n;
-    let bad = |image: &FrameImage| {
-        image
-            .pixels
-            .iter()
-            .filter(|p| !p[..3].iter().all(|c| c.is_finite()))
-            .count()
-    };
+    let bad = |image: &FrameImage| image.pixels.iter().filter(|p| !finite(p)).count();
     Agreement {
         within,
         max_abs,
@@ -187,14 +189,17 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         None => None,
     };
     println!(
-        "fovea: {} against {} ({}x{}): {:.4} % of pixels within 1e-3, max abs {:.3e}, relMSE {:.3e}, \
+        "fovea: {} against {} ({}x{}): {:.4} % of pixels within 1e-3, max abs {}, relMSE {:.3e}, \
          mean FLIP {:.3e}",
         args.test.display(),
         args.reference.display(),
         test.width,
         test.height,
         100.0 * a.within,
-        a.max_abs,
+        a.max_abs.map_or_else(
+            || "none (no pixel is finite in both)".to_string(),
+            |m| format!("{m:.3e}")
+        ),
         a.rel_mse,
         a.mean_flip
     );
@@ -268,7 +273,7 @@ mod tests {
     fn agreement_counts_pixels_within_the_tolerances() {
         let reference = image(vec![[1.0, 0.5, 0.0, 0.0]; 4]);
         assert_eq!(agreement(&reference, &reference, 0.0).within, 1.0);
-        assert_eq!(agreement(&reference, &reference, 0.0).max_abs, 0.0);
+        assert_eq!(agreement(&reference, &reference, 0.0).max_abs, Some(0.0));
         let test = image(vec![
             [1.0005, 0.5, 0.0, 0.0],  // 5e-4 relative: agrees
             [1.0, 0.5, 0.00005, 0.0], // 5e-5 absolute near zero: agrees
@@ -277,7 +282,15 @@ mod tests {
         ]);
         let a = agreement(&test, &reference, 0.0);
         assert_eq!(a.within, 0.5);
-        assert!((a.max_abs - 0.01).abs() < 1e-6, "{}", a.max_abs);
+        assert!((a.max_abs.unwrap() - 0.01).abs() < 1e-6, "{:?}", a.max_abs);
+        assert_eq!(a.non_finite, [1, 0]);
+        // An image all NaN has no largest difference, not a 0 that reads as identical.
+        let nan = image(vec![[f32::NAN, 0.5, 0.0, 0.0]; 4]);
+        let all_nan = agreement(&nan, &reference, 0.0);
+        assert_eq!(
+            (all_nan.max_abs, all_nan.within, all_nan.non_finite),
+            (None, 0.0, [4, 0])
+        );
         // A NaN pixel shows in the mean error rather than being skipped.
         assert!(a.rel_mse.is_nan());
         let one = |r: f32| image(vec![[r, 0.5, 0.0, 0.0]]);

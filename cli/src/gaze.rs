@@ -231,20 +231,7 @@ fn parse_header(line: &str) -> Result<(TraceTiming, GazeColumns), String> {
 /// The separator a line without commas uses instead, by name, where it splits the line into three
 /// or five fields (`;`, tabs, spaces).
 fn other_separator(line: &str) -> Option<&'static str> {
-    let line = line.trim();
-    if line.contains(',') {
-        return None;
-    }
-    let three = |parts: Vec<&str>| matches!(parts.iter().filter(|p| !p.is_empty()).count(), 3 | 5);
-    if three(line.split(';').map(str::trim).collect()) {
-        Some("semicolons")
-    } else if line.contains('\t') && three(line.split('\t').map(str::trim).collect()) {
-        Some("tabs")
-    } else if three(line.split(' ').collect()) {
-        Some("spaces")
-    } else {
-        None
-    }
+    crate::csv_lines::other_separator(line, &[3, 5])
 }
 
 /// A line's key (seconds or frame), its gaze (the left eye's of two) and the right eye's, raw.
@@ -668,7 +655,7 @@ impl GazeTrace {
         let mut previous_line = 0;
         let mut seen_content = false;
         // A UTF-8 byte-order mark (spreadsheet exports write one) is not part of the first field.
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let text = crate::csv_lines::strip_bom(text);
         for (index, raw) in text.lines().enumerate() {
             let line = index + 1;
             let content = raw.split('#').next().unwrap_or("").trim();
@@ -941,12 +928,12 @@ mod tests {
         assert!(t.note.unwrap().contains("skipping 3 frame number(s)"));
     }
 
-    /// A property test of the trace and camera-path readers (run in CI, bounded: `FOVEA_FUZZ_CASES`,
+    /// A property test of the trace, camera-path and views-file readers (run in CI, bounded: `FOVEA_FUZZ_CASES`,
     /// 3000 by default): random edits of valid files (bytes flipped, inserted, deleted, lines
     /// repeated, separators and numbers swapped for odd ones) parse or are refused with a message
     /// naming the file, never a panic; a trace that parses gives frames without a panic either.
     #[test]
-    fn mutated_traces_and_camera_paths_are_refused_or_read_never_a_panic() {
+    fn mutated_traces_camera_paths_and_views_files_are_refused_or_read_never_a_panic() {
         let cases: u64 = std::env::var("FOVEA_FUZZ_CASES")
             .ok()
             .and_then(|v| v.parse().ok())
@@ -955,6 +942,8 @@ mod tests {
             "t,x,y\n0,0.5,0.5\n0.0083,0.51,0.49\n0.5,0.2,0.3\n2,0.7,0.6\n",
             "frame,x,y\n0,10,10\n1,12,9\n# a comment\n\n2,14,8\n",
             "frame,ex,ey,ez,tx,ty,tz\n0,0,1,3.9,0,1,0\n1,0.1,1,3.9,0,1,0\n",
+            "frame,eye,x,y,z,qx,qy,qz,qw,l,r,u,d\n0,left,-0.03,1.6,0,0,0,0,1,-0.9,0.8,0.8,-0.9\n\
+             0,right,0.03,1.6,0,0,0,0,1,-0.8,0.9,0.8,-0.9\n",
         ];
         let odd = [
             ",",
@@ -1011,6 +1000,10 @@ mod tests {
                 if seed.starts_with("frame,ex") {
                     crate::camera_path::parse_camera_path(Path::new("p.csv"), &text)
                         .map(|k| k.len())
+                        .map_err(|e| e.to_string())
+                } else if seed.starts_with("frame,eye") {
+                    crate::stereo::parse_eye_views(Path::new("p.csv"), &text)
+                        .map(|v| v.len())
                         .map_err(|e| e.to_string())
                 } else {
                     GazeTrace::parse(

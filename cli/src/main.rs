@@ -5,6 +5,7 @@ mod bench;
 mod camera_path;
 mod compare;
 mod content_hash;
+mod csv_lines;
 mod error;
 // Without the Vulkan backend (`--no-default-features`: the CPU-only build of scripts/render-default.sh
 // and the cluster's portable binary) the live view cannot run, but its modules (fly camera, HUD, gaze

@@ -20,22 +20,18 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     let checked = check_parts(parts)?;
     let frame = *checked.frame();
-    let image = checked.merged()?;
+    let (image, non_finite) = checked.merged()?;
     if format == crate::output::ImageFormat::Exr && args.exposure != 0.0 {
         eprintln!(
             "warning: --exposure applies to a tone-mapped PNG; the --output EXR is linear and is \
              written without it"
         );
     }
-    let non_finite = image
-        .pixels
-        .iter()
-        .filter(|p| !p[..3].iter().all(|c| c.is_finite()))
-        .count();
-    if non_finite > 0 {
+    for (part, count) in &non_finite {
         eprintln!(
-            "warning: {non_finite} pixel(s) of the merged image are NaN or infinite: the parts' sums \
-             hold non-finite samples (written as they are)"
+            "warning: {count} pixel(s) of '{}' hold NaN or infinite sums, which the merged image \
+             shows as they are",
+            part.display()
         );
     }
     write_image(&args.output, format, &image, args.exposure)?;

@@ -102,22 +102,46 @@ pub fn resolved_path(p: &Path) -> PathBuf {
     }
 }
 
-/// Refuses, before any work, an output (`option`, path) that is one of the run's `inputs`, compared by
-/// the files they resolve to ([`resolved_path`]): fovea never overwrites its input.
-pub fn refuse_overwriting_inputs(
-    outputs: &[(&'static str, &Path)],
+/// Refuses, before any work, an output (`option`, path) that is one of the run's `inputs`, or that
+/// another output writes too, compared by the files they resolve to ([`resolved_path`]): fovea never
+/// overwrites its input, nor one output with another.
+pub fn refuse_overwriting_inputs<P: AsRef<Path>>(
+    outputs: &[(&'static str, P)],
     inputs: &[&Path],
 ) -> Result<()> {
-    let inputs: Vec<(PathBuf, &Path)> = inputs.iter().map(|i| (resolved_path(i), *i)).collect();
+    let inputs: std::collections::HashMap<PathBuf, &Path> =
+        inputs.iter().map(|i| (resolved_path(i), *i)).collect();
+    let mut written: std::collections::HashMap<PathBuf, (&'static str, &Path)> =
+        std::collections::HashMap::new();
+    // Outputs numbered per frame share a folder: resolve each folder once.
+    let mut folders: std::collections::HashMap<PathBuf, PathBuf> = std::collections::HashMap::new();
     for (option, output) in outputs {
-        let out = resolved_path(output);
-        if let Some((_, input)) = inputs.iter().find(|(r, _)| *r == out) {
+        let output = output.as_ref();
+        let out = match (output.canonicalize(), output.file_name()) {
+            (Ok(c), _) => c,
+            (Err(_), Some(name)) => folders
+                .entry(parent_dir(output))
+                .or_insert_with_key(|dir| dir.canonicalize().unwrap_or_else(|_| dir.clone()))
+                .join(name),
+            (Err(_), None) => output.to_path_buf(),
+        };
+        if let Some(input) = inputs.get(&out) {
             return Err(FoveaError::option(
                 option,
                 format!(
                     "'{}' is an input of this run ('{}'); fovea never overwrites its input",
                     output.display(),
                     input.display()
+                ),
+            ));
+        }
+        if let Some((other, first)) = written.insert(out, (option, output)) {
+            return Err(FoveaError::option(
+                option,
+                format!(
+                    "'{}' is also written as '{}' ({other}); give each output its own file",
+                    output.display(),
+                    first.display()
                 ),
             ));
         }

@@ -21,14 +21,17 @@ use crate::partial::{
 use crate::scene_setup::{choose_camera, prepare_scene, Lighting, PreparedScene};
 use crate::stats::FrameStats;
 
-use crate::schedule::{FrameSchedule, FrameSettings, LonePath, ScheduledFrame};
+use crate::schedule::{
+    FoveationRule, FrameSchedule, FrameSettings, FrameView, LonePath, ScheduledFrame,
+};
 use crate::stereo::{eye_path, StereoSource, EYES};
 use crate::values::{self, SampleSelection};
 
 /// Everything `render` needs, parsed and checked before any work starts.
 struct Plan {
     resolution: [u32; 2],
-    foveation_template: FoveationParams,
+    /// The run's foveation, and how each view's gaze and eye set it.
+    foveation_rule: FoveationRule,
     radii_px: [f32; 2],
     /// The frames, each with its gaze and camera.
     schedule: FrameSchedule,
@@ -158,15 +161,8 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         Some(_) => ImageFormat::Exr,
         None => check_output_path(&args.output, "--output", true)?,
     };
-    refuse_overwriting_inputs(args)?;
     if let Some(p) = &args.regions_overlay {
         check_output_path(p, "--regions-overlay", false)?;
-        if p == &args.output {
-            return Err(FoveaError::option(
-                "--regions-overlay",
-                format!("'{}' is also the --output image", p.display()),
-            ));
-        }
     }
     let keep_raw = match &args.keep_raw {
         None => None,
@@ -176,28 +172,8 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
                 "keeps the image the denoiser starts from; add --denoise",
             ))
         }
-        Some(p) => {
-            let format = check_output_path(p, "--keep-raw", true)?;
-            if p == &args.output || Some(p) == args.regions_overlay.as_ref() {
-                return Err(FoveaError::option(
-                    "--keep-raw",
-                    format!("'{}' is also an output image", p.display()),
-                ));
-            }
-            Some((p.clone(), format))
-        }
+        Some(p) => Some((p.clone(), check_output_path(p, "--keep-raw", true)?)),
     };
-    if let Some(p) = &args.stats {
-        if p == &args.output
-            || Some(p) == args.regions_overlay.as_ref()
-            || Some(p) == args.keep_raw.as_ref()
-        {
-            return Err(FoveaError::option(
-                "--stats",
-                format!("'{}' is also an output image", p.display()),
-            ));
-        }
-    }
     if let Some(p) = &args.stats {
         check_json_path(p, "--stats")?;
     }
@@ -219,9 +195,15 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         );
     }
 
-    Ok(Plan {
+    let plan = Plan {
         resolution,
-        foveation_template,
+        foveation_rule: FoveationRule {
+            template: foveation_template,
+            uniform: args.foveation.uniform,
+            // The eyes of a views file have their own frusta, and so their own radii.
+            eye_eccentricity: (args.foveation.radii.is_none())
+                .then_some(args.foveation.display.eccentricity.0),
+        },
         radii_px,
         per_frame_outputs: schedule.from_files,
         schedule,
@@ -233,7 +215,9 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         settings: FrameSettings::new(resolution, &args.path, &args.image),
         lighting,
         warnings,
-    })
+    };
+    refuse_overwriting_inputs(args, &plan, &[])?;
+    Ok(plan)
 }
 
 /// `--stereo IPD` or `--stereo-views FILE`, read and checked against the frames `schedule` holds; a
@@ -329,16 +313,7 @@ fn check_part_options(
             ),
         ));
     }
-    let dir = match args.output.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    if !dir.is_dir() {
-        return Err(FoveaError::option(
-            "--output",
-            crate::output::missing_folder(dir),
-        ));
-    }
+    crate::output::check_writable_file(&args.output, "--output")?;
     Ok(spec)
 }
 
@@ -392,6 +367,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         &plan.lighting.point_lights,
         renderer.wants_wide_bvh(),
     )?;
+    // The scene's own files (its MTL libraries, buffers, textures) are known once it is read.
+    refuse_overwriting_inputs(args, &plan, &scene.files)?;
     run_warnings.extend(describe_scene(args, &scene));
 
     let settings = plan.settings;
@@ -413,7 +390,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let mut black_frames = 0usize;
     for (g, &camera) in plan.schedule.frames.iter().zip(&cameras) {
         if let Some(spec) = plan.samples {
-            let frame = settings.frame(g.number, camera, foveation_at(&plan, args, g.gaze));
+            let frame = settings.frame(g.number, camera, plan.foveation_rule.at(g.gaze, None));
             let bar = progress_bar(args.quiet, &plan, &frame.foveation);
             frames.push(render_part(
                 args,
@@ -437,35 +414,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             },
         );
         // One view, or each eye in turn as a view of the frame, with its own history.
-        let views: Vec<(Option<usize>, FrameParams)> = match &plan.stereo {
-            None => vec![(
-                None,
-                settings.frame(g.number, camera, foveation_at(&plan, args, g.gaze)),
-            )],
+        let eyes = match &plan.stereo {
+            None => None,
             Some(stereo) => {
-                let eyes = stereo.cameras(g.number, camera, scene.origin)?;
-                (0..EYES)
-                    .map(|view| {
-                        let mut foveation = foveation_at(&plan, args, g.eye_gaze(view));
-                        if let (Some(eye), false, None) = (
-                            stereo.eye_views(g.number),
-                            args.foveation.uniform,
-                            args.foveation.radii,
-                        ) {
-                            // The eye's own angles set its pixels per degree, and so its radii.
-                            [foveation.radius_fovea, foveation.radius_intermediate] = eye_radii(
-                                args.foveation.display.eccentricity.0,
-                                eye[view].focal_px(plan.resolution[0]),
-                            );
-                        }
-                        let frame =
-                            settings.view_frame(g.number, view as u32, eyes[view], foveation);
-                        (Some(view), frame)
-                    })
-                    .collect()
+                Some(stereo.eye_cameras(g.number, camera, scene.origin, plan.resolution[0])?)
             }
         };
-        for (view, frame) in views {
+        for FrameView { view, frame } in settings.views(g, camera, eyes, &plan.foveation_rule) {
             let bar = progress_bar(args.quiet, &plan, &frame.foveation);
             let request = request.for_view(view.unwrap_or(0) as u32);
             let rendered = renderer.render(&scene.packed, &frame, &request, &|n| bar.inc(n))?;
@@ -496,7 +451,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let report = crate::stats::build_report(
         renderer.name(),
         &renderer.device_name(),
-        &plan.foveation_template,
+        &plan.foveation_rule.template,
         args.foveation.uniform,
         plan.radii_px,
         plan.resolution,
@@ -514,28 +469,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// The run's foveation fixated at `gaze` (a uniform frame has no gaze).
-fn foveation_at(plan: &Plan, args: &RenderArgs, gaze: [f32; 2]) -> FoveationParams {
-    let mut foveation = plan.foveation_template;
-    if !args.foveation.uniform {
-        foveation.gaze = gaze;
-    }
-    foveation
-}
-
-/// The region radii in pixels of an eye whose image has a focal length of `focal_px` pixels, for
-/// regions bounded at `eccentricity` degrees: the paper's `r = (a / 2) · R / A` with `a = 2 d
-/// tan(e / 2)` is `r = f · tan(e / 2)` for the focal length `f = d · R / A` in pixels.
-fn eye_radii(eccentricity: [f32; 2], focal_px: f32) -> [f32; 2] {
-    eccentricity.map(|e| focal_px * (0.5 * e.to_radians()).tan())
-}
-
 /// Prints what loading the scene found (all of it with `--verbose`, else how many warnings), and
 /// returns the warnings that `--stats` lists: a scene without lights, `--texture-lod` without textures.
 fn describe_scene(args: &RenderArgs, scene: &PreparedScene) -> Vec<String> {
     if args.verbose {
         for w in &scene.warnings {
             eprintln!("warning: {w}");
+        }
+        for u in &scene.unused {
+            eprintln!("note: {u}");
         }
         let s = &scene.packed.stats;
         eprintln!(
@@ -639,6 +581,45 @@ fn render_part(
     })
 }
 
+/// The file an output option's `path` names for frame `number` and `view`: `out.png` →
+/// `out_left.png` for an eye, then `out_left_00012.png` for a frame of a sequence.
+fn numbered_output(plan: &Plan, path: &Path, number: u32, view: Option<usize>) -> PathBuf {
+    let path = match view {
+        Some(view) => eye_path(path, view),
+        None => path.to_path_buf(),
+    };
+    if plan.per_frame_outputs {
+        frame_path(&path, number)
+    } else {
+        path
+    }
+}
+
+/// Every file the run will write, with the option that names it: each frame's and each eye's
+/// image, `--keep-raw` and `--regions-overlay`, and `--stats`.
+fn written_files(args: &RenderArgs, plan: &Plan) -> Vec<(&'static str, PathBuf)> {
+    let views: Vec<Option<usize>> = match plan.stereo {
+        Some(_) => (0..EYES).map(Some).collect(),
+        None => vec![None],
+    };
+    let images = [
+        ("--output", Some(&plan.output)),
+        ("--keep-raw", plan.keep_raw.as_ref().map(|(p, _)| p)),
+        ("--regions-overlay", args.regions_overlay.as_ref()),
+    ];
+    let mut files = Vec::new();
+    for (option, base) in images {
+        let Some(base) = base else { continue };
+        for frame in &plan.schedule.frames {
+            for &view in &views {
+                files.push((option, numbered_output(plan, base, frame.number, view)));
+            }
+        }
+    }
+    files.extend(args.stats.iter().map(|p| ("--stats", p.clone())));
+    files
+}
+
 /// Writes frame `number`'s outputs (the image, `--keep-raw`, `--regions-overlay`; numbered over a
 /// sequence); returns its statistics and whether its 8-bit image is all black.
 fn write_frame_outputs(
@@ -651,18 +632,7 @@ fn write_frame_outputs(
 ) -> Result<(FrameStats, bool)> {
     let [w, h] = plan.resolution;
     let exposure = plan.settings.exposure_ev;
-    // `out.png` → `out_left.png` for an eye, then `out_left_00012.png` for a frame of a sequence.
-    let numbered = |path: &Path| {
-        let path = match view {
-            Some(view) => eye_path(path, view),
-            None => path.to_path_buf(),
-        };
-        if plan.per_frame_outputs {
-            frame_path(&path, number)
-        } else {
-            path
-        }
-    };
+    let numbered = |path: &Path| numbered_output(plan, path, number, view);
     let rgb8 = match (rendered.image.rgb8(), &rendered.image.hdr) {
         (Some(bytes), _) => bytes,
         (None, Some(hdr)) => tonemapped_rgb8(hdr, exposure),
@@ -729,30 +699,24 @@ fn print_summary(args: &RenderArgs, [w, h]: [u32; 2], backend: &str, frames: &[F
     );
 }
 
-/// Fails if an output (`--output`, `--regions-overlay`, `--stats`, `--keep-raw`) is one of the run's
-/// input files (the scene, `--mtl`, `--env-map`, `--gaze-trace`, `--camera-path`): fovea never
-/// overwrites its input.
-fn refuse_overwriting_inputs(args: &RenderArgs) -> Result<()> {
+/// Fails if a file the run writes ([`written_files`]: every frame's and eye's) is one of its input
+/// files (the scene, `--mtl`, `--env-map`, `--gaze-trace`, `--camera-path`, `--stereo-views`, and
+/// `extra`: the files the scene's load read) or is written twice, compared by the files they
+/// resolve to: fovea never overwrites its input, nor one output with another.
+fn refuse_overwriting_inputs(args: &RenderArgs, plan: &Plan, extra: &[PathBuf]) -> Result<()> {
     let inputs: Vec<&Path> = [
         args.scene.as_deref(),
         args.materials.mtl.as_deref(),
         args.lighting.env_map.as_deref(),
         args.sequence.gaze_trace.as_deref(),
         args.sequence.camera_path.as_deref(),
+        args.stereo.stereo_views.as_deref(),
     ]
     .into_iter()
     .flatten()
+    .chain(extra.iter().map(PathBuf::as_path))
     .collect();
-    let outputs: Vec<(&'static str, &Path)> = [
-        ("--output", Some(args.output.as_path())),
-        ("--regions-overlay", args.regions_overlay.as_deref()),
-        ("--stats", args.stats.as_deref()),
-        ("--keep-raw", args.keep_raw.as_deref()),
-    ]
-    .into_iter()
-    .filter_map(|(option, p)| p.map(|p| (option, p)))
-    .collect();
-    crate::output::refuse_overwriting_inputs(&outputs, &inputs)
+    crate::output::refuse_overwriting_inputs(&written_files(args, plan), &inputs)
 }
 
 #[cfg(test)]

@@ -42,6 +42,11 @@ pub struct PreparedScene {
     pub pack_ms: f64,
     pub triangle_count: usize,
     pub is_default: bool,
+    /// Every file the load read (the scene file, its MTL libraries, buffers and textures): the
+    /// inputs no output may replace.
+    pub files: Vec<std::path::PathBuf>,
+    /// What the scene's files give that fovea's mapping does not use (`LoadedScene::unused`).
+    pub unused: Vec<String>,
 }
 
 /// The warning for a scene with no light and no sky (`render` and `view` print it and list it in
@@ -79,7 +84,8 @@ pub fn prepare_scene(
         ..Default::default()
     };
     let start = Instant::now();
-    let mut loaded: LoadedScene = fovea_scene::load_scene(&path, &options)?;
+    let source = fovea_scene::source::RecordingFilesystem::default();
+    let mut loaded: LoadedScene = fovea_scene::load_scene_from(&source, &path, &options)?;
     let origin = loaded.origin;
     loaded
         .punctual_lights
@@ -87,6 +93,7 @@ pub fn prepare_scene(
     let load_ms = start.elapsed().as_secs_f64() * 1e3;
     let camera_desc = loaded.camera;
     let warnings = loaded.warnings.clone();
+    let unused = loaded.unused.clone();
     let triangle_count = loaded.triangles.len();
     let options = BvhBuildOptions {
         wide: wide_bvh,
@@ -103,6 +110,8 @@ pub fn prepare_scene(
         load_ms,
         triangle_count,
         is_default,
+        files: source.files(),
+        unused,
     })
 }
 

@@ -58,6 +58,13 @@ pub struct FrameSchedule {
     pub notes: Vec<String>,
 }
 
+/// The frames a camera path gives, for messages: `frames 0 to 60 (61 lines)`.
+fn span_of_keys(keys: &[CameraKey]) -> String {
+    let lo = keys.iter().map(|k| k.frame).min().unwrap_or(0);
+    let hi = keys.iter().map(|k| k.frame).max().unwrap_or(0);
+    format!("frames {lo} to {hi} ({} lines)", keys.len())
+}
+
 impl FrameSchedule {
     /// The frames `sequence` gives for an `image` (a gaze trace's, a camera path's, or both, the path
     /// then giving every frame of the trace its camera), or `still` alone where it gives none.
@@ -120,10 +127,12 @@ impl FrameSchedule {
                         let camera = match &by_frame {
                             None => None,
                             Some(by_frame) => Some(*by_frame.get(&number).ok_or_else(|| {
+                                let held = keys.as_deref().map_or(String::new(), span_of_keys);
                                 FoveaError::option(
                                     "--camera-path",
                                     format!(
-                                        "has no line for frame {number}, which the --gaze-trace renders"
+                                        "has no line for frame {number}, which the --gaze-trace \
+                                         renders (the path gives {held})"
                                     ),
                                 )
                             })?),
@@ -147,6 +156,18 @@ impl FrameSchedule {
                 .collect(),
             (None, None) => vec![still],
         };
+        if let (Some(keys), Some(_)) = (&keys, &sequence.gaze_trace) {
+            let rendered: std::collections::HashSet<u32> =
+                frames.iter().map(|f| f.number).collect();
+            let unused = keys.iter().filter(|k| !rendered.contains(&k.frame)).count();
+            if unused > 0 {
+                notes.push(format!(
+                    "the --camera-path gives {unused} frame(s) the --gaze-trace does not render \
+                     (unused; the path gives {})",
+                    span_of_keys(keys)
+                ));
+            }
+        }
         if let Some(n) = max_frames {
             frames.truncate(n as usize);
         }
@@ -183,6 +204,59 @@ impl FrameSchedule {
     }
 }
 
+/// How a run's foveation follows each view's gaze: the template (its sample counts, blocks and
+/// radii), whether the run is uniform (no gaze), and where an eye's own frustum sets its radii.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FoveationRule {
+    pub template: FoveationParams,
+    pub uniform: bool,
+    /// The regions' bounds in degrees (`--eccentricity`) where the radii follow each eye's focal
+    /// length; `None` where `--radii` fixes them in pixels.
+    pub eye_eccentricity: Option<[f32; 2]>,
+}
+
+impl FoveationRule {
+    /// The foveation of a view fixating `gaze` (pixels), whose image has a focal length of
+    /// `focal_px` pixels where its own frustum is given (an eye of `--stereo-views` or a headset).
+    #[must_use]
+    pub fn at(&self, gaze: [f32; 2], focal_px: Option<f32>) -> FoveationParams {
+        let mut foveation = self.template;
+        if self.uniform {
+            return foveation;
+        }
+        foveation.gaze = gaze;
+        if let (Some(eccentricity), Some(focal)) = (self.eye_eccentricity, focal_px) {
+            // The eye's own angles set its pixels per degree, and so its radii.
+            [foveation.radius_fovea, foveation.radius_intermediate] =
+                eye_radii(eccentricity, focal);
+        }
+        foveation
+    }
+}
+
+/// The region radii in pixels of an eye whose image has a focal length of `focal_px` pixels, for
+/// regions bounded at `eccentricity` degrees: the paper's `r = (a / 2) · R / A` with `a = 2 d
+/// tan(e / 2)` is `r = f · tan(e / 2)` for the focal length `f = d · R / A` in pixels.
+#[must_use]
+pub fn eye_radii(eccentricity: [f32; 2], focal_px: f32) -> [f32; 2] {
+    eccentricity.map(|e| focal_px * (0.5 * e.to_radians()).tan())
+}
+
+/// One view of a frame as a run renders it: which (`None` for a frame of one view, else the eye,
+/// 0 left, 1 right), and core's parameters for it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameView {
+    pub view: Option<usize>,
+    pub frame: FrameParams,
+}
+
+/// An eye of a frame: its camera, and its focal length in pixels where its own frustum is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EyeCamera {
+    pub camera: Camera,
+    pub focal_px: Option<f32>,
+}
+
 /// What every frame of a run shares. [`Self::frame`] and [`Self::request`] are the only places the
 /// command line makes core's [`FrameParams`] and [`FrameRequest`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -208,6 +282,18 @@ impl FrameSettings {
             seed: image.seed,
             fill_mode: path.fill_mode(),
             exposure_ev: image.exposure,
+        }
+    }
+
+    /// Every option at its default, for a benchmark's fixed frame (`fovea bench scale`).
+    #[must_use]
+    pub fn defaults(size: [u32; 2], seed: u32) -> Self {
+        Self {
+            size,
+            integrator: IntegratorSettings::default(),
+            seed,
+            fill_mode: fovea_core::foveation::fill::FILL_BILINEAR,
+            exposure_ev: 0.0,
         }
     }
 
@@ -257,17 +343,45 @@ impl FrameSettings {
         }
     }
 
+    /// The views `scheduled` renders, each with its parameters: one seen by `camera`, or, with
+    /// `eyes`, each eye by its own camera, fixating its own gaze (the trace's for that eye, else the
+    /// frame's), foveated by `rule`. Every command renders its frames through this.
+    #[must_use]
+    pub fn views(
+        &self,
+        scheduled: &ScheduledFrame,
+        camera: Camera,
+        eyes: Option<[EyeCamera; 2]>,
+        rule: &FoveationRule,
+    ) -> Vec<FrameView> {
+        match eyes {
+            None => vec![FrameView {
+                view: None,
+                frame: self.frame(scheduled.number, camera, rule.at(scheduled.gaze, None)),
+            }],
+            Some(eyes) => eyes
+                .iter()
+                .enumerate()
+                .map(|(view, eye)| {
+                    let foveation = rule.at(scheduled.eye_gaze(view), eye.focal_px);
+                    FrameView {
+                        view: Some(view),
+                        frame: self.view_frame(
+                            scheduled.number,
+                            view as u32,
+                            eye.camera,
+                            foveation,
+                        ),
+                    }
+                })
+                .collect(),
+        }
+    }
+
     /// How to render a frame: with a history and the denoiser or not, its image going to `output`.
     #[must_use]
     pub fn request(&self, history: bool, denoise: bool, output: FrameOutput) -> FrameRequest {
-        FrameRequest {
-            fill_mode: self.fill_mode,
-            exposure_ev: self.exposure_ev,
-            history,
-            denoise,
-            output,
-            view: 0,
-        }
+        FrameRequest::new(self.fill_mode, self.exposure_ev, history, denoise, output)
     }
 
     /// The image's aspect ratio (width over height), for a camera.
@@ -365,7 +479,7 @@ mod tests {
         // A path that lacks one of the trace's frames names it.
         let short = write(&dir, "s.csv", "0,0,0,1,0,0,0\n1,0,0,2,0,0,0\n");
         let e = FrameSchedule::read(
-            &sequence(Some(trace), Some(short)),
+            &sequence(Some(trace.clone()), Some(short)),
             STILL,
             image,
             LonePath::NeedsTrace,
@@ -373,7 +487,31 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(e.contains("frame 2"), "{e}");
+        assert!(
+            e.contains("frame 2") && e.contains("the path gives frames 0 to 1 (2 lines)"),
+            "{e}"
+        );
+        // A path with frames the trace does not render says so.
+        let long = write(
+            &dir,
+            "l.csv",
+            "0,0,0,1,0,0,0\n1,0,0,2,0,0,0\n2,0,0,3,0,0,0\n3,0,0,4,0,0,0\n",
+        );
+        let s = FrameSchedule::read(
+            &sequence(Some(trace), Some(long)),
+            STILL,
+            image,
+            LonePath::NeedsTrace,
+            None,
+        )
+        .unwrap();
+        assert!(
+            s.notes
+                .iter()
+                .any(|n| n.contains("gives 1 frame(s) the --gaze-trace does not render")),
+            "{:?}",
+            s.notes
+        );
         // Neither: the still frame.
         let still = FrameSchedule::read(
             &sequence(None, None),

@@ -107,6 +107,8 @@ pub fn build_report(
         "frames": frame_list,
         // Every warning the run printed: the command line's first, then the scene's.
         "warnings": run_warnings.iter().chain(&scene.warnings).collect::<Vec<_>>(),
+        // What the scene file gives that fovea's mapping of its format does not use.
+        "unused_scene_values": &scene.unused,
         "backend_details": backend_details,
     })
 }

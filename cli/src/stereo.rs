@@ -100,6 +100,24 @@ impl StereoSource {
         }
     }
 
+    /// The two eyes of frame `number` for an image `width` pixels wide: their cameras (see
+    /// [`Self::cameras`]) and, where a file gives each eye its own frustum, its focal length in
+    /// pixels (which sets the eye's radii: [`crate::schedule::FoveationRule::at`]).
+    pub fn eye_cameras(
+        &self,
+        number: u32,
+        mono: Camera,
+        origin: [f64; 3],
+        width: u32,
+    ) -> Result<[crate::schedule::EyeCamera; EYES]> {
+        let cameras = self.cameras(number, mono, origin)?;
+        let views = self.eye_views(number);
+        Ok([0, 1].map(|eye| crate::schedule::EyeCamera {
+            camera: cameras[eye],
+            focal_px: views.map(|v| v[eye].focal_px(width)),
+        }))
+    }
+
     /// The two eyes' views of frame `number` from a file, if they come from one.
     #[must_use]
     pub fn eye_views(&self, number: u32) -> Option<&[EyeView; EYES]> {
@@ -133,13 +151,30 @@ pub fn eye_path(path: &Path, view: usize) -> PathBuf {
     }
 }
 
+/// A views file's columns, each with the names its header may give it.
+const VIEWS_COLUMNS: &[&[&str]] = &[
+    &["frame"],
+    &["eye"],
+    &["x"],
+    &["y"],
+    &["z"],
+    &["qx"],
+    &["qy"],
+    &["qz"],
+    &["qw"],
+    &["angle_left", "l", "left"],
+    &["angle_right", "r", "right"],
+    &["angle_up", "u", "up"],
+    &["angle_down", "d", "down"],
+];
+
 /// Parses a views file (see the [module documentation](self)); errors name the file and the line.
 pub fn parse_eye_views(path: &Path, text: &str) -> Result<BTreeMap<u32, [EyeView; EYES]>> {
     const EXPECTED: &str =
         "expected frame,eye,x,y,z,qx,qy,qz,qw,angle_left,angle_right,angle_up,angle_down";
     // Each frame's eyes as they are read, with the line that gave each.
     let mut frames: BTreeMap<u32, [Option<(EyeView, usize)>; EYES]> = BTreeMap::new();
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let text = crate::csv_lines::strip_bom(text);
     let mut seen_content = false;
     for (index, raw) in text.lines().enumerate() {
         let line_no = index + 1;
@@ -147,12 +182,13 @@ pub fn parse_eye_views(path: &Path, text: &str) -> Result<BTreeMap<u32, [EyeView
         if line.is_empty() {
             continue;
         }
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        let first = !seen_content;
-        seen_content = true;
-        if first && fields[0].parse::<f64>().is_err() {
-            continue; // a header
+        if !std::mem::replace(&mut seen_content, true)
+            && crate::csv_lines::is_header(line, VIEWS_COLUMNS, "a views file")
+                .map_err(|e| FoveaError::file(path, format!("line {line_no}: {e}")))?
+        {
+            continue;
         }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
         let bad =
             |what: String| FoveaError::file(path, format!("line {line_no}: {what} ({EXPECTED})"));
         if fields.len() != 13 {
@@ -260,6 +296,9 @@ mod tests {
         assert_eq!(views.len(), 1);
         assert_eq!(views[&0][1].position, [0.032, 1.6, 0.0]);
         assert_eq!(views[&0][0].angles[0], -0.94);
+        // A byte-order mark, and a file without a header: the first line is data.
+        let bom = format!("\u{feff}{}", TWO_EYES.split_once('\n').unwrap().1);
+        assert_eq!(parse_eye_views(p, &bom).unwrap(), views);
         let line = |s: &str| format!("0,left,0,0,0,0,0,0,1,{s}\n0,right,0,0,0,0,0,0,1,-1,1,1,-1\n");
         for (text, needle) in [
             ("0,left,0,0,0,0,0,0,1,-1,1,1\n".to_string(), "12 fields"),
@@ -280,6 +319,18 @@ mod tests {
                 "lines 1 and 3",
             ),
             ("# nothing\n".into(), "no eye lines"),
+            (
+                "frame,eye,x,y,z,qw,qx,qy,qz,l,r,u,d\n".into(),
+                "names its columns frame,eye,x,y,z,qx,qy,qz,qw,angle_left",
+            ),
+            (
+                "frame;eye;x;y;z;qx;qy;qz;qw;l;r;u;d\n".into(),
+                "separated by semicolons",
+            ),
+            (
+                "time,eye\n".into(),
+                "line 1: 'time,eye' is neither a header",
+            ),
         ] {
             let e = parse_eye_views(p, &text).unwrap_err().to_string();
             assert!(e.contains(needle), "{text:?}: {e}");

@@ -649,6 +649,75 @@ fn hostile_inputs_are_refused_before_the_work_or_rendered_as_said() {
         "{stderr}"
     );
     assert!(!dir.join("ok.png").exists(), "nothing rendered");
+    // The files render writes are checked by the names it gives them: frame 0 of `t.png` over a
+    // trace is `t_00000.png`, here the trace itself.
+    let trace = dir.join("t_00000.png");
+    std::fs::write(&trace, "0,10,10\n1,12,10\n").unwrap();
+    let out = run(&[
+        "render",
+        scene,
+        "-o",
+        dir.join("t.png").to_str().unwrap(),
+        "--gaze-trace",
+        trace.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("t_00000.png' is an input of this run"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read(&trace).unwrap(), b"0,10,10\n1,12,10\n");
+    // A texture the scene reads is an input too, known once the scene is loaded (before rendering).
+    let texture = dir.join("tex.png");
+    assert!(run(&[
+        "render",
+        scene,
+        "-q",
+        "--resolution",
+        "8x8",
+        "-o",
+        texture.to_str().unwrap()
+    ])
+    .status
+    .success());
+    let texture_bytes = std::fs::read(&texture).unwrap();
+    std::fs::write(dir.join("s.mtl"), "newmtl m\nKd 1 1 1\nmap_Kd tex.png\n").unwrap();
+    std::fs::write(
+        dir.join("s.obj"),
+        "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n",
+    )
+    .unwrap();
+    let out = run(&[
+        "render",
+        dir.join("s.obj").to_str().unwrap(),
+        "--sky",
+        "1,1,1",
+        "-o",
+        texture.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("tex.png' is an input of this run"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read(&texture).unwrap(), texture_bytes);
+    // Two outputs naming one file by two strings.
+    let same = dir.join("same.png");
+    let other_name = format!("{}/./same.png", dir.display());
+    let out = run(&[
+        "render",
+        scene,
+        "-o",
+        same.to_str().unwrap(),
+        "--regions-overlay",
+        &other_name,
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("is also written as"),
+        "{stderr}"
+    );
+    assert!(!same.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -884,6 +953,22 @@ fn compare_judges_one_exr_against_another() {
     }
     let ppd = regions["pixels_per_degree"].as_f64().unwrap();
     assert!((ppd - 0.946).abs() < 0.01, "{ppd}");
+    // NaN pixels are counted, and an image all NaN has no "max abs 0" (it would read as identical).
+    let nan = dir.join("nan.exr");
+    exr::prelude::write_rgba_file(&nan, 64, 48, |_, _| (f32::NAN, 0.5f32, 0.5f32, 1.0f32)).unwrap();
+    let out = compare(&nan, &a, &["--json", json.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    assert!(
+        stdout.contains("0.0000 % of pixels within 1e-3, max abs none")
+            && stdout.contains("3072 pixel(s) of '")
+            && stdout.contains("nan.exr' are NaN or infinite"),
+        "{stdout}"
+    );
+    let figures: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(figures["max_abs"].is_null(), "{figures}");
+    assert_eq!(figures["non_finite_pixels"]["test"], 3072, "{figures}");
     for (test, reference, needle) in [
         (small.clone(), a.clone(), "compare needs images of one size"),
         (

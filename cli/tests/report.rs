@@ -366,6 +366,42 @@ fn bad_options_fail_clearly() {
         !cache.exists(),
         "no reference rendered before every scene loaded"
     );
+    // Folders that take no files, and a scene where the report would write its images, are refused
+    // before any reference is rendered.
+    let inside = dir.join("out/images");
+    std::fs::create_dir_all(&inside).unwrap();
+    std::fs::copy(cornell(), inside.join("c.obj")).unwrap();
+    for (scene, out, needle) in [
+        (
+            cornell(),
+            PathBuf::from("/proc/fovea-report"),
+            "/proc/fovea-report",
+        ),
+        (
+            inside.join("c.obj"),
+            dir.join("out"),
+            "is an input of this run inside",
+        ),
+    ] {
+        let output = Command::new(env!("CARGO_BIN_EXE_fovea"))
+            .arg("report")
+            .arg(&scene)
+            .args(["--quick", "--backend", "cpu", "--cache-dir"])
+            .arg(&cache)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(
+            !output.status.success() && stderr.contains(needle),
+            "{stderr}"
+        );
+        assert!(
+            std::fs::read_dir(&cache).map_or(true, |mut d| d.next().is_none()),
+            "no reference rendered"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -154,11 +154,28 @@ fn parts_merge_to_the_single_render_and_bad_parts_are_refused() {
         .args(frame_args())
         .args(["--depth", "2", "--samples", "0..3", "-q", "-o"])
         .arg(&other));
+    // The stray part is the one named, even when it is listed first.
     let e = failure(&mut merge(&[&other, &parts[2], &parts[0]], &out));
     assert!(
-        e.contains("another render") && e.contains("frame-params"),
+        e.contains("other.fvpart: belongs to another render") && e.contains("frame-params"),
         "{e}"
     );
+    // A part whose header was edited (its seed) is corrupt, not another render's.
+    let text = std::fs::read(&parts[0]).unwrap();
+    let at = text
+        .windows(5)
+        .position(|w| w == b"seed ")
+        .expect("a seed line");
+    let mut edited = text.clone();
+    edited[at + 5] = if edited[at + 5] == b'9' { b'8' } else { b'9' };
+    let edited_part = dir.join("edited.fvpart");
+    std::fs::write(&edited_part, &edited).unwrap();
+    let e = failure(&mut merge(&[&parts[1], &parts[2], &edited_part], &out));
+    assert!(e.contains("edited.fvpart: corrupt"), "{e}");
+    // An output naming one of the parts is refused, and the part is untouched.
+    let e = failure(&mut merge(&[&parts[1], &parts[2], &parts[0]], &parts[0]));
+    assert!(e.contains("--output") && e.contains("c.fvpart"), "{e}");
+    assert_eq!(std::fs::read(&parts[0]).unwrap(), text);
     let bytes = std::fs::read(&parts[0]).unwrap();
     let damaged = dir.join("damaged.fvpart");
     std::fs::write(&damaged, &bytes[..bytes.len() / 2]).unwrap();
@@ -300,6 +317,82 @@ impl Drop for LocalSlurm {
             .arg(&self.dir)
             .status();
     }
+}
+
+/// `submit.sh` checks every option and the render arguments before it creates or submits anything;
+/// none of these cases reaches Slurm (whether or not this machine has it).
+#[test]
+fn submit_sh_refuses_bad_options_before_it_submits() {
+    let dir = temp_dir("submit-options");
+    let out = dir.join("never-made");
+    let submit = |args: &[&str]| {
+        Command::new("bash")
+            .arg(repo().join("scripts/slurm/submit.sh"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let help = submit(&["--help"]);
+    let usage = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        help.status.success() && usage.contains("--parts N"),
+        "{usage}"
+    );
+    let fovea = env!("CARGO_BIN_EXE_fovea");
+    let out_s = out.to_str().unwrap();
+    let cornell = cornell();
+    let base = ["--fovea", fovea, "--out", out_s];
+    for (args, needle) in [
+        (vec!["--parts"], "--parts needs a value"),
+        (
+            vec!["--parts", "12345678901", "--", "x"],
+            "--parts N (a whole number",
+        ),
+        (vec!["--bogus"], "unknown option '--bogus'"),
+        (
+            [
+                &["--parts", "4", "--image", "sub/x.exr"],
+                &base[..],
+                &["--", &cornell],
+            ]
+            .concat(),
+            "without a folder",
+        ),
+        (
+            [
+                &["--parts", "4", "--after", "12"],
+                &base[..],
+                &["--", &cornell],
+            ]
+            .concat(),
+            "give --tasks too",
+        ),
+        (
+            [
+                &["--parts", "4", "--sbatch", "--comment=\"open"],
+                &base[..],
+                &["--", &cornell],
+            ]
+            .concat(),
+            "unmatched quote",
+        ),
+        (
+            [
+                &["--parts", "4"],
+                &base[..],
+                &["--", &cornell, "--spp", "0,1,1"],
+            ]
+            .concat(),
+            "fovea render refuses these arguments",
+        ),
+    ] {
+        let output = submit(&args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+        assert!(!out.exists(), "{args:?} made --out");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `submit.sh`'s two job ids (array, merge).

@@ -272,6 +272,7 @@ mod sampling_tests {
             punctual_lights: Vec::new(),
             camera: None,
             warnings: Vec::new(),
+            unused: Vec::new(),
             origin: [0.0; 3],
         };
         let env = Environment::Map {

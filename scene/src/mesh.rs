@@ -171,6 +171,10 @@ pub struct LoadedScene {
     pub camera: Option<CameraDesc>,
     /// Human-readable problems that were worked around, each naming the file.
     pub warnings: Vec<String>,
+    /// Values the file gives that fovea's mapping of its format does not use by design (OBJ's `Ka`,
+    /// `illum`, ...: the loader's documentation), one line per file naming them and what is used
+    /// instead: not problems, so not warnings, but never dropped without a word.
+    pub unused: Vec<String>,
 }
 
 impl LoadedScene {
@@ -220,6 +224,10 @@ impl LoadedScene {
     /// - non-finite or out-of-range material parameters are replaced by defaults, punctual lights with
     ///   non-finite or negative values are dropped, and an unusable camera is dropped (warnings);
     /// - a scene without any triangle left is [`SceneError::Empty`].
+    ///
+    /// Long because each check is one block over one array (positions, normals, texture coordinates,
+    /// tangents, colours, triangles, materials, textures, lights, camera), in the order the
+    /// documentation above lists them.
     pub fn validate(&mut self, file: &Path) -> Result<(), SceneError> {
         let n = self.positions.len();
         let name = file.display();

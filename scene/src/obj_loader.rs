@@ -28,7 +28,8 @@
 //! | `map_Ke` | `emission_texture` (sRGB), times `Ke` (1 if `Ke` is absent) |
 //! | `map_Pr`, `map_Pm` | one `metallic_roughness_texture` built at load (G = the roughness map, B = the metallic map, as glTF packs them; the metallic map is resampled to the roughness map's size), times `Pr`/`Pm` (1 if absent) |
 //! | `norm`, or `map_Bump`/`bump` | `normal_texture` (linear). A `map_Bump` image is taken for a tangent-space normal map when its mean colour is bluish-neutral (mean B > 0.6, R and G within 0.2 of 0.5); otherwise it holds heights and is converted to a normal map with its `-bm` multiplier ([`crate::bump`]) |
-//! | `map_Ka`, `Ka`, `Ni`, `illum`, `Tf`, `Tr` | ignored |
+//! | `map_Ka`, `Ka`, `Ni`, `illum`, `Tf`, `Tr` | not used, and named per file in [`LoadedScene::unused`] (a `Tr` above 0 is warned about, as `d` below 1) |
+//! | `Pm`, `Pr`, `Ps`, `Pc`, `Pcr`, `aniso` outside 0..1; a negative `Ke` | clamped, with a warning naming the value used |
 //!
 //! `specular` is 0.5 (an index of refraction of 1.5), except 0 when the material gives `Ks 0 0 0`
 //! explicitly and no `Pm` (no specular reflection at all: a pure diffuse material, as Mitsuba's `diffuse`
@@ -175,6 +176,9 @@ pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedScene, Scene
 
 /// Loads an `.obj` file and its materials, reading the OBJ, its MTL libraries and textures from
 /// `source` (paths as for [`load_obj`]: MTL files relative to the OBJ, textures relative to their MTL).
+///
+/// Long because it is the OBJ load in order (tobj's parse with the MTL log, the vertex arrays, the
+/// faces with their index checks, the materials), each step reading the locals of the one before.
 pub fn load_obj_from(
     source: &dyn FileSource,
     path: &Path,
@@ -299,6 +303,7 @@ pub fn load_obj_from(
     material_files.resize(materials.len(), path.to_owned());
 
     convert_materials(source, &materials, &material_files, options, &mut scene)?;
+    scene.unused = unused_mtl_values(&materials, &material_files);
     let default_material = scene.materials.len() as u32;
     let mut default_triangles = 0usize;
 
@@ -773,6 +778,75 @@ fn looks_like_normal_map(t: &Texture) -> bool {
 }
 
 /// Parses a numeric PBR-extension key (tobj keeps unknown keys as strings).
+/// [`param`] for a value of 0..1 (`Pm`, `Pr`, `Ps`, `Pc`, `Pcr`, `aniso`): one outside is clamped,
+/// with a warning naming what was used.
+fn unit_param(
+    m: &tobj::Material,
+    key: &str,
+    warnings: &mut Vec<String>,
+    mtl: &Path,
+) -> Option<f32> {
+    let v = param(m, key, warnings, mtl)?;
+    let used = v.clamp(0.0, 1.0);
+    if used != v {
+        warnings.push(format!(
+            "{}: material {:?}: {key} {v} is outside 0..1 (used {used})",
+            mtl.display(),
+            m.name
+        ));
+    }
+    Some(used)
+}
+
+/// The MTL statements fovea's mapping does not use (the module's table): per MTL file, each key and
+/// how many materials give it, as one line per file for [`LoadedScene::unused`].
+fn unused_mtl_values(materials: &[tobj::Material], files: &[PathBuf]) -> Vec<String> {
+    const KEYS: [(&str, &str); 6] = [
+        ("Ka", "no ambient term"),
+        ("map_Ka", "no ambient term"),
+        ("Ni", "the specular is 0.5, an index of refraction of 1.5"),
+        ("illum", "every material is the Disney BSDF"),
+        ("Tf", "no transmission"),
+        ("Tr", "opaque"),
+    ];
+    let mut per_file: Vec<(PathBuf, [usize; 6])> = Vec::new();
+    for (m, file) in materials.iter().zip(files) {
+        let given = [
+            m.ambient.is_some(),
+            m.ambient_texture.is_some(),
+            m.optical_density.is_some(),
+            m.illumination_model.is_some(),
+            m.unknown_param.contains_key("Tf"),
+            m.unknown_param.contains_key("Tr"),
+        ];
+        if !given.contains(&true) {
+            continue;
+        }
+        let counts = match per_file.iter_mut().find(|(f, _)| f == file) {
+            Some((_, counts)) => counts,
+            None => {
+                per_file.push((file.clone(), [0; 6]));
+                &mut per_file.last_mut().expect("just pushed").1
+            }
+        };
+        for (count, g) in counts.iter_mut().zip(given) {
+            *count += usize::from(g);
+        }
+    }
+    per_file
+        .into_iter()
+        .map(|(file, counts)| {
+            let keys: Vec<String> = KEYS
+                .iter()
+                .zip(counts)
+                .filter(|(_, n)| *n > 0)
+                .map(|((key, instead), n)| format!("{key} ({n} materials; {instead})"))
+                .collect();
+            format!("{}: not used: {}", file.display(), keys.join(", "))
+        })
+        .collect()
+}
+
 fn param(m: &tobj::Material, key: &str, warnings: &mut Vec<String>, mtl: &Path) -> Option<f32> {
     let text = m.unknown_param.get(key)?;
     match text
@@ -805,6 +879,9 @@ fn texture_path(dir: &Path, statement: &str) -> PathBuf {
 }
 
 /// Converts tobj materials (see the module table), decoding their textures in parallel.
+///
+/// Long because each MTL statement's mapping (the module's table) is a few lines of it, in the table's
+/// order.
 fn convert_materials(
     source: &dyn FileSource,
     materials: &[tobj::Material],
@@ -898,9 +975,9 @@ fn convert_materials(
         let no_specular = m.specular == Some([0.0; 3]) && m.unknown_param.get("Pm").is_none();
         let base_texture = kd_tex.map_or(INVALID_INDEX, |i| slots[i]);
         let alpha_texture = d_tex.map_or(INVALID_INDEX, |i| slots[i]);
-        let pm = param(m, "Pm", &mut warnings, mtl);
+        let pm = unit_param(m, "Pm", &mut warnings, mtl);
         let (metallic, base) = match pm {
-            Some(pm) => (pm.clamp(0.0, 1.0), Vec3::from(kd)),
+            Some(pm) => (pm, Vec3::from(kd)),
             None => {
                 let (ls, ld) = (luminance(ks), luminance(kd));
                 let metallic = if ls > 0.0 {
@@ -916,13 +993,19 @@ fn convert_materials(
         } else {
             base
         };
-        let roughness = match param(m, "Pr", &mut warnings, mtl) {
-            Some(r) => r.clamp(0.0, 1.0),
+        let roughness = match unit_param(m, "Pr", &mut warnings, mtl) {
+            Some(r) => r,
             None => m
                 .shininess
                 .map_or(1.0, |n| roughness_from_phong_exponent(n as f32)),
         };
         let e = m.emissive.map_or([0.0; 3], f64x3_to_f32);
+        if e.iter().any(|&c| c < 0.0) {
+            warnings.push(format!(
+                "{mtl_name}: material {:?}: Ke {e:?} has negative components (used 0 for them)",
+                m.name
+            ));
+        }
         let mut out = Material {
             base_color: [base.x, base.y, base.z, 1.0],
             emission: [e[0].max(0.0), e[1].max(0.0), e[2].max(0.0), 0.0],
@@ -932,17 +1015,17 @@ fn convert_materials(
             base_color_texture: base_texture,
             ..Material::default()
         };
-        if let Some(v) = param(m, "Ps", &mut warnings, mtl) {
-            out.sheen = v.clamp(0.0, 1.0);
+        if let Some(v) = unit_param(m, "Ps", &mut warnings, mtl) {
+            out.sheen = v;
         }
-        if let Some(v) = param(m, "Pc", &mut warnings, mtl) {
-            out.clearcoat = v.clamp(0.0, 1.0);
+        if let Some(v) = unit_param(m, "Pc", &mut warnings, mtl) {
+            out.clearcoat = v;
         }
-        if let Some(v) = param(m, "Pcr", &mut warnings, mtl) {
-            out.clearcoat_gloss = (1.0 - v).clamp(0.0, 1.0);
+        if let Some(v) = unit_param(m, "Pcr", &mut warnings, mtl) {
+            out.clearcoat_gloss = 1.0 - v;
         }
-        if let Some(v) = param(m, "aniso", &mut warnings, mtl) {
-            out.anisotropic = v.clamp(0.0, 1.0);
+        if let Some(v) = unit_param(m, "aniso", &mut warnings, mtl) {
+            out.anisotropic = v;
         }
         let pbr_keys = ["Pm", "Pr", "Ps", "Pc", "aniso", "map_Pm", "map_Pr", "norm"];
         let purely_diffuse =
@@ -968,6 +1051,11 @@ fn convert_materials(
         } else if dissolve < 1.0 {
             warnings.push(format!(
                 "{mtl_name}: material {:?} has d {dissolve} (transparency is not supported); kept opaque",
+                m.name
+            ));
+        } else if let Some(tr) = param(m, "Tr", &mut warnings, mtl).filter(|&tr| tr > 0.0) {
+            warnings.push(format!(
+                "{mtl_name}: material {:?} has Tr {tr} (transparency is not supported); kept opaque",
                 m.name
             ));
         }
@@ -1123,6 +1211,69 @@ mod tests {
         let s = load_scene(&file, &LoadOptions::default()).unwrap();
         assert!(s.colors.is_empty());
         std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// Every numeric MTL value fovea maps, loaded with a whole OBJ: inside its range it reaches the
+    /// material unchanged and without a word; outside, the warning names the value used; the
+    /// statements the mapping does not use are named in `unused`, not dropped silently.
+    #[test]
+    fn every_mtl_value_arrives_or_is_named() {
+        use crate::load::load_scene_from;
+        use crate::source::MemoryFiles;
+        let load = |mtl: &str| {
+            let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n";
+            let files = MemoryFiles::new()
+                .with("d/s.obj", obj)
+                .with("d/m.mtl", format!("newmtl m\nKd 0.5 0.5 0.5\n{mtl}\n"));
+            load_scene_from(&files, Path::new("d/s.obj"), &LoadOptions::default()).unwrap()
+        };
+        type Field = fn(&Material) -> f32;
+        let fields: [(&str, Field); 6] = [
+            ("Pm", |m| m.metallic),
+            ("Pr", |m| m.roughness),
+            ("Ps", |m| m.sheen),
+            ("Pc", |m| m.clearcoat),
+            ("Pcr", |m| 1.0 - m.clearcoat_gloss),
+            ("aniso", |m| m.anisotropic),
+        ];
+        for (key, field) in fields {
+            for v in [0.0f32, 0.3, 1.0] {
+                let s = load(&format!("{key} {v}"));
+                assert!(s.warnings.is_empty(), "{key} {v}: {:?}", s.warnings);
+                let got = field(material(&s, "m"));
+                assert!((got - v).abs() < 1e-6, "{key} {v} arrived as {got}");
+            }
+            for (v, used) in [(-1.0f32, 0.0f32), (2.0, 1.0)] {
+                let s = load(&format!("{key} {v}"));
+                assert_eq!(s.warnings.len(), 1, "{key} {v}: {:?}", s.warnings);
+                assert!(
+                    s.warnings[0].contains(&format!("{key} {v} is outside 0..1 (used {used})")),
+                    "{:?}",
+                    s.warnings
+                );
+                assert_eq!(field(material(&s, "m")), used);
+            }
+        }
+        let s = load("Ke 2 -1 0.5");
+        assert_eq!(&material(&s, "m").emission[..3], &[2.0, 0.0, 0.5]);
+        assert!(
+            s.warnings.len() == 1 && s.warnings[0].contains("negative components"),
+            "{:?}",
+            s.warnings
+        );
+        let s = load("Tr 0.4");
+        assert!(
+            s.warnings.len() == 1 && s.warnings[0].contains("Tr 0.4 (transparency"),
+            "{:?}",
+            s.warnings
+        );
+        let s = load("Ka 0.1 0.1 0.1\nNi 1.45\nillum 2\nTf 1 1 1");
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        assert_eq!(s.unused.len(), 1, "{:?}", s.unused);
+        for key in ["Ka (1 materials", "Ni (1 materials", "illum (1", "Tf (1"] {
+            assert!(s.unused[0].contains(key), "{key}: {:?}", s.unused);
+        }
+        assert!(load("Pm 0.5").unused.is_empty());
     }
 
     fn material<'a>(s: &'a LoadedScene, name: &str) -> &'a Material {

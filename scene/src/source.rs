@@ -61,9 +61,56 @@ impl FileSource for MemoryFiles {
     }
 }
 
+/// The real file system, remembering every file a load read (the scene file, its MTL libraries,
+/// buffers and textures): the files a command must not write over.
+#[derive(Debug, Default)]
+pub struct RecordingFilesystem {
+    read: std::sync::Mutex<Vec<PathBuf>>,
+}
+
+impl RecordingFilesystem {
+    /// Every path read so far (also those that failed to read), in the order first read.
+    #[must_use]
+    pub fn files(&self) -> Vec<PathBuf> {
+        self.read.lock().map(|r| r.clone()).unwrap_or_default()
+    }
+}
+
+impl FileSource for RecordingFilesystem {
+    fn read(&self, path: &Path) -> io::Result<Vec<u8>> {
+        if let Ok(mut read) = self.read.lock() {
+            if !read.iter().any(|p| p == path) {
+                read.push(path.to_path_buf());
+            }
+        }
+        std::fs::read(path)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_recording_filesystem_lists_what_a_load_read() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/cornell_box");
+        let source = RecordingFilesystem::default();
+        crate::load_scene_from(
+            &source,
+            &root.join("CornellBox-Original.obj"),
+            &crate::mesh::LoadOptions::default(),
+        )
+        .unwrap();
+        let names: Vec<String> = source
+            .files()
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(
+            names,
+            ["CornellBox-Original.obj", "CornellBox-Original.mtl"]
+        );
+    }
 
     #[test]
     fn memory_files_find_exact_paths_only() {

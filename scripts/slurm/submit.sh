@@ -46,7 +46,8 @@ done
 [[ $parts =~ ^[1-9][0-9]{0,6}$ ]] ||
   { echo "submit.sh: --parts N (a whole number from 1 to 9999999) is required" >&2; exit 2; }
 if command -v scontrol >/dev/null; then
-  max_array=$(scontrol show config 2>/dev/null | sed -n 's/^MaxArraySize *= *\([0-9]*\).*/\1/p')
+  # No controller to ask (scontrol fails): the limit is sbatch's to enforce.
+  max_array=$(scontrol show config 2>/dev/null | sed -n 's/^MaxArraySize *= *\([0-9]*\).*/\1/p' || true)
   if [ -n "$max_array" ] && [ "$parts" -gt "$max_array" ]; then
     echo "submit.sh: --parts $parts: this cluster's MaxArraySize is $max_array" >&2; exit 2
   fi
@@ -56,8 +57,8 @@ fi
 [ -n "$fovea" ] || fovea=$(command -v fovea || true)
 [ -n "$fovea" ] && [ -x "$fovea" ] ||
   { echo "submit.sh: no fovea binary: give --fovea BIN or set FOVEA (scripts/slurm/build-portable.sh builds one)" >&2; exit 2; }
-command -v sbatch >/dev/null || { echo "submit.sh: sbatch not found; run this on a Slurm login node" >&2; exit 2; }
 case $image in
+  */*) echo "submit.sh: --image $image: a file name in --out, without a folder" >&2; exit 2 ;;
   *.exr|*.png) ;;
   *) echo "submit.sh: --image $image: the merged image is .exr or .png" >&2; exit 2 ;;
 esac
@@ -68,23 +69,32 @@ if [ -n "$tasks" ]; then
   done
 fi
 [ -z "$after" ] || [[ $after =~ ^[0-9]+$ ]] || { echo "submit.sh: --after JOBID (a job id)" >&2; exit 2; }
-mkdir -p "$out"
-out=$(cd "$out" && pwd)
-fovea=$(cd "$(dirname "$fovea")" && pwd)/$(basename "$fovea")
-# A whole new split into a folder that holds parts would merge them with the new ones.
-if [ -z "$tasks" ] && compgen -G "$out/part-*.fvpart" >/dev/null; then
-  echo "submit.sh: $out already holds parts (part-*.fvpart); use an empty folder, or --tasks to complete that split" >&2
-  exit 2
-fi
+[ -z "$after" ] || [ -n "$tasks" ] ||
+  { echo "submit.sh: --after waits for an earlier array while --tasks completes it: give --tasks too" >&2; exit 2; }
+scratch=$(mktemp -d)
+trap 'rm -rf "$scratch"' EXIT
 # The sbatch options, split as a shell would (quotes kept together: --comment="two words").
 sbatch_extra=()
 if [ -n "$extra" ]; then
-  while IFS= read -r -d '' word; do sbatch_extra+=("$word"); done < <(printf '%s' "$extra" | xargs printf '%s\0')
+  printf '%s' "$extra" | xargs printf '%s\0' >"$scratch/sbatch-words" 2>"$scratch/xargs.log" ||
+    { echo "submit.sh: --sbatch '$extra': $(head -1 "$scratch/xargs.log") (an unmatched quote?)" >&2; exit 2; }
+  while IFS= read -r -d '' word; do sbatch_extra+=("$word"); done <"$scratch/sbatch-words"
 fi
-# The first task's command line, checked before anything is submitted.
-if ! check=$("$fovea" render "$@" --samples "0/$parts" --dry-run --quiet -o "$out/part-0000.fvpart" 2>&1); then
+fovea=$(cd "$(dirname "$fovea")" && pwd)/$(basename "$fovea")
+# The first task's command line, checked before anything is created or submitted.
+if ! check=$("$fovea" render "$@" --samples "0/$parts" --dry-run --quiet -o "$scratch/part-0000.fvpart" 2>&1); then
   echo "submit.sh: fovea render refuses these arguments; nothing was submitted:" >&2
   echo "$check" >&2
+  exit 2
+fi
+command -v sbatch >/dev/null || { echo "submit.sh: sbatch not found; run this on a Slurm login node" >&2; exit 2; }
+mkdir -p "$out" 2>/dev/null && touch "$out/.submit-check" 2>/dev/null ||
+  { echo "submit.sh: --out $out: cannot create files in that folder" >&2; exit 2; }
+rm -f "$out/.submit-check"
+out=$(cd "$out" && pwd)
+# A whole new split into a folder that holds parts would merge them with the new ones.
+if [ -z "$tasks" ] && compgen -G "$out/part-*.fvpart" >/dev/null; then
+  echo "submit.sh: $out already holds parts (part-*.fvpart); use an empty folder, or --tasks to complete that split" >&2
   exit 2
 fi
 # The jobs' environment is given explicitly: some sites set SBATCH_EXPORT=NONE.

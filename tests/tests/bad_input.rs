@@ -396,6 +396,11 @@ fn fovea_binary() -> Option<PathBuf> {
     if bin.is_file() {
         Some(bin)
     } else {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "{} is not built, and CI must run these tests (cargo test --workspace builds it)",
+            bin.display()
+        );
         eprintln!(
             "skipped: {} is not built (run `cargo build -p fovea-cli` or the whole workspace's tests)",
             bin.display()

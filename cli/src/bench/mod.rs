@@ -17,7 +17,6 @@ use std::time::Instant;
 
 use fovea_core::camera::Camera;
 use fovea_core::foveation::display::{paper_params_for_display, DisplayGeometry};
-use fovea_core::integrator::IntegratorSettings;
 use fovea_scene::bvh::{build_bvh_indexed, BvhBuildOptions};
 use fovea_scene::environment::Environment;
 use fovea_scene::load_scene;
@@ -33,6 +32,19 @@ use crate::scene_setup::default_scene_path;
 
 /// Runs `fovea bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
+    if let Some(path) = &args.json {
+        // Checked before the work, which can take minutes.
+        crate::output::check_json_path(path, "--json")?;
+        let inputs: Vec<&Path> = match &args.what {
+            BenchCommand::Build { scene, .. } => scene.iter().map(|p| p.as_path()).collect(),
+            BenchCommand::Rays { scene, rays, .. } => {
+                scene.iter().chain(rays).map(|p| p.as_path()).collect()
+            }
+            BenchCommand::Scale { .. } => Vec::new(),
+            BenchCommand::Paths(paths) => paths.scene.iter().map(|p| p.as_path()).collect(),
+        };
+        crate::output::refuse_overwriting_inputs(&[("--json", path)], &inputs)?;
+    }
     let pool = crate::backend::cpu_pool(args.threads)?;
     let figures = pool.install(|| match &args.what {
         BenchCommand::Build { scene, runs } => bench_build(scene.as_deref(), *runs),
@@ -313,14 +325,7 @@ fn bench_scale(triangles: u64, resolution: [u32; 2]) -> Result<serde_json::Value
         &DisplayGeometry::default(),
         w,
     );
-    let frame = crate::schedule::FrameSettings {
-        size: [w, h],
-        integrator: IntegratorSettings::default(),
-        seed: 1,
-        fill_mode: fovea_core::foveation::fill::FILL_BILINEAR,
-        exposure_ev: 0.0,
-    }
-    .frame(0, camera, foveation);
+    let frame = crate::schedule::FrameSettings::defaults([w, h], 1).frame(0, camera, foveation);
     let view = packed.view();
     let (_image, stats) = fovea_cpu::render_frame(
         &view,

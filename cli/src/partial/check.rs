@@ -29,11 +29,25 @@ fn first_difference<'a>(a: &'a [(String, String)], b: &[(String, String)]) -> Op
 /// tile `0..largest-spp` with no gap and no overlap. A gap names the missing samples, the `--samples`
 /// options that render them and, for `I/N` parts, the job-array tasks to resubmit.
 pub fn check_parts(mut parts: Vec<(PathBuf, PartHeader)>) -> Result<CheckedParts> {
-    let Some((first_path, first)) = parts.first().cloned() else {
+    if parts.is_empty() {
         return Err(FoveaError::option("PARTS", "no part files given"));
+    }
+    // The render is the one most parts agree on (the first listed of a tie), so that a stray part
+    // listed first is the one named, not the good parts after it.
+    let agreeing = |i: usize| {
+        parts
+            .iter()
+            .filter(|(_, p)| p.identity == parts[i].1.identity)
+            .count()
     };
-    for (path, part) in &parts[1..] {
+    let majority = (0..parts.len())
+        .max_by_key(|&i| (agreeing(i), std::cmp::Reverse(i)))
+        .unwrap_or(0);
+    let (first_path, first) = parts[majority].clone();
+    for (path, part) in &parts {
         if let Some(key) = first_difference(&first.identity, &part.identity) {
+            // An edited or damaged header reads as another render's; its checksum tells.
+            part.verify(path)?;
             return Err(FoveaError::file(
                 path,
                 format!(
@@ -129,16 +143,17 @@ impl CheckedParts {
     /// The merged image: every pixel's sums and counts added over the parts in sample order (one part
     /// in memory at a time, each checked against its checksum as it is read), then the frame's block
     /// fill.
-    pub fn merged(&self) -> Result<FrameImage> {
+    pub fn merged(&self) -> Result<(FrameImage, Vec<(PathBuf, usize)>)> {
         let frame = *self.frame();
         let mut sums = vec![[0.0f32; 4]; frame.width as usize * frame.height as usize];
+        let mut non_finite = Vec::new();
         for (path, part) in &self.parts {
-            part.add_data_to(path, &mut sums)?;
+            let bad = part.add_data_to(path, &mut sums)?;
+            if bad > 0 {
+                non_finite.push((path.clone(), bad));
+            }
         }
-        Ok(fovea_cpu::fill_from_sample_sums(
-            &frame,
-            &sums,
-            self.parts[0].1.fill_mode,
-        ))
+        let image = fovea_cpu::fill_from_sample_sums(&frame, &sums, self.parts[0].1.fill_mode);
+        Ok((image, non_finite))
     }
 }

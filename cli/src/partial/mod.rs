@@ -387,20 +387,48 @@ impl PartHeader {
     }
 
     /// Adds the part's data at `path` (whose header this is) to `sums`, pixel by pixel, and checks the
-    /// checksum: a corrupt part is an error, and `sums` is then not to be used.
-    pub fn add_data_to(&self, path: &Path, sums: &mut [[f32; 4]]) -> Result<()> {
+    /// checksum: a corrupt part is an error, and `sums` is then not to be used. Returns how many of
+    /// the part's pixel sums hold a NaN or an infinity (a render's non-finite samples, which the
+    /// merged image then shows).
+    pub fn add_data_to(&self, path: &Path, sums: &mut [[f32; 4]]) -> Result<usize> {
+        let mut non_finite = 0;
+        let mut sums = sums.iter_mut();
+        self.read_data(path, |pixel| {
+            if let Some(sum) = sums.next() {
+                non_finite += usize::from(!pixel.iter().all(|v| v.is_finite()));
+                for (c, v) in sum.iter_mut().zip(pixel) {
+                    *c += v;
+                }
+            }
+        })?;
+        Ok(non_finite)
+    }
+
+    /// Reads the part's data at `path` through and checks it against the checksum, keeping nothing:
+    /// whether a part whose header disagrees with the others' was edited or damaged (then corrupt)
+    /// rather than rendered differently.
+    pub fn verify(&self, path: &Path) -> Result<()> {
+        self.read_data(path, |_| {})
+    }
+
+    /// Streams the part's pixel sums (one per pixel of its frame, in order) to `each`, then checks the
+    /// checksum over its header and data.
+    fn read_data(&self, path: &Path, mut each: impl FnMut([f32; 4])) -> Result<()> {
         let io = |e: std::io::Error| FoveaError::file(path, e);
         let mut file = File::open(path).map_err(io)?;
         file.seek(SeekFrom::Start(self.data_offset)).map_err(io)?;
         let mut reader = BufReader::with_capacity(1 << 20, file);
         let mut hash = self.header_hash;
         let mut pixel = [0u8; PIXEL_BYTES as usize];
-        for sum in sums.iter_mut() {
+        let pixels = u64::from(self.frame.width) * u64::from(self.frame.height);
+        for _ in 0..pixels {
             reader.read_exact(&mut pixel).map_err(io)?;
             hash.write(&pixel);
+            let mut sum = [0.0f32; 4];
             for (c, bytes) in sum.iter_mut().zip(pixel.chunks_exact(4)) {
-                *c += f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
+                *c = f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
             }
+            each(sum);
         }
         if hash.finish() != self.checksum {
             return Err(FoveaError::file(
@@ -533,7 +561,9 @@ mod tests {
             std::fs::write(&mutated, &bytes).unwrap();
             let result = std::panic::catch_unwind(|| {
                 let header = PartHeader::read(&mutated)?;
-                check::check_parts(vec![(mutated.clone(), header)])?.merged()
+                check::check_parts(vec![(mutated.clone(), header)])?
+                    .merged()
+                    .map(|(image, _)| image)
             });
             match result {
                 Err(_) => panic!("a panic on {} mutated bytes", bytes.len()),
@@ -630,7 +660,8 @@ mod tests {
         // The paper's 32/16/8: parts must tile 0..32.
         let ok = check_parts(vec![p("b", 16, 32, 7), p("a", 0, 16, 7)]).unwrap();
         assert_eq!(ok.parts[0].0, d.join("a"), "sorted by sample");
-        let merged = ok.merged().unwrap();
+        let (merged, non_finite) = ok.merged().unwrap();
+        assert!(non_finite.is_empty());
         assert_eq!(merged.pixels.len(), 6);
 
         let e = error(check_parts(vec![p("a", 0, 8, 7), p("c", 16, 24, 7)]));

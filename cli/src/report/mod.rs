@@ -297,6 +297,77 @@ fn plan(args: &ReportArgs) -> Result<Plan> {
     })
 }
 
+/// The files `report` writes into each scene's folder, besides those in its `images/` and `flip/`.
+const REPORT_FILES: [&str; 7] = [
+    "report.md",
+    "report.json",
+    "report.csv",
+    "plot.svg",
+    "sequence.svg",
+    "reference.png",
+    "regions.png",
+];
+
+/// Checks before any work that every folder the run writes into takes files (`--out` and each
+/// scene's folder in it, the reference cache, `--reference-parts` for a part) and that no file it
+/// writes is one of its inputs (the scenes, `--env-map`, the trace, the camera path), by the files
+/// they resolve to: one line naming the path, and nothing rendered.
+fn check_outputs(
+    args: &ReportArgs,
+    plan: &Plan,
+    scenes: &[tasks::SceneEntry],
+    writes_report: bool,
+) -> Result<()> {
+    let takes_files = |dir: &Path, option: &'static str| -> Result<()> {
+        create_dir(dir)?;
+        crate::output::check_folder_takes_files(dir).map_err(|why| FoveaError::option(option, why))
+    };
+    let inputs: Vec<&Path> = args
+        .scenes
+        .iter()
+        .map(PathBuf::as_path)
+        .chain(args.lighting.env_map.as_deref())
+        .chain(args.sequence.gaze_trace.as_deref())
+        .chain(args.sequence.camera_path.as_deref())
+        .collect();
+    if writes_report {
+        takes_files(&args.out, "--out")?;
+        for (_, dir) in scenes {
+            takes_files(dir, "--out")?;
+            let files: Vec<(&'static str, PathBuf)> = REPORT_FILES
+                .iter()
+                .map(|n| ("--out", dir.join(n)))
+                .collect();
+            crate::output::refuse_overwriting_inputs(&files, &inputs)?;
+            for sub in ["images", "flip"] {
+                let folder = crate::output::resolved_path(&dir.join(sub));
+                if let Some(input) = inputs
+                    .iter()
+                    .find(|i| crate::output::resolved_path(i).starts_with(&folder))
+                {
+                    return Err(FoveaError::option(
+                        "--out",
+                        format!(
+                            "'{}' is an input of this run inside '{}', which the report writes \
+                             into; fovea never overwrites its input",
+                            input.display(),
+                            dir.join(sub).display()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    if !args.no_cache {
+        takes_files(&plan.cache_dir, "--cache-dir")?;
+    }
+    if let (Some(_), Some(dir)) = (plan.reference_part, &plan.reference_parts) {
+        crate::output::check_folder_takes_files(dir)
+            .map_err(|why| FoveaError::option("--reference-parts", why))?;
+    }
+    Ok(())
+}
+
 /// Creates `dir` (and its parents).
 fn create_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir)
@@ -304,6 +375,9 @@ fn create_dir(dir: &Path) -> Result<()> {
 }
 
 /// Runs `fovea report`.
+///
+/// Long because it is the report's run in order: the scenes and their folders, the checks before work,
+/// each scene, the combined files and the summary.
 pub fn run(args: &ReportArgs) -> Result<()> {
     let wall = Instant::now();
     let plan = plan(args)?;
@@ -343,13 +417,11 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         Some(_) => crate::backend::cpu_target_for_parts(&args.target, "--reference-part")?,
         None => args.target,
     };
-    let mut renderer = Renderer::new(&target, args.quiet)?;
-    let lighting = Lighting::from_args(&args.lighting)?;
     // A part of the references is all a `--reference-part` run writes.
     let writes_report = plan.reference_part.is_none();
-    if writes_report {
-        create_dir(&args.out)?;
-    }
+    check_outputs(args, &plan, &scenes, writes_report)?;
+    let mut renderer = Renderer::new(&target, args.quiet)?;
+    let lighting = Lighting::from_args(&args.lighting)?;
 
     let [w, h] = plan.resolution;
     let paper = FoveationParams::paper(plan.gaze, plan.radii_px[0], plan.radii_px[1]);
@@ -738,7 +810,15 @@ fn merge_reference_parts(
         .collect::<Result<Vec<_>>>()?;
     let checked = check_parts(parts)?;
     checked.expect_identity(expected, &format!("{scene_name}'s reference"))?;
-    checked.merged()
+    let (image, non_finite) = checked.merged()?;
+    match non_finite.first() {
+        // A reference with NaN pixels would make every figure against it NaN.
+        Some((path, count)) => Err(FoveaError::file(
+            path,
+            format!("{count} pixel(s) of this part of {scene_name}'s reference hold NaN or infinite sums; render it again"),
+        )),
+        None => Ok(image),
+    }
 }
 
 /// Prints a status line above the progress bar (nothing with `--quiet`).
@@ -750,6 +830,9 @@ fn note(bar: &ProgressBar, quiet: bool, message: &str) {
 
 /// Renders and measures one scene; writes its images. With `--reference-part`, renders only that part of
 /// its reference into `--reference-parts` and returns `None`.
+///
+/// Long because it is one scene's report in order (load, reference from the cache, parts or a render,
+/// the configurations, the sequence, the files), each step using the ones before.
 #[allow(clippy::too_many_arguments)]
 fn run_scene(
     args: &ReportArgs,
@@ -1143,7 +1226,10 @@ impl Measurer<'_> {
         let settings = spec.texture_lod.map_or(self.plan.settings, |lod| {
             self.plan.settings.with_texture_lod(lod)
         });
-        let frame = settings.frame(0, self.camera, spec.foveation);
+        let mut frame = settings.frame(0, self.camera, spec.foveation);
+        // Each configuration draws its own random numbers: with one key, 32/16/8's fovea would be
+        // uniform's image there, and their comparison would hold by construction.
+        frame.seed = sequence::spec_seed(frame.seed, &spec.slug);
         let mut runs_ms = Vec::new();
         let mut first: Option<(FrameImage, fovea_cpu::RenderStats)> = None;
         for run in 0..self.plan.runs {
