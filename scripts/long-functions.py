@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Functions longer than a limit (150 lines by default) in the workspace's production code, longest
 first: test modules (`#[cfg(test)] mod ...`), `tests/` folders and benchmarks are left out. A function
-counts from its `fn` line to its closing brace.
+counts from its `fn` line to its closing brace. Each says whether its doc comment gives the reason
+for its length (a sentence "Long because ..."), and the last line counts those that do not.
 
     python3 scripts/long-functions.py [LIMIT]
 """
@@ -37,7 +38,11 @@ def functions(path):
                 if not started and code.rstrip().endswith(";"):
                     break  # a declaration without a body
                 j += 1
-            out.append((j - i + 1, m.group(1), i + 1))
+            k = i - 1
+            while k >= 0 and (lines[k].strip().startswith("///") or lines[k].strip().startswith("#[")):
+                k -= 1
+            reason = any("Long because" in l for l in lines[k + 1 : i])
+            out.append((j - i + 1, m.group(1), i + 1, reason))
             i = j + 1 if started else i + 1
             continue
         i += 1
@@ -52,12 +57,13 @@ def main():
             for n in names:
                 if n.endswith(".rs"):
                     p = os.path.join(dirpath, n)
-                    for length, name, line in functions(p):
+                    for length, name, line, reason in functions(p):
                         if length > limit:
-                            rows.append((length, f"{os.path.relpath(p, ROOT)}:{line}", name))
-    for length, where, name in sorted(rows, reverse=True):
-        print(f"{length:5d}  {name}  {where}")
-    print(f"{len(rows)} functions over {limit} lines")
+                            rows.append((length, f"{os.path.relpath(p, ROOT)}:{line}", name, reason))
+    for length, where, name, reason in sorted(rows, reverse=True):
+        print(f"{length:5d}  {name}  {where}{'' if reason else '  (no reason given)'}")
+    without = sum(1 for r in rows if not r[3])
+    print(f"{len(rows)} functions over {limit} lines, {without} without a reason in their doc comment")
 
 
 if __name__ == "__main__":

@@ -6,7 +6,7 @@ depends on another when it names it in a path: `use crate::a::b::Item`, `crate::
 `super::b::Item`. A path is resolved to the deepest module file it names; an item that a module
 re-exports (`pub use sub::Item`) is followed to the module that defines it, so that a parent's
 re-exports make no circle by themselves. Test modules (`#[cfg(test)] mod tests { ... }` to the end of
-the file) are left out.
+the file, and modules declared `#[cfg(test)] mod name;`) are left out.
 
     python3 scripts/module-graph.py            # circles and upward imports of every crate
     python3 scripts/module-graph.py --counts   # one line of counts (for docs/architecture.md)
@@ -35,13 +35,30 @@ def module_files(crate):
 
 def strip(text):
     """The file without comments, strings, and its trailing test module."""
-    m = re.search(r"#\[cfg\(test\)\]\s*mod\s+\w+\s*\{", text)
+    m = re.search(r"#\[cfg\(test\)\]\s*(?:pub(?:\([^)]*\))?\s+)?mod\s+\w+\s*\{", text)
     if m:
         text = text[: m.start()]
     text = re.sub(r"//[^\n]*", "", text)
     text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
     text = re.sub(r'"(\\.|[^"\\])*"', '""', text)
-    return text
+    return inline_modules_as_self(text)
+
+
+def inline_modules_as_self(text):
+    """Inside an inline `mod name { ... }`, `super::` names the file's own module: written `self::`."""
+    out, i = [], 0
+    for m in re.finditer(r"\bmod\s+\w+\s*\{", text):
+        if m.start() < i:
+            continue
+        depth, j = 1, m.end()
+        while j < len(text) and depth:
+            depth += {"{": 1, "}": -1}.get(text[j], 0)
+            j += 1
+        out.append(text[i : m.end()])
+        out.append(text[m.end() : j].replace("super::", "self::"))
+        i = j
+    out.append(text[i:])
+    return "".join(out)
 
 
 PATH = re.compile(r"\b(crate|super|self)((?:::[A-Za-z_][A-Za-z0-9_]*)+)")
@@ -111,8 +128,17 @@ def resolve(segs, files, reexports):
     return module
 
 
+TEST_MODULE = re.compile(r"#\[cfg\(test\)\]\s*(?:pub(?:\([^)]*\))?\s+)?mod\s+(\w+)\s*;")
+
+
 def graph(crate):
     files = module_files(crate)
+    # Modules declared `#[cfg(test)] mod name;` (and theirs) are test code: left out.
+    test_only = set()
+    for m, p in files.items():
+        for t in TEST_MODULE.finditer(open(p, encoding="utf-8").read()):
+            test_only.add(m + (t.group(1),))
+    files = {m: p for m, p in files.items() if not any(m[: len(t)] == t for t in test_only)}
     texts = {m: strip(open(p, encoding="utf-8").read()) for m, p in files.items()}
     reexports = {}
     for m, text in texts.items():

@@ -112,6 +112,26 @@ pub const MAX_VIEWS: u32 = 4;
 pub const STEREO_VIEW_NAMES: [&str; 2] = ["left", "right"];
 
 impl FrameRequest {
+    /// A request for the single view 0 (the one constructor: hosts and the command line build
+    /// their requests here).
+    #[must_use]
+    pub const fn new(
+        fill_mode: u32,
+        exposure_ev: f32,
+        history: bool,
+        denoise: bool,
+        output: FrameOutput,
+    ) -> Self {
+        Self {
+            fill_mode,
+            exposure_ev,
+            history,
+            denoise,
+            output,
+            view: 0,
+        }
+    }
+
     /// The same request for view `view` of the frame (see [`Self::view`]).
     #[must_use]
     pub const fn for_view(self, view: u32) -> Self {
@@ -249,7 +269,17 @@ impl FramePass {
     pub const fn repeats(self) -> u32 {
         match self {
             FramePass::DenoiseAtrous => crate::denoise::DENOISE_MAX_PASSES,
-            _ => 1,
+            FramePass::Samples
+            | FramePass::CellMeans
+            | FramePass::Fill
+            | FramePass::GBuffer
+            | FramePass::CellAlbedo
+            | FramePass::Temporal
+            | FramePass::ResolveHistory
+            | FramePass::DenoiseInput
+            | FramePass::DenoiseOutput
+            | FramePass::ToneMap
+            | FramePass::Overlay => 1,
         }
     }
 
@@ -268,6 +298,23 @@ impl FramePass {
         }
     }
 }
+
+// `FramePass::ALL` holds each pass once, in the order the enum declares them (a pass declared but
+// left out of the list, or listed twice, fails to compile here).
+const _: () = {
+    let mut k = 0;
+    while k < FramePass::ALL.len() {
+        assert!(
+            FramePass::ALL[k] as usize == k,
+            "FramePass::ALL out of declaration order"
+        );
+        k += 1;
+    }
+    assert!(
+        FramePass::Overlay as usize + 1 == FramePass::ALL.len(),
+        "FramePass::Overlay is the last pass"
+    );
+};
 
 /// What the invocations of a pass's dispatch each work on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -326,7 +373,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_foveated_image_is_always_made_and_history_adds_its_three_passes_before_the_tone_map() {
+    fn the_foveated_image_is_always_made_and_history_adds_its_four_passes_before_the_tone_map() {
         let plain: Vec<_> = frame_passes(FrameSetup::default()).collect();
         assert_eq!(
             plain,

@@ -334,14 +334,7 @@ pub fn render_frame_with_history(
 
 /// A request for the HDR image alone, with or without history.
 fn hdr_request(fill_mode: u32, history: bool) -> FrameRequest {
-    FrameRequest {
-        fill_mode,
-        exposure_ev: 0.0,
-        history,
-        denoise: false,
-        output: FrameOutput::Hdr,
-        view: 0,
-    }
+    FrameRequest::new(fill_mode, 0.0, history, false, FrameOutput::Hdr)
 }
 
 /// What the samples pass writes to every pixel of a block.

@@ -117,7 +117,7 @@ pub struct VulkanContext {
     pub(crate) active_view: u32,
     /// The other views' buffers and sizes (with their histories), indexed by view; the active
     /// view's slot is empty.
-    pub(crate) parked_views: Vec<crate::frame::ParkedView>,
+    pub(crate) parked_views: Vec<crate::resources::ParkedView>,
     /// The window's swapchain (live view), created by the first [`Self::present`].
     pub(crate) presenter: Option<crate::swapchain::Presenter>,
     pub(crate) poisoned: bool,
@@ -143,6 +143,10 @@ pub struct VulkanContext {
 
 impl VulkanContext {
     /// Loads Vulkan, picks a device and creates everything the kernel needs.
+    ///
+    /// Long because creating the device is one sequence of dependent calls (instance, device choice,
+    /// traversal, queue family, the features the module's capabilities need, device, allocator, pools,
+    /// layouts), each taking the handles made before it.
     pub fn new(options: &ContextOptions) -> Result<Self> {
         let code = spirv::load_kernel()?;
         let module_info = spirv::module_info(&code);

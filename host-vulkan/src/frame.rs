@@ -206,13 +206,6 @@ pub(crate) fn scene_texels_write<'a>(
         .texel_buffer_view(view)
 }
 
-/// A view's buffers while another view renders (see [`VulkanContext::select_view`]).
-#[derive(Default)]
-pub(crate) struct ParkedView {
-    pub(crate) frame: Option<FrameResources>,
-    pub(crate) size: Option<(u32, u32)>,
-}
-
 /// A memory barrier after a dispatch: its writes (and reads, for buffers reused next) before the next
 /// dispatch (`COMPUTE_SHADER`) or the readback copies (`TRANSFER`).
 fn barrier(device: &ash::Device, cb: vk::CommandBuffer, dst_stage: vk::PipelineStageFlags) {
@@ -298,9 +291,10 @@ impl VulkanContext {
         }
         let needed = view.max(self.active_view) as usize + 1;
         if self.parked_views.len() < needed {
-            self.parked_views.resize_with(needed, ParkedView::default);
+            self.parked_views
+                .resize_with(needed, crate::resources::ParkedView::default);
         }
-        self.parked_views[self.active_view as usize] = ParkedView {
+        self.parked_views[self.active_view as usize] = crate::resources::ParkedView {
             frame: self.frame.take(),
             size: self.last_frame_size.take(),
         };
@@ -324,17 +318,11 @@ impl VulkanContext {
         history: bool,
         progress: &dyn Fn(u64),
     ) -> Result<(RenderedFrame, GpuRenderStats)> {
-        let request = FrameRequest {
-            fill_mode,
-            exposure_ev,
-            history,
-            denoise: false,
-            output: FrameOutput::ReadBack {
-                want_hdr,
-                want_raw: false,
-            },
-            view: 0,
+        let output = FrameOutput::ReadBack {
+            want_hdr,
+            want_raw: false,
         };
+        let request = FrameRequest::new(fill_mode, exposure_ev, history, false, output);
         self.render(scene, frame, &request, progress)
     }
 
@@ -690,6 +678,9 @@ impl VulkanContext {
 
     /// Records and submits all dispatches of a frame, pass by pass from core's list; returns what they
     /// took.
+    ///
+    /// Long because it records one frame's dispatches in core's pass order, one arm per pass of an
+    /// exhaustive match, between the chunks' submissions and the read-back.
     fn dispatch_frame(
         &mut self,
         plan: &ChunkPlan,

@@ -213,6 +213,10 @@ impl VulkanContext {
     }
 
     /// Builds the acceleration structures of `packed` (see the module documentation).
+    ///
+    /// Long because building the acceleration structures is one sequence of dependent Vulkan calls
+    /// (geometry buffers, sizes, the bottom-level build, the instance, the top-level build, one
+    /// submission).
     pub(crate) fn build_hardware_scene(&mut self, packed: &PackedScene) -> Result<HardwareScene> {
         let start = Instant::now();
         let loader = ash::khr::acceleration_structure::Device::new(

@@ -369,6 +369,9 @@ impl VulkanContext {
     /// Records and submits the copies of one present into swapchain image `index`: source → frame image,
     /// frame image → swapchain image (blit), HUD → the swapchain image's corner, then the layout for
     /// presenting.
+    ///
+    /// Long because presenting is one command buffer of dependent steps: the image's barriers, the copy
+    /// or blit, the HUD's copy, the layout transitions, the submission.
     fn record_and_submit_copy(
         &mut self,
         index: u32,

@@ -226,3 +226,10 @@ impl FrameResources {
         })
     }
 }
+
+/// A view's buffers while another view renders (see `VulkanContext::select_view`).
+#[derive(Default)]
+pub(crate) struct ParkedView {
+    pub(crate) frame: Option<FrameResources>,
+    pub(crate) size: Option<(u32, u32)>,
+}

@@ -112,6 +112,9 @@ impl GpuScene {
     ///
     /// An empty `triangle_light` of a scene with triangles is uploaded as `INVALID_INDEX` for every
     /// triangle (a 4-byte element cannot be made to look empty; "no triangle is a light" reads the same).
+    ///
+    /// Long because uploading is one sequence of buffer creations (each checked against the device's
+    /// limits) followed by one staging copy.
     pub fn upload(ctx: &mut VulkanContext, packed: &PackedScene) -> Result<Self> {
         ctx.check_usable()?;
         let triangle_light: Vec<u32> =

@@ -364,6 +364,9 @@ pub fn absorption_coefficient(attenuation_color: [f32; 3], attenuation_distance:
 /// Applies the material extensions of `extensions` (the material's `extensions` object, as JSON) to
 /// `material` (whose textures are already set: unlit emits the base colour texture); returns the
 /// extensions' textures for the loader to decode and what could not be rendered.
+///
+/// Long because each supported extension is one block, in the order of the module's table, and later
+/// ones read what earlier ones set (IOR before specular, transmission before volume).
 pub fn apply_material_extensions(
     extensions: &serde_json::Map<String, Value>,
     material: &mut Material,

@@ -157,6 +157,8 @@ fn sequence_colour(c: &SequenceResult, index: usize) -> RGBColor {
     }
 }
 
+/// Long because it draws one SVG in order (axes, grid, each configuration's series, the saccades, the
+/// legend), all on the same scales.
 fn draw_sequence(
     scene_name: &str,
     q: &SequenceReport,

@@ -29,7 +29,7 @@ use super::metrics::{self, RegionMap, RegionMeans, REL_MSE_EPSILON};
 use super::saccades::{fovea_lag, saccade_frames, FoveaLag};
 use crate::backend::{FrameOutput, Renderer};
 use crate::error::{FoveaError, Result};
-use crate::schedule::{FrameSchedule, FrameSettings};
+use crate::schedule::{FoveationRule, FrameSchedule, FrameSettings};
 
 /// The trace's frames and how to pool them.
 #[derive(Clone, Debug)]
@@ -349,6 +349,9 @@ pub fn spec_seed(seed: u32, slug: &str) -> u32 {
 }
 
 /// Renders and scores every configuration of the sequence.
+///
+/// Long because it is one loop over configurations and frames whose accumulators (by region, by band,
+/// flicker, the frames FovVideoVDP scores) are all read when each configuration ends.
 pub fn run_sequence(
     renderer: &mut Renderer,
     plan: &SequencePlan,
@@ -478,14 +481,19 @@ pub fn run_sequence(
             ));
             let (regions, band, paper_at_gaze) = &per_frame[i];
             let view = inputs.views[i];
-            let foveation = if spec.foveated {
+            let template = if spec.foveated {
                 let mut f = *paper_at_gaze;
                 f.spp = [spec.spp[0], spec.spp[1], spec.spp[2], 0];
                 f
             } else {
                 FoveationParams::uniform(spec.spp[0])
             };
-            let frame = settings.frame(scheduled.number, view.camera, foveation);
+            let rule = FoveationRule {
+                template,
+                uniform: !spec.foveated,
+                eye_eccentricity: None,
+            };
+            let frame = settings.views(scheduled, view.camera, None, &rule)[0].frame;
             let request = settings.request(
                 spec.history,
                 spec.denoise,

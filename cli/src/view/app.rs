@@ -30,6 +30,7 @@ use crate::error::{FoveaError, Result};
 use crate::fixation::FixationFilter;
 use crate::gaze::GazeConvention;
 use crate::scene_setup::{choose_camera, prepare_scene, PreparedScene};
+use crate::schedule::{FoveationRule, ScheduledFrame};
 use crate::view::fly::{FlyCamera, Movement};
 use crate::view::hud::render_hud;
 use crate::view::live::LiveRenderer;
@@ -530,6 +531,8 @@ impl Viewer {
         }
     }
 
+    /// Long because it is one live frame in order (input, the frame's foveation and camera, render,
+    /// HUD, present, its record), all on the viewer's state.
     fn render_frame(&mut self) -> Result<()> {
         let tick_start = Instant::now();
         if self.records.is_empty() {
@@ -585,7 +588,19 @@ impl Viewer {
             pose.fov_y_degrees.to_radians(),
             settings.aspect(),
         );
-        let frame = settings.frame(self.frame_index_key, camera, foveation);
+        // Live input makes the frame: its number, the gaze and the fly camera's pose.
+        let scheduled = ScheduledFrame {
+            number: self.frame_index_key,
+            gaze,
+            eyes: None,
+            camera: None,
+        };
+        let rule = FoveationRule {
+            template: foveation,
+            uniform: false,
+            eye_eccentricity: None,
+        };
+        let frame = settings.views(&scheduled, camera, None, &rule)[0].frame;
         self.frame_index_key = self.frame_index_key.wrapping_add(1);
         let gaze_is_new = self.gaze_arrived.is_some() && self.gaze_arrived != self.gaze_used;
         self.gaze_used = self.gaze_arrived;

@@ -180,7 +180,8 @@ fn is_unlit<F: crate::scene::Features, S: SceneSource>(
 /// The path loop of [`trace_path_with`] and [`trace_path_from_hit`]: the camera ray's hit is traced at
 /// the top of the first iteration unless `first_hit` gives it, so that the GPU kernel, which never
 /// gives it, keeps a single inlined copy of the traversal (with a second one its SPIR-V grew from 668
-/// to 721 kB and lavapipe frames were 6 % slower).
+/// to 721 kB and lavapipe frames were 6 % slower). Long because of that: one loop, one copy of the
+/// traversal, the bounce's shading, light sampling and MIS inside it.
 #[inline(always)]
 fn trace_path_impl<F: crate::scene::Features, S: SceneSource>(
     scene: &SceneView<F>,

@@ -5,7 +5,7 @@
 //! `φ = atan2(z, x)`; row 0 is the top of the image.
 use glam::{Vec2, Vec3};
 
-use super::{LightSample, INFINITE_DISTANCE};
+use crate::lights::sample::{LightSample, INFINITE_DISTANCE};
 use crate::math::float::{atan2, cos, safe_sqrt, sin, INV_2PI, INV_PI, PI};
 use crate::math::vec3_from;
 use crate::sampling::distribution::{pdf_2d, sample_2d};

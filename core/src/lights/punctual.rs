@@ -2,7 +2,7 @@
 //! samples deterministically and BSDF sampling never hits.
 use glam::Vec3;
 
-use super::LightSample;
+use crate::lights::sample::LightSample;
 use crate::math::vec3_from;
 use crate::scene::{Light, LIGHT_SPOT};
 

@@ -2,9 +2,9 @@
 //! a ray.
 use glam::{Vec2, Vec3};
 
-use super::LightSample;
 use crate::geometry::offset::{offset_ray_origin, triangle_magnitude};
 use crate::geometry::triangle::{scaled_geometric_normal, triangle_vertices};
+use crate::lights::sample::LightSample;
 use crate::material::alpha::interpolate_uv;
 use crate::material::texture::sample_texture;
 use crate::math::vec3_from;

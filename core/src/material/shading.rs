@@ -79,6 +79,10 @@ pub fn surface_point<F: Features, S: SceneSource>(
 
 /// [`surface_point`] for a ray along `direction` whose cone is `cone_width` wide at the hit (0: mip level
 /// 0): the textures are read at the level of the cone's footprint (`crate::material::texture`).
+///
+/// Long because it evaluates each material input in turn (base colour, alpha, normal map,
+/// metallic-roughness, emission, the extensions' values) from one hit and its texture coordinates,
+/// which every piece would need.
 #[must_use]
 pub fn surface_point_lod<F: Features, S: SceneSource>(
     scene: &SceneView<F>,

@@ -14,10 +14,11 @@
 //! texel buffer made frames 31-36 % faster there (docs/performance.md, "lavapipe against the CPU host"). rust-gpu
 //! cannot keep an image inside a struct, so the source is an argument of its own next to the
 //! [`SceneView`] rather than one of its fields.
-use crate::scene::{
-    positions_at, Bvh4Node, Features, Material, SceneView, TextureInfo, TriangleBlock,
-    TriangleInfo, TrianglePositions,
+use crate::scene::features::Features;
+use crate::scene::layout::{
+    positions_at, Bvh4Node, Material, TextureInfo, TriangleBlock, TriangleInfo, TrianglePositions,
 };
+use crate::scene::view::SceneView;
 
 /// Texels (16 bytes each) per [`Bvh4Node`].
 pub const NODE_TEXELS: u32 = 7;
