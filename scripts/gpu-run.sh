@@ -143,8 +143,8 @@ for pf in sorted(f for f in os.listdir(raw) if f.startswith("passes") and f.ends
     d = json.load(open(os.path.join(raw, pf)))
     frames = (d.get("frames") or [d])[1:] or (d.get("frames") or [d])
     # The frame's order (core's FramePass::ALL), then anything else the stats name.
-    names = [n for n in ["samples", "cell_means", "fill", "gbuffer", "temporal", "resolve_history",
-                         "denoise_input", "denoise_atrous", "denoise_output", "tonemap", "read_back"]
+    names = [n for n in ["samples", "cell_means", "fill", "gbuffer", "cell_albedo", "temporal", "resolve_history",
+                         "denoise_input", "denoise_atrous", "denoise_output", "tonemap", "overlay", "read_back"]
              if any(n in f.get("pass_ms", {}) for f in frames)]
     for f in frames:
         for n in f.get("pass_ms", {}):

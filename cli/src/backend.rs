@@ -234,6 +234,7 @@ impl Renderer {
             // The CPU backend only presents: no kernel and no acceleration structures for it.
             traversal: fovea_vulkan::Traversal::Software,
             present_only: true,
+            factory: None,
         };
         let presenter = fovea_vulkan::VulkanContext::new(&options).map_err(|e| {
             FoveaError::View(format!(
@@ -242,6 +243,59 @@ impl Renderer {
             ))
         })?;
         Ok((Self::Cpu(CpuRenderer::new(threads)?), Some(presenter)))
+    }
+
+    /// `fovea xr`'s backend, on the Vulkan device an OpenXR runtime makes through `factory`: it
+    /// renders there (`use_gpu`: the Vulkan backend), or the CPU renders and a context on that device
+    /// only copies its images into the headset's swapchain (returned beside it). The runtime chooses
+    /// the device, so `--device` is refused.
+    #[cfg(feature = "vulkan")]
+    pub fn for_headset(
+        factory: fovea_vulkan::factory::SharedFactory,
+        target: &crate::args::BackendArgs,
+    ) -> Result<(Self, Option<fovea_vulkan::VulkanContext>)> {
+        if target.device.is_some() {
+            return Err(FoveaError::option(
+                "--device",
+                "the OpenXR runtime chooses the Vulkan device of its headset",
+            ));
+        }
+        let use_gpu = target.backend != Backend::Cpu;
+        if !use_gpu && target.traversal == crate::args::Traversal::Hardware {
+            return Err(FoveaError::option(
+                "--traversal",
+                "hardware traversal runs on a Vulkan device; use it with --backend vulkan or auto",
+            ));
+        }
+        let options = fovea_vulkan::ContextOptions {
+            device_index: None,
+            validation: fovea_vulkan::validation_requested(),
+            window: None,
+            traversal: if use_gpu {
+                target.traversal.into()
+            } else {
+                fovea_vulkan::Traversal::Software
+            },
+            present_only: !use_gpu,
+            factory: Some(factory),
+        };
+        let ctx = fovea_vulkan::VulkanContext::new(&options).map_err(|e| {
+            FoveaError::Backend(format!(
+                "OpenXR: the runtime's Vulkan device cannot run fovea: {e}"
+            ))
+        })?;
+        if use_gpu {
+            Ok((
+                Self::Vulkan(Box::new(VulkanRenderer {
+                    scene: None,
+                    ctx,
+                    upload_ms: 0.0,
+                })),
+                None,
+            ))
+        } else {
+            Ok((Self::Cpu(CpuRenderer::new(target.threads)?), Some(ctx)))
+        }
     }
 
     #[cfg(feature = "vulkan")]
@@ -260,6 +314,7 @@ impl Renderer {
             window,
             traversal: traversal.into(),
             present_only: false,
+            factory: None,
         };
         match fovea_vulkan::VulkanContext::new(&options) {
             Ok(ctx) => {
@@ -425,7 +480,7 @@ impl Renderer {
                         "idle_invocations": stats.idle_invocations,
                         "gpu_timestamps": stats.gpu_timestamps,
                         "plan_ms": stats.plan_ms,
-                        "pipeline_create_ms": v.ctx.pipeline_create_ms,
+                        "pipeline_create_ms": v.ctx.pipeline_create_ms(),
                         "warmup_ms": stats.warmup_ms,
                         "upload_ms": v.upload_ms,
                         "scene_upload_bytes": scene.bytes,

@@ -27,6 +27,23 @@ use crate::schedule::{
 use crate::stereo::{eye_path, StereoSource, EYES};
 use crate::values::{self, SampleSelection};
 
+/// How the foveation options make each view's foveation from `template` ([`foveation_of`]'s):
+/// fixated on the view's gaze unless uniform, and, where `--radii` does not fix them, with radii
+/// from each eye's own frustum (a views file's or a headset's eyes).
+pub(crate) fn foveation_rule(
+    options: &crate::args::FoveationArgs,
+    template: FoveationParams,
+) -> FoveationRule {
+    FoveationRule {
+        template,
+        uniform: options.uniform,
+        eye_eccentricity: options
+            .radii
+            .is_none()
+            .then_some(options.display.eccentricity.0),
+    }
+}
+
 /// Everything `render` needs, parsed and checked before any work starts.
 struct Plan {
     resolution: [u32; 2],
@@ -178,7 +195,6 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         check_json_path(p, "--stats")?;
     }
 
-    let lighting = Lighting::from_args(&args.lighting)?;
     if samples.is_some() && args.image.exposure != 0.0 {
         warnings.push(
             "--exposure does not apply to a part (linear sums); give it to `fovea merge` for a PNG"
@@ -195,15 +211,9 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         );
     }
 
-    let plan = Plan {
+    let mut plan = Plan {
         resolution,
-        foveation_rule: FoveationRule {
-            template: foveation_template,
-            uniform: args.foveation.uniform,
-            // The eyes of a views file have their own frusta, and so their own radii.
-            eye_eccentricity: (args.foveation.radii.is_none())
-                .then_some(args.foveation.display.eccentricity.0),
-        },
+        foveation_rule: foveation_rule(&args.foveation, foveation_template),
         radii_px,
         per_frame_outputs: schedule.from_files,
         schedule,
@@ -213,10 +223,12 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         samples,
         keep_raw,
         settings: FrameSettings::new(resolution, &args.path, &args.image),
-        lighting,
+        lighting: Lighting::default(),
         warnings,
     };
+    // Before the environment map is read: an output over it must be refused, not a missing map.
     refuse_overwriting_inputs(args, &plan, &[])?;
+    plan.lighting = Lighting::from_args(&args.lighting)?;
     Ok(plan)
 }
 
@@ -318,7 +330,7 @@ fn check_part_options(
 }
 
 /// `out.png` → `out_00012.png` for frame 12 of a gaze trace.
-fn frame_path(path: &Path, frame: u32) -> PathBuf {
+pub(crate) fn frame_path(path: &Path, frame: u32) -> PathBuf {
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())

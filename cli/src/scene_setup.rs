@@ -196,6 +196,7 @@ pub fn choose_camera(
 
 /// The light options of `render` and `report`, checked: a constant sky or an environment map (not both;
 /// neither: the bundled scene's own sky, or none) and point lights.
+#[derive(Default)]
 pub struct Lighting {
     sky: Option<[f32; 3]>,
     /// The loaded map with its path and scale (for the reference cache key).

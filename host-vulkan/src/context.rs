@@ -4,22 +4,16 @@ use std::time::Duration;
 
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
-use gpu_allocator::{AllocationSizes, AllocatorDebugSettings, MemoryLocation};
-
-use fovea_core::kernel_abi::{
-    KernelPushConstants, BINDING_BLOCKS, BINDING_COUNT, BINDING_SCENE_TEXELS,
-    SPEC_CONSTANT_FEATURES,
-};
-use fovea_core::passes::{FramePass, KERNEL_ENTRY_COUNT};
-use fovea_core::scene::features::FEATURES_ALL;
+use gpu_allocator::{AllocationSizes, AllocatorDebugSettings};
 
 use crate::blocks::{DEFAULT_MAX_CHUNK_SAMPLES, SOFTWARE_MAX_CHUNK_SAMPLES};
-use crate::buffer::GpuBuffer;
+use crate::device::Device;
 use crate::error::{Result, VkContext, VulkanError};
 use crate::instance::{choose_device, DeviceInfo, InstanceHandle, MessageLog, Shared};
-use crate::limits::{query_limits, Limits};
+use crate::kernel::Kernel;
 use crate::resources::FrameResources;
 use crate::spirv::{self, capability, ENTRY_POINTS};
+use crate::swapchain::Presenter;
 
 /// How to set up a context.
 #[derive(Clone, Debug, Default)]
@@ -40,6 +34,9 @@ pub struct ContextOptions {
     /// more under the validation layer, which checks the whole module). Rendering then fails with
     /// an error that says so.
     pub present_only: bool,
+    /// Who creates the instance and device (`None`: fovea itself; an OpenXR session's runtime for
+    /// `fovea xr`, see [`crate::factory`]).
+    pub factory: Option<crate::factory::SharedFactory>,
 }
 
 impl ContextOptions {
@@ -52,6 +49,7 @@ impl ContextOptions {
             window: None,
             traversal: crate::traversal::Traversal::Auto,
             present_only: false,
+            factory: None,
         }
     }
 }
@@ -65,10 +63,6 @@ pub fn validation_requested() -> bool {
     )
 }
 
-/// The index in [`VulkanContext::pipelines`] of `render_samples`, the one pipeline specialised per
-/// scene ([`VulkanContext::specialize_render_pipeline`]).
-pub(crate) const RENDER_SAMPLES: usize = FramePass::Samples.first_kernel_entry();
-
 /// Timeout of each fence wait per chunk of work.
 pub const CHUNK_TIMEOUT: Duration = Duration::from_secs(60);
 
@@ -76,39 +70,14 @@ pub const CHUNK_TIMEOUT: Duration = Duration::from_secs(60);
 /// LLVM), which for the general kernels takes tens of seconds alone and longer on a loaded machine.
 pub const WARMUP_TIMEOUT: Duration = Duration::from_secs(300);
 
-/// A Vulkan device ready to run the fovea kernel: one compute queue, one pipeline per entry point (all from
-/// the one SPIR-V module, each created when a frame first needs it), and the buffers of the last frame
-/// size, reused across frames.
+/// A Vulkan device ready to run the fovea kernel: the device and its queue ([`Device`]), the kernel's
+/// pipelines ([`Kernel`]), each view's per-frame buffers ([`FrameResources`]) and the window's
+/// swapchain ([`Presenter`]), each a type with its own state; the context renders frames with them
+/// (`crate::frame`). Fields drop in declaration order, after [`Drop`] has waited for the device: the
+/// swapchain, the frames' buffers, the pipelines, then the device's own objects.
 pub struct VulkanContext {
-    pub(crate) shared: Arc<Shared>,
-    pub(crate) info: DeviceInfo,
-    pub(crate) limits: Limits,
-    pub(crate) queue: vk::Queue,
-    pub(crate) command_pool: vk::CommandPool,
-    pub(crate) command_buffer: vk::CommandBuffer,
-    pub(crate) fence: vk::Fence,
-    pub(crate) set_layout: vk::DescriptorSetLayout,
-    pub(crate) pipeline_layout: vk::PipelineLayout,
-    /// One per kernel entry of core's passes ([`ENTRY_POINTS`], indexed by
-    /// [`FramePass::kernel_entry_range`]), null until a frame first needs it
-    /// ([`Self::ensure_pipelines`]): a render without history or denoiser never creates those passes'
-    /// pipelines.
-    pub(crate) pipelines: [vk::Pipeline; KERNEL_ENTRY_COUNT],
-    /// The kernel module, kept for re-specialising `render_samples` per scene.
-    pub(crate) module: vk::ShaderModule,
-    /// The feature mask `pipelines[RENDER_SAMPLES]` was (or, while it is null, will be) specialised for.
-    pub(crate) render_features: u32,
-    /// The pipelines of the `probe` and `probe_scene` entry points, created on first use by
-    /// [`VulkanContext::run_probe`] and [`VulkanContext::run_scene_probe`].
-    pub(crate) probe_pipelines: [vk::Pipeline; 2],
-    pub(crate) descriptor_pool: vk::DescriptorPool,
-    pub(crate) descriptor_set: vk::DescriptorSet,
-    /// Two timestamps per frame; null when the queue has no timestamp bits.
-    pub(crate) query_pool: vk::QueryPool,
-    /// Nanoseconds per timestamp tick.
-    pub(crate) timestamp_period: f32,
-    /// Mask of the valid timestamp bits.
-    pub(crate) timestamp_mask: u64,
+    /// The window's swapchain (live view), created by the first [`Self::present`].
+    pub(crate) presenter: Option<Presenter>,
     /// The per-frame buffers of the view being rendered ([`Self::active_view`]).
     pub(crate) frame: Option<FrameResources>,
     /// Size of the last frame rendered (what [`Self::read_back_hdr`] and [`Self::present`] show).
@@ -118,27 +87,13 @@ pub struct VulkanContext {
     /// The other views' buffers and sizes (with their histories), indexed by view; the active
     /// view's slot is empty.
     pub(crate) parked_views: Vec<crate::resources::ParkedView>,
-    /// The window's swapchain (live view), created by the first [`Self::present`].
-    pub(crate) presenter: Option<crate::swapchain::Presenter>,
-    pub(crate) poisoned: bool,
-    /// A failure the next submission reports instead of submitting ([`Self::inject_fault`]).
-    pub(crate) injected_fault: Option<vk::Result>,
+    pub(crate) kernel: Kernel,
+    pub(crate) device: Device,
     /// Bound on the samples of one `render_samples` dispatch (and one submission):
     /// [`DEFAULT_MAX_CHUNK_SAMPLES`], or [`SOFTWARE_MAX_CHUNK_SAMPLES`] on a software driver.
     pub max_chunk_samples: u32,
-    /// Host time of every `vkCreateComputePipelines` of this context so far (lavapipe translates the
-    /// module to NIR here; LLVM code generation waits for the first dispatch, see [`Self::warmed`]).
-    pub pipeline_create_ms: f64,
-    /// Which pipelines have been dispatched once (by the first frame that runs their pass, before its
-    /// own dispatches, so that its `render_ms` excludes a driver's lazy shader compilation; frames that
-    /// never run a pass never compile it).
-    pub(crate) warmed: [bool; KERNEL_ENTRY_COUNT],
-    /// Whether the kernel is the ray-query module (scenes get acceleration structures).
-    pub(crate) hardware_traversal: bool,
     /// Why `Traversal::Auto` chose software, if it did.
     pub traversal_note: Option<String>,
-    /// `minAccelerationStructureScratchOffsetAlignment` (hardware traversal).
-    pub(crate) hardware_scratch_alignment: u32,
 }
 
 impl VulkanContext {
@@ -159,12 +114,13 @@ impl VulkanContext {
             }
         }
 
+        let factory = options.factory.as_deref();
         let instance = match &options.window {
-            None => InstanceHandle::new(options.validation)?,
+            None => InstanceHandle::with_extensions(options.validation, &[], factory)?,
             Some(window) => {
                 let extensions = crate::swapchain::surface_extensions(window)?;
                 let mut instance =
-                    InstanceHandle::with_extensions(options.validation, &extensions)?;
+                    InstanceHandle::with_extensions(options.validation, &extensions, factory)?;
                 crate::swapchain::create_surface(&mut instance, window)?;
                 instance
             }
@@ -185,7 +141,28 @@ impl VulkanContext {
                 }
             }
         }
-        let index = choose_device(&infos, options.device_index)?;
+        let index = match factory
+            .map(|f| f.physical_device(&instance.instance))
+            .transpose()?
+            .flatten()
+        {
+            // The factory's device (a headset's), wherever it is in the list.
+            Some(pd) => {
+                let index = physical.iter().position(|&p| p == pd).ok_or_else(|| {
+                    VulkanError::NoDevice(
+                        " (the device the OpenXR runtime chose is not listed)".into(),
+                    )
+                })?;
+                if let Some(reason) = &infos[index].unsuitable {
+                    return Err(VulkanError::UnsuitableDevice {
+                        device: infos[index].name.clone(),
+                        reason: reason.clone(),
+                    });
+                }
+                index
+            }
+            None => choose_device(&infos, options.device_index)?,
+        };
         let pd = physical[index];
         let info = infos[index].clone();
         let vk_instance = &instance.instance;
@@ -219,6 +196,14 @@ impl VulkanContext {
         // first compute family that presents to it.
         let family = if instance.surface.is_some() {
             crate::swapchain::present_queue_family(&instance, pd)
+        } else if factory.is_some_and(|f| f.needs_graphics_queue()) {
+            queue_families
+                .iter()
+                .position(|q| {
+                    q.queue_flags
+                        .contains(vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS)
+                })
+                .map(|i| i as u32)
         } else {
             queue_families
                 .iter()
@@ -324,10 +309,31 @@ impl VulkanContext {
         let queue_info = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(family)
             .queue_priorities(&priorities)];
+        // The features as the structs Vulkan 1.2 promoted them from, not `Vulkan11Features` and
+        // `Vulkan12Features`: an OpenXR runtime adds its own (timeline semaphores, 16-bit storage)
+        // to the chain, and the two kinds must not be mixed (VUID-VkDeviceCreateInfo-pNext-02829/30).
+        let mut storage16 = vk::PhysicalDevice16BitStorageFeatures::default()
+            .storage_buffer16_bit_access(want11.storage_buffer16_bit_access == vk::TRUE);
+        let mut variable_pointers = vk::PhysicalDeviceVariablePointersFeatures::default()
+            .variable_pointers_storage_buffer(want11.variable_pointers_storage_buffer == vk::TRUE)
+            .variable_pointers(want11.variable_pointers == vk::TRUE);
+        let mut storage8 = vk::PhysicalDevice8BitStorageFeatures::default()
+            .storage_buffer8_bit_access(want12.storage_buffer8_bit_access == vk::TRUE);
+        let mut int8 = vk::PhysicalDeviceShaderFloat16Int8Features::default()
+            .shader_int8(want12.shader_int8 == vk::TRUE);
+        let mut memory_model = vk::PhysicalDeviceVulkanMemoryModelFeatures::default()
+            .vulkan_memory_model(want12.vulkan_memory_model == vk::TRUE)
+            .vulkan_memory_model_device_scope(want12.vulkan_memory_model_device_scope == vk::TRUE);
+        let mut addresses = vk::PhysicalDeviceBufferDeviceAddressFeatures::default()
+            .buffer_device_address(want12.buffer_device_address == vk::TRUE);
         let mut enabled = vk::PhysicalDeviceFeatures2::default()
             .features(want)
-            .push_next(&mut want11)
-            .push_next(&mut want12);
+            .push_next(&mut storage16)
+            .push_next(&mut variable_pointers)
+            .push_next(&mut storage8)
+            .push_next(&mut int8)
+            .push_next(&mut memory_model)
+            .push_next(&mut addresses);
         if hardware {
             enabled = enabled
                 .push_next(&mut want_accel)
@@ -342,9 +348,16 @@ impl VulkanContext {
             .queue_create_infos(&queue_info)
             .enabled_extension_names(&device_extensions)
             .push_next(&mut enabled);
-        // SAFETY: the create info and everything it points to live until the call returns.
-        let device = unsafe { vk_instance.create_device(pd, &device_info, None) }
-            .during("vkCreateDevice")?;
+        let device = match factory {
+            Some(factory) => {
+                // SAFETY: `pd` belongs to the instance; the create info and everything it points to
+                // live until the call returns.
+                unsafe { factory.create_device(&instance.entry, vk_instance, pd, &device_info) }?
+            }
+            // SAFETY: as above.
+            None => unsafe { vk_instance.create_device(pd, &device_info, None) }
+                .during("vkCreateDevice")?,
+        };
         let allocator = match Allocator::new(&AllocatorCreateDesc {
             instance: vk_instance.clone(),
             device: device.clone(),
@@ -366,565 +379,170 @@ impl VulkanContext {
             physical_device: pd,
             instance,
         });
-        let limits = query_limits(&shared);
-        let hardware_scratch_alignment = crate::traversal::scratch_alignment(&shared.instance, pd);
-        // SAFETY: `pd` belongs to the instance.
-        let props = unsafe { shared.instance.instance.get_physical_device_properties(pd) };
-
-        let mut ctx = Self {
+        let device = Device::new(shared.clone(), info.clone(), family, timestamp_bits)?;
+        let kernel = Kernel::new(
             shared,
-            info: info.clone(),
-            limits,
-            queue: vk::Queue::null(),
-            command_pool: vk::CommandPool::null(),
-            command_buffer: vk::CommandBuffer::null(),
-            fence: vk::Fence::null(),
-            set_layout: vk::DescriptorSetLayout::null(),
-            pipeline_layout: vk::PipelineLayout::null(),
-            pipelines: [vk::Pipeline::null(); KERNEL_ENTRY_COUNT],
-            module: vk::ShaderModule::null(),
-            render_features: FEATURES_ALL,
-            probe_pipelines: [vk::Pipeline::null(); 2],
-            descriptor_pool: vk::DescriptorPool::null(),
-            descriptor_set: vk::DescriptorSet::null(),
-            query_pool: vk::QueryPool::null(),
-            timestamp_period: props.limits.timestamp_period,
-            timestamp_mask: if timestamp_bits >= 64 {
-                u64::MAX
-            } else {
-                (1u64 << timestamp_bits) - 1
-            },
+            (!options.present_only).then_some(code.as_slice()),
+            hardware,
+        )?;
+        Ok(Self {
+            presenter: None,
             frame: None,
             last_frame_size: None,
             active_view: 0,
             parked_views: Vec::new(),
-            presenter: None,
-            poisoned: false,
-            injected_fault: None,
+            kernel,
+            device,
             max_chunk_samples: if info.device_type == "cpu" {
                 SOFTWARE_MAX_CHUNK_SAMPLES
             } else {
                 DEFAULT_MAX_CHUNK_SAMPLES
             },
-            pipeline_create_ms: 0.0,
-            warmed: [false; KERNEL_ENTRY_COUNT],
-            hardware_traversal: hardware,
             traversal_note,
-            hardware_scratch_alignment,
-        };
-        // From here on, `ctx`'s Drop cleans up whatever was created if a step fails.
-        let kernel = (!options.present_only).then_some(code.as_slice());
-        ctx.create_objects(family, kernel, timestamp_bits > 0)?;
-        Ok(ctx)
-    }
-
-    /// Queue, command buffer, fence, descriptor layout and set, pipelines and the timestamp pool.
-    /// Creates the queue's command objects, the descriptor set and, given the kernel's `code`, its
-    /// module and pipelines (a present-only context has none).
-    fn create_objects(
-        &mut self,
-        family: u32,
-        code: Option<&[u32]>,
-        timestamps: bool,
-    ) -> Result<()> {
-        let device = &self.shared.device;
-        // SAFETY: (whole function) every create call gets a valid create info whose pointers live until
-        // the call returns; the handles are stored in `self` at once, so Drop destroys them.
-        unsafe {
-            self.queue = device.get_device_queue(family, 0);
-            self.command_pool = device
-                .create_command_pool(
-                    &vk::CommandPoolCreateInfo::default()
-                        .queue_family_index(family)
-                        .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
-                    None,
-                )
-                .during("vkCreateCommandPool")?;
-            self.command_buffer = device
-                .allocate_command_buffers(
-                    &vk::CommandBufferAllocateInfo::default()
-                        .command_pool(self.command_pool)
-                        .level(vk::CommandBufferLevel::PRIMARY)
-                        .command_buffer_count(1),
-                )
-                .during("vkAllocateCommandBuffers")?[0];
-            self.fence = device
-                .create_fence(&vk::FenceCreateInfo::default(), None)
-                .during("vkCreateFence")?;
-
-            let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..BINDING_COUNT)
-                .map(|b| {
-                    vk::DescriptorSetLayoutBinding::default()
-                        .binding(b)
-                        .descriptor_type(descriptor_type(b))
-                        .descriptor_count(1)
-                        .stage_flags(vk::ShaderStageFlags::COMPUTE)
-                })
-                .collect();
-            self.set_layout = device
-                .create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
-                    None,
-                )
-                .during("vkCreateDescriptorSetLayout")?;
-            let push = [vk::PushConstantRange::default()
-                .stage_flags(vk::ShaderStageFlags::COMPUTE)
-                .offset(0)
-                .size(std::mem::size_of::<KernelPushConstants>() as u32)];
-            let set_layouts = [self.set_layout];
-            self.pipeline_layout = device
-                .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::default()
-                        .set_layouts(&set_layouts)
-                        .push_constant_ranges(&push),
-                    None,
-                )
-                .during("vkCreatePipelineLayout")?;
-            let pool_sizes = descriptor_pool_sizes();
-            self.descriptor_pool = device
-                .create_descriptor_pool(
-                    &vk::DescriptorPoolCreateInfo::default()
-                        .max_sets(1)
-                        .pool_sizes(&pool_sizes),
-                    None,
-                )
-                .during("vkCreateDescriptorPool")?;
-            self.descriptor_set = device
-                .allocate_descriptor_sets(
-                    &vk::DescriptorSetAllocateInfo::default()
-                        .descriptor_pool(self.descriptor_pool)
-                        .set_layouts(&set_layouts),
-                )
-                .during("vkAllocateDescriptorSets")?[0];
-
-            if timestamps {
-                self.query_pool = device
-                    .create_query_pool(
-                        &vk::QueryPoolCreateInfo::default()
-                            .query_type(vk::QueryType::TIMESTAMP)
-                            .query_count(crate::timestamps::QUERIES),
-                        None,
-                    )
-                    .during("vkCreateQueryPool")?;
-            }
-        }
-        if let Some(code) = code {
-            self.create_kernel_pipelines(code)?;
-        }
-        Ok(())
-    }
-
-    /// The kernel's module. Its pipelines are created when a frame first needs them
-    /// ([`Self::ensure_pipelines`]).
-    fn create_kernel_pipelines(&mut self, code: &[u32]) -> Result<()> {
-        let device = &self.shared.device;
-        // SAFETY: a valid create info whose code lives until the call returns; the handle is stored in
-        // `self` at once, so Drop destroys it.
-        self.module = unsafe {
-            device
-                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None)
-                .during("vkCreateShaderModule")?
-        };
-        Ok(())
-    }
-
-    /// Creates those of the pipelines `which` (indices into [`Self::pipelines`]) that do not exist yet,
-    /// in one call; `render_samples` specialised for [`Self::render_features`]. Creating only what a
-    /// frame uses matters where creation is slow: the validation layer spent about 40 s on all 13
-    /// pipelines of the kernel on lavapipe, and a render without history or denoiser uses 6.
-    pub(crate) fn ensure_pipelines(&mut self, which: &[usize]) -> Result<()> {
-        self.check_kernel()?;
-        if which.contains(&RENDER_SAMPLES) && self.pipelines[RENDER_SAMPLES] == vk::Pipeline::null()
-        {
-            self.specialize_render_pipeline(self.render_features)?;
-        }
-        let missing: Vec<usize> = which
-            .iter()
-            .copied()
-            .filter(|&p| self.pipelines[p] == vk::Pipeline::null())
-            .collect();
-        if missing.is_empty() {
-            return Ok(());
-        }
-        let names: Vec<std::ffi::CString> = missing.iter().map(|&p| entry_point_name(p)).collect();
-        let infos: Vec<vk::ComputePipelineCreateInfo> = names
-            .iter()
-            .map(|name| self.kernel_pipeline_info(name, None))
-            .collect();
-        let start = std::time::Instant::now();
-        // SAFETY: every create info and what it points to live until the call returns; the handles
-        // are stored in `self` at once, so Drop destroys them.
-        let created = unsafe { create_compute_pipelines(&self.shared.device, &infos)? };
-        self.pipeline_create_ms += start.elapsed().as_secs_f64() * 1e3;
-        for (&p, pipeline) in missing.iter().zip(created) {
-            self.pipelines[p] = pipeline;
-        }
-        Ok(())
+        })
     }
 
     /// Whether rays are traced by the device's acceleration structures (`--traversal hardware`).
     #[must_use]
     pub fn hardware_traversal(&self) -> bool {
-        self.hardware_traversal
+        self.kernel.hardware_traversal
+    }
+
+    /// The device the context renders on.
+    #[must_use]
+    pub fn device(&self) -> &Device {
+        &self.device
+    }
+
+    /// The device, for submissions of its own (a headset's swapchain copies).
+    #[cfg_attr(not(feature = "xr"), allow(dead_code))]
+    pub(crate) fn device_mut(&mut self) -> &mut Device {
+        &mut self.device
     }
 
     /// The chosen device.
     #[must_use]
     pub fn device_info(&self) -> &DeviceInfo {
-        &self.info
+        self.device.device_info()
     }
 
     /// The device's name, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
     #[must_use]
     pub fn device_name(&self) -> &str {
-        &self.info.name
+        self.device.device_name()
     }
 
-    /// The device's name and its driver, e.g.
-    /// "llvmpipe (LLVM 15.0.6, 256 bits); llvmpipe, Mesa 25.0.7 (LLVM 15.0.6)": what reports print,
-    /// since lavapipe's speed depends on the Mesa version more than on the device.
+    /// The device's name and its driver (see [`Device::device_description`]).
     #[must_use]
     pub fn device_description(&self) -> String {
-        self.info.description()
+        self.device.device_description()
     }
 
     /// Whether frame times come from GPU timestamps (else wall time around the submissions).
     #[must_use]
     pub fn has_timestamps(&self) -> bool {
-        self.query_pool != vk::QueryPool::null()
+        self.device.has_timestamps()
     }
 
-    /// A snapshot of every warning and error the validation layer reported so far (empty without
-    /// validation).
+    /// A snapshot of every warning and error the validation layer reported so far.
     #[must_use]
     pub fn validation_messages(&self) -> Vec<String> {
-        self.shared
-            .instance
-            .log
-            .lock()
-            .map(|l| l.clone())
-            .unwrap_or_default()
+        self.device.validation_messages()
     }
 
-    /// The live message list; it stays readable after the context is dropped (messages about leaked
-    /// objects arrive during destruction).
+    /// The live message list ([`Device::validation_log`]).
     #[must_use]
     pub fn validation_log(&self) -> MessageLog {
-        self.shared.instance.log.clone()
+        self.device.validation_log()
     }
 
-    /// Fault injection for tests: the next submission fails with `fault` (e.g.
-    /// `vk::Result::ERROR_DEVICE_LOST` or `ERROR_OUT_OF_DEVICE_MEMORY`) as if the driver had returned it,
-    /// so the error paths that a real device loss takes can be tested on any device.
+    /// Fault injection for tests ([`Device::inject_fault`]).
     #[doc(hidden)]
     pub fn inject_fault(&mut self, fault: vk::Result) {
-        self.injected_fault = Some(fault);
+        self.device.inject_fault(fault);
     }
 
-    /// Fails on a present-only context ([`ContextOptions::present_only`]), which has no kernel.
-    pub(crate) fn check_kernel(&self) -> Result<()> {
-        if self.module == vk::ShaderModule::null() {
-            Err(VulkanError::Invalid(
-                "this Vulkan context was created to present host images only; it has no kernel to \
-                 render with"
-                    .into(),
-            ))
-        } else {
-            Ok(())
-        }
-    }
-
-    /// Fails if an earlier device loss or timeout left the device in an unknown state.
-    pub(crate) fn check_usable(&self) -> Result<()> {
-        if self.poisoned {
-            Err(VulkanError::Poisoned)
-        } else {
-            Ok(())
-        }
-    }
-
-    /// Marks the context unusable after a fatal error and passes the error on.
-    pub(crate) fn poison_on_fatal(&mut self, e: VulkanError) -> VulkanError {
-        if e.is_fatal() {
-            self.poisoned = true;
-        }
-        e
-    }
-
-    /// Records commands with `record`, submits them and waits up to `timeout`.
-    pub(crate) fn submit_and_wait(
-        &mut self,
-        what: &'static str,
-        timeout: Duration,
-        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
-    ) -> Result<()> {
-        self.submit_and_wait_with(what, timeout, None, None, record)
-    }
-
-    /// [`Self::submit_and_wait`] whose submission first waits for `wait` (a semaphore, at a stage) and
-    /// signals `signal` when done (the swapchain's acquire and present semaphores).
-    pub(crate) fn submit_and_wait_with(
-        &mut self,
-        what: &'static str,
-        timeout: Duration,
-        wait: Option<(vk::Semaphore, vk::PipelineStageFlags)>,
-        signal: Option<vk::Semaphore>,
-        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
-    ) -> Result<()> {
-        self.check_usable()?;
-        let device = &self.shared.device;
-        let cb = self.command_buffer;
-        // SAFETY: the command buffer is not in use (every submission is waited on before the next), and
-        // the fence is unsignalled (reset after each wait).
-        let result = unsafe {
-            device
-                .reset_command_buffer(cb, vk::CommandBufferResetFlags::empty())
-                .during("vkResetCommandBuffer")
-                .and_then(|()| {
-                    device
-                        .begin_command_buffer(
-                            cb,
-                            &vk::CommandBufferBeginInfo::default()
-                                .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-                        )
-                        .during("vkBeginCommandBuffer")
-                })
-                .and_then(|()| {
-                    record(device, cb);
-                    device.end_command_buffer(cb).during("vkEndCommandBuffer")
-                })
-                .and_then(|()| match self.injected_fault.take() {
-                    Some(fault) => Err(VulkanError::vk("vkQueueSubmit (injected fault)", fault)),
-                    None => Ok(()),
-                })
-                .and_then(|()| {
-                    let cbs = [cb];
-                    let wait_semaphores: Vec<vk::Semaphore> = wait.iter().map(|w| w.0).collect();
-                    let wait_stages: Vec<vk::PipelineStageFlags> =
-                        wait.iter().map(|w| w.1).collect();
-                    let signal_semaphores: Vec<vk::Semaphore> = signal.into_iter().collect();
-                    let submit = [vk::SubmitInfo::default()
-                        .command_buffers(&cbs)
-                        .wait_semaphores(&wait_semaphores)
-                        .wait_dst_stage_mask(&wait_stages)
-                        .signal_semaphores(&signal_semaphores)];
-                    device
-                        .queue_submit(self.queue, &submit, self.fence)
-                        .during("vkQueueSubmit")
-                })
-                .and_then(|()| {
-                    let nanos = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
-                    match device.wait_for_fences(&[self.fence], true, nanos) {
-                        Ok(()) => Ok(()),
-                        Err(vk::Result::TIMEOUT) => Err(VulkanError::Timeout {
-                            what,
-                            seconds: timeout.as_secs(),
-                        }),
-                        Err(r) => Err(VulkanError::vk("vkWaitForFences", r)),
-                    }
-                })
-                .and_then(|()| device.reset_fences(&[self.fence]).during("vkResetFences"))
-        };
-        result.map_err(|e| self.poison_on_fatal(e))
-    }
-
-    /// A new device-local storage buffer of `size` bytes (with `extra_usage` besides) holding each
-    /// `(offset, bytes)` part at its offset and zeros elsewhere, written straight into a staging buffer.
-    pub(crate) fn upload(
-        &mut self,
-        what: &str,
-        parts: &[(u64, &[u8])],
-        size: u64,
-        extra_usage: vk::BufferUsageFlags,
-    ) -> Result<GpuBuffer> {
-        let end = parts
-            .iter()
-            .map(|(offset, bytes)| offset + bytes.len() as u64)
-            .max()
-            .unwrap_or(0);
-        let dst = GpuBuffer::new(
-            &self.shared,
-            what,
-            size.max(end),
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | extra_usage,
-            MemoryLocation::GpuOnly,
-        )?;
-        let mut staging = GpuBuffer::new(
-            &self.shared,
-            "staging",
-            dst.size,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-        )?;
-        staging.write_parts(parts)?;
-        let (src_buf, dst_buf, n) = (staging.buffer, dst.buffer, dst.size);
-        self.submit_and_wait("a scene upload", CHUNK_TIMEOUT, |device, cb| {
-            let region = [vk::BufferCopy::default().size(n)];
-            // SAFETY: both buffers are at least `n` bytes and alive until the wait returns.
-            unsafe { device.cmd_copy_buffer(cb, src_buf, dst_buf, &region) };
-        })?;
-        Ok(dst)
-    }
-
-    /// Checks a buffer of `bytes` that is bound as a storage buffer against the device limits
-    /// (`maxStorageBufferRange`, `maxMemoryAllocationSize`); the error names the limit.
-    pub fn check_size(&self, what: &str, bytes: u64) -> Result<()> {
-        self.limits.check_size(what, bytes)
-    }
-
-    /// Checks a buffer of `bytes` against `maxMemoryAllocationSize`; the error names the limit.
-    pub fn check_allocation(&self, what: &str, bytes: u64) -> Result<()> {
-        self.limits.check_allocation(what, bytes)
-    }
-}
-
-/// Descriptor type of each binding: the chunk's block list is bound with a dynamic offset, the scene
-/// texels as a storage texel buffer, everything else as a plain storage buffer.
-pub(crate) fn descriptor_type(binding: u32) -> vk::DescriptorType {
-    if binding == BINDING_BLOCKS {
-        vk::DescriptorType::STORAGE_BUFFER_DYNAMIC
-    } else if binding == BINDING_SCENE_TEXELS {
-        vk::DescriptorType::STORAGE_TEXEL_BUFFER
-    } else {
-        vk::DescriptorType::STORAGE_BUFFER
-    }
-}
-
-/// Descriptors of each type in one set of the kernel's layout (for descriptor pools).
-pub(crate) fn descriptor_pool_sizes() -> Vec<vk::DescriptorPoolSize> {
-    let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
-    for b in 0..BINDING_COUNT {
-        let ty = descriptor_type(b);
-        match sizes.iter_mut().find(|s| s.ty == ty) {
-            Some(s) => s.descriptor_count += 1,
-            None => sizes.push(vk::DescriptorPoolSize::default().ty(ty).descriptor_count(1)),
-        }
-    }
-    sizes
-}
-
-/// `vkCreateComputePipelines` for `infos`; on failure the pipelines that were created are destroyed and
-/// the error names the call.
-///
-/// # Safety
-/// Every create info and everything it points to must be valid for `device` until the call returns.
-pub(crate) unsafe fn create_compute_pipelines(
-    device: &ash::Device,
-    infos: &[vk::ComputePipelineCreateInfo],
-) -> Result<Vec<vk::Pipeline>> {
-    // SAFETY: the caller guarantees valid create infos; partially created pipelines are destroyed before
-    // anything else can use them.
-    unsafe {
-        device
-            .create_compute_pipelines(vk::PipelineCache::null(), infos, None)
-            .map_err(|(created, r)| {
-                for p in created {
-                    if p != vk::Pipeline::null() {
-                        device.destroy_pipeline(p, None);
-                    }
-                }
-                VulkanError::vk("vkCreateComputePipelines", r)
-            })
-    }
-}
-
-/// The one specialization constant of `render_samples`: the feature mask, a `u32` at offset 0.
-fn features_map_entry() -> [vk::SpecializationMapEntry; 1] {
-    [vk::SpecializationMapEntry::default()
-        .constant_id(SPEC_CONSTANT_FEATURES)
-        .offset(0)
-        .size(4)]
-}
-
-impl VulkanContext {
-    /// Makes `render_samples` the pipeline specialised for the feature mask `features` (its
-    /// specialization constant [`SPEC_CONSTANT_FEATURES`]), so that the driver compiles out the code of
-    /// features the scene lacks. Created on first use, re-created only when the mask changes; nothing is
-    /// in flight between frames. The next frame warms the new pipeline up again.
-    pub(crate) fn specialize_render_pipeline(&mut self, features: u32) -> Result<()> {
-        self.check_kernel()?;
-        if features == self.render_features
-            && self.pipelines[RENDER_SAMPLES] != vk::Pipeline::null()
-        {
-            return Ok(());
-        }
-        let name = entry_point_name(RENDER_SAMPLES);
-        let spec_data = features.to_ne_bytes();
-        let spec_entries = features_map_entry();
-        let spec = vk::SpecializationInfo::default()
-            .map_entries(&spec_entries)
-            .data(&spec_data);
-        let create = [self.kernel_pipeline_info(&name, Some(&spec))];
-        let device = &self.shared.device;
-        let start = std::time::Instant::now();
-        // SAFETY: the create info and everything it points to live until the call returns; the old
-        // pipeline is not in use (every submission was waited on) and is destroyed only after the new
-        // one exists.
-        unsafe {
-            let created = create_compute_pipelines(device, &create)?;
-            device.destroy_pipeline(self.pipelines[RENDER_SAMPLES], None);
-            self.pipelines[RENDER_SAMPLES] = created[0];
-        }
-        self.pipeline_create_ms += start.elapsed().as_secs_f64() * 1e3;
-        self.render_features = features;
-        self.warmed[RENDER_SAMPLES] = false;
-        Ok(())
+    /// Host time of every `vkCreateComputePipelines` of this context so far.
+    #[must_use]
+    pub fn pipeline_create_ms(&self) -> f64 {
+        self.kernel.pipeline_create_ms
     }
 
     /// The feature mask the current `render_samples` pipeline was specialised for.
+    #[must_use]
     pub fn render_features(&self) -> u32 {
-        self.render_features
+        self.kernel.render_features
     }
 
-    /// The create info of the kernel module's compute pipeline for entry point `name`, with the
-    /// context's layout, specialised by `spec` where given.
-    fn kernel_pipeline_info<'a>(
-        &self,
-        name: &'a std::ffi::CStr,
-        spec: Option<&'a vk::SpecializationInfo<'a>>,
-    ) -> vk::ComputePipelineCreateInfo<'a> {
-        let mut stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(self.module)
-            .name(name);
-        if let Some(spec) = spec {
-            stage = stage.specialization_info(spec);
+    /// Presents `source` with `hud` over its corner to the window, at `window_size` (the window's inner
+    /// size in pixels, used where the surface leaves the size to the application). Creates the swapchain
+    /// on first use and re-creates it after a resize. A minimised window presents nothing
+    /// ([`crate::present`]).
+    pub fn present(
+        &mut self,
+        source: crate::present::PresentSource<'_>,
+        hud: Option<crate::present::HudOverlay<'_>>,
+        window_size: [u32; 2],
+    ) -> Result<crate::present::PresentOutcome> {
+        let last_frame = self.last_ldr_buffer();
+        crate::present::present(
+            &mut self.device,
+            &mut self.presenter,
+            last_frame,
+            source,
+            hud,
+            window_size,
+        )
+    }
+
+    /// The kernel's probe entry points on this context's device ([`crate::probe`]).
+    pub fn probes(&mut self) -> crate::probe::Probes<'_> {
+        crate::probe::Probes {
+            device: &mut self.device,
+            kernel: &mut self.kernel,
         }
-        vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(self.pipeline_layout)
     }
-}
 
-/// The kernel entry point of pipeline `index` ([`ENTRY_POINTS`]) as a C string.
-fn entry_point_name(index: usize) -> std::ffi::CString {
-    std::ffi::CString::new(ENTRY_POINTS[index]).expect("entry point names have no NUL")
+    /// [`crate::probe::Probes::run_probe`] on this context.
+    pub fn run_probe(&mut self, selector: u32, inputs: &[[f32; 4]]) -> Result<Vec<[f32; 4]>> {
+        self.probes().run_probe(selector, inputs)
+    }
+
+    /// [`crate::probe::Probes::run_probe_with`] on this context.
+    pub fn run_probe_with(
+        &mut self,
+        selector: u32,
+        inputs: &[[f32; 4]],
+        frame: &fovea_core::integrator::FrameParams,
+        replicated: &[[f32; 4]],
+        cell_means: &[[f32; 4]],
+    ) -> Result<Vec<[f32; 4]>> {
+        self.probes()
+            .run_probe_with(selector, inputs, frame, replicated, cell_means)
+    }
+
+    /// [`crate::probe::Probes::run_scene_probe`] on this context.
+    pub fn run_scene_probe(
+        &mut self,
+        scene: &crate::GpuScene,
+        selector: u32,
+        inputs: &[[f32; 4]],
+    ) -> Result<Vec<[f32; 4]>> {
+        self.probes().run_scene_probe(scene, selector, inputs)
+    }
+
+    /// Checks a buffer bound as a storage buffer against the device limits ([`Device::check_size`]).
+    pub fn check_size(&self, what: &str, bytes: u64) -> Result<()> {
+        self.device.check_size(what, bytes)
+    }
 }
 
 impl Drop for VulkanContext {
     fn drop(&mut self) {
-        let device = &self.shared.device;
-        // SAFETY: waiting for the device first makes every object below unused; null handles (a
-        // half-built context) are skipped by the Vulkan destroy functions.
+        // SAFETY: waiting for the device makes every object the fields hold unused before they drop
+        // (in declaration order: the swapchain before the surface, which goes with the instance).
         unsafe {
-            let _ = device.device_wait_idle();
-            // The swapchain goes before the surface (with the instance, later).
-            self.presenter = None;
-            self.frame = None;
-            self.parked_views.clear();
-            for p in self.pipelines {
-                device.destroy_pipeline(p, None);
-            }
-            for p in self.probe_pipelines {
-                device.destroy_pipeline(p, None);
-            }
-            device.destroy_shader_module(self.module, None);
-            device.destroy_pipeline_layout(self.pipeline_layout, None);
-            device.destroy_descriptor_pool(self.descriptor_pool, None);
-            device.destroy_descriptor_set_layout(self.set_layout, None);
-            device.destroy_query_pool(self.query_pool, None);
-            device.destroy_fence(self.fence, None);
-            device.destroy_command_pool(self.command_pool, None);
+            let _ = self.device.shared.device.device_wait_idle();
         }
     }
 }

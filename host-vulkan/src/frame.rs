@@ -409,12 +409,13 @@ impl VulkanContext {
         let res = self.frame.as_ref().expect("a rendered frame has resources");
         let src = (res.replicated.buffer, res.replicated.size);
         let dst = (res.hdr_readback.buffer, res.hdr_readback.size);
-        self.submit_and_wait("the HDR read-back", CHUNK_TIMEOUT, |device, cb| {
-            barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
-            record_copy(device, cb, src, dst, pixels * PIXEL);
-            // The host barrier makes the copy visible to the mapped read after the fence.
-            host_read_barrier(device, cb);
-        })?;
+        self.device
+            .submit_and_wait("the HDR read-back", CHUNK_TIMEOUT, |device, cb| {
+                barrier(device, cb, vk::PipelineStageFlags::TRANSFER);
+                record_copy(device, cb, src, dst, pixels * PIXEL);
+                // The host barrier makes the copy visible to the mapped read after the fence.
+                host_read_barrier(device, cb);
+            })?;
         let res = self.frame.as_mut().expect("a rendered frame has resources");
         Ok(FrameImage {
             width: w,
@@ -439,9 +440,9 @@ impl VulkanContext {
         request: &FrameRequest,
     ) -> Result<PreparedFrame> {
         let (temporal, denoise) = (request.history, request.denoise);
-        self.check_usable()?;
-        self.check_kernel()?;
-        scene.check_uploaded_to(&self.shared)?;
+        self.device.check_usable()?;
+        self.kernel.check_kernel()?;
+        scene.check_uploaded_to(&self.device.shared)?;
         let (w, h) = (frame.width, frame.height);
         if w == 0 || h == 0 {
             return Err(VulkanError::Invalid("the image is empty".into()));
@@ -455,6 +456,7 @@ impl VulkanContext {
         let fov = &frame.foveation;
         let blocks = enumerate_blocks(w, h, fov);
         let align_blocks = self
+            .device
             .limits
             .min_storage_buffer_offset_alignment
             .div_ceil(16)
@@ -490,7 +492,7 @@ impl VulkanContext {
             // then; the image's own buffers (the history above all) carry over. The old buffers are
             // freed before the new ones are made.
             let kept = self.frame.take().map(FrameResources::into_image_buffers);
-            let mut res = FrameResources::new(&self.shared, &self.limits, sizes)?;
+            let mut res = FrameResources::new(&self.device.shared, &self.device.limits, sizes)?;
             if let Some(kept) = kept {
                 res.restore_image_buffers(kept);
             }
@@ -504,11 +506,15 @@ impl VulkanContext {
                 .as_mut()
                 .expect("frame resources were just created");
             if (temporal || denoise) && res.temporal.is_none() {
-                res.temporal = Some(TemporalBuffers::new(&self.shared, &self.limits, pixels)?);
+                res.temporal = Some(TemporalBuffers::new(
+                    &self.device.shared,
+                    &self.device.limits,
+                    pixels,
+                )?);
             }
             if denoise && request.output.wants_raw() && res.raw_readback.is_none() {
                 res.raw_readback = Some(GpuBuffer::new(
-                    &self.shared,
+                    &self.device.shared,
                     "raw HDR readback",
                     pixels * PIXEL,
                     vk::BufferUsageFlags::TRANSFER_DST,
@@ -525,11 +531,11 @@ impl VulkanContext {
             res.blocks.write(&block_data)?;
         }
         self.write_descriptors(scene, &sizes);
-        self.specialize_render_pipeline(scene.features.0)?;
+        self.kernel.specialize_render_pipeline(scene.features.0)?;
         let start = Instant::now();
         let cold: Vec<usize> = frame_passes(request.setup())
             .flat_map(pass_pipelines)
-            .filter(|&p| !self.warmed[p])
+            .filter(|&p| !self.kernel.warmed[p])
             .collect();
         self.warm_up(&cold)?;
         let warmup_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -630,18 +636,23 @@ impl VulkanContext {
             .iter()
             .map(|(binding, info)| {
                 vk::WriteDescriptorSet::default()
-                    .dst_set(self.descriptor_set)
+                    .dst_set(self.kernel.descriptor_set)
                     .dst_binding(*binding)
-                    .descriptor_type(crate::context::descriptor_type(*binding))
+                    .descriptor_type(crate::kernel::descriptor_type(*binding))
                     .buffer_info(std::slice::from_ref(info))
             })
             .chain(std::iter::once(scene_texels_write(
-                self.descriptor_set,
+                self.kernel.descriptor_set,
                 &scene_texels,
             )))
             .collect();
         // SAFETY: the set is not in use by any pending command buffer, and every buffer and view is alive.
-        unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
+        unsafe {
+            self.device
+                .shared
+                .device
+                .update_descriptor_sets(&writes, &[])
+        };
     }
 
     /// Creates the pipelines `which` (indices into the frame pipelines) if they do not exist yet, then
@@ -650,9 +661,9 @@ impl VulkanContext {
     /// that each compilation has the whole timeout (lavapipe compiles the general ray-query kernels for
     /// tens of seconds each). The descriptors must already point at live buffers.
     fn warm_up(&mut self, which: &[usize]) -> Result<()> {
-        self.ensure_pipelines(which)?;
-        let layout = self.pipeline_layout;
-        let set = self.descriptor_set;
+        self.kernel.ensure_pipelines(which)?;
+        let layout = self.kernel.pipeline_layout;
+        let set = self.kernel.descriptor_set;
         let pc = KernelPushConstants {
             block_count: 0,
             spp: 0,
@@ -663,15 +674,16 @@ impl VulkanContext {
             flags: 0,
             _pad: 0,
         };
-        let max_x = self.limits.max_workgroup_count_x;
+        let max_x = self.device.limits.max_workgroup_count_x;
         for &p in which {
-            let pipeline = self.pipelines[p];
-            self.submit_and_wait("the pipeline warm-up", WARMUP_TIMEOUT, |device, cb| {
-                // Zero counts make every invocation return at once.
-                record_dispatch(device, cb, pipeline, layout, set, 0, &pc, 1, max_x);
-                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
-            })?;
-            self.warmed[p] = true;
+            let pipeline = self.kernel.pipelines[p];
+            self.device
+                .submit_and_wait("the pipeline warm-up", WARMUP_TIMEOUT, |device, cb| {
+                    // Zero counts make every invocation return at once.
+                    record_dispatch(device, cb, pipeline, layout, set, 0, &pc, 1, max_x);
+                    barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+                })?;
+            self.kernel.warmed[p] = true;
         }
         Ok(())
     }
@@ -688,11 +700,11 @@ impl VulkanContext {
         request: &FrameRequest,
         progress: &dyn Fn(u64),
     ) -> Result<FrameTiming> {
-        let layout = self.pipeline_layout;
-        let set = self.descriptor_set;
-        let pipelines = self.pipelines;
-        let query_pool = self.query_pool;
-        let max_x = self.limits.max_workgroup_count_x;
+        let layout = self.kernel.pipeline_layout;
+        let set = self.kernel.descriptor_set;
+        let pipelines = self.kernel.pipelines;
+        let query_pool = self.device.query_pool;
+        let max_x = self.device.limits.max_workgroup_count_x;
         let timed = query_pool != vk::QueryPool::null();
         let dispatch = move |device: &ash::Device,
                              cb: vk::CommandBuffer,
@@ -742,29 +754,30 @@ impl VulkanContext {
             };
             let first = i == 0;
             let c = *chunk;
-            self.submit_and_wait("a sample chunk", CHUNK_TIMEOUT, |device, cb| {
-                if first && timed {
-                    timestamps::write_start(device, cb, query_pool);
-                }
-                dispatch(
-                    device,
-                    cb,
-                    sample_pipeline,
-                    offset,
-                    &pc,
-                    c.sample_invocations(),
-                );
-                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
-                dispatch(
-                    device,
-                    cb,
-                    reduce_pipeline,
-                    offset,
-                    &pc,
-                    u64::from(c.block_count),
-                );
-                barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
-            })?;
+            self.device
+                .submit_and_wait("a sample chunk", CHUNK_TIMEOUT, |device, cb| {
+                    if first && timed {
+                        timestamps::write_start(device, cb, query_pool);
+                    }
+                    dispatch(
+                        device,
+                        cb,
+                        sample_pipeline,
+                        offset,
+                        &pc,
+                        c.sample_invocations(),
+                    );
+                    barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+                    dispatch(
+                        device,
+                        cb,
+                        reduce_pipeline,
+                        offset,
+                        &pc,
+                        u64::from(c.block_count),
+                    );
+                    barrier(device, cb, vk::PipelineStageFlags::COMPUTE_SHADER);
+                })?;
             submissions += 1;
             progress(chunk.samples());
         }
@@ -786,7 +799,7 @@ impl VulkanContext {
         let (pixels, cells) = (sizes.pixels, sizes.cells);
         let no_chunks = plan.chunks.is_empty();
         let output = request.output;
-        self.submit_and_wait(
+        self.device.submit_and_wait(
             "the passes after the samples",
             CHUNK_TIMEOUT,
             |device, cb| {
@@ -867,12 +880,12 @@ impl VulkanContext {
 
         if timed {
             let times = timestamps::read_frame(
-                &self.shared.device,
+                &self.device.shared.device,
                 query_pool,
                 &passes,
                 read_back(output) != (false, false),
-                self.timestamp_period,
-                self.timestamp_mask,
+                self.device.timestamp_period,
+                self.device.timestamp_mask,
             );
             if let Some((render_ms, passes)) = times {
                 return Ok(FrameTiming {

@@ -20,7 +20,8 @@ use fovea_core::scene::MATERIAL_ALPHA_CUTOUT;
 use fovea_scene::pack::PackedScene;
 
 use crate::buffer::GpuBuffer;
-use crate::context::{VulkanContext, CHUNK_TIMEOUT};
+use crate::context::CHUNK_TIMEOUT;
+use crate::device::Device;
 use crate::error::{Result, VkContext};
 use crate::instance::Shared;
 
@@ -131,97 +132,97 @@ fn build_barrier(device: &ash::Device, cb: vk::CommandBuffer, dst_stage: vk::Pip
     );
 }
 
-impl VulkanContext {
-    /// A buffer for an acceleration structure of `size` bytes and the structure in it.
-    fn create_accel(
-        &self,
-        loader: &ash::khr::acceleration_structure::Device,
-        what: &str,
-        ty: vk::AccelerationStructureTypeKHR,
-        size: u64,
-    ) -> Result<Accel> {
-        self.check_allocation(what, size)?;
-        let buffer = GpuBuffer::new(
-            &self.shared,
-            what,
-            size,
-            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR
-                | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
-            MemoryLocation::GpuOnly,
-        )?;
-        let info = vk::AccelerationStructureCreateInfoKHR::default()
-            .buffer(buffer.buffer)
-            .offset(0)
-            .size(size)
-            .ty(ty);
-        // SAFETY: the buffer has ACCELERATION_STRUCTURE_STORAGE usage and `size` bytes at offset 0.
-        let handle = unsafe { loader.create_acceleration_structure(&info, None) }
-            .during("vkCreateAccelerationStructureKHR")?;
-        Ok(Accel {
-            handle,
-            _buffer: buffer,
-        })
-    }
+/// A buffer for an acceleration structure of `size` bytes and the structure in it.
+fn create_accel(
+    device: &Device,
+    loader: &ash::khr::acceleration_structure::Device,
+    what: &str,
+    ty: vk::AccelerationStructureTypeKHR,
+    size: u64,
+) -> Result<Accel> {
+    device.check_allocation(what, size)?;
+    let buffer = GpuBuffer::new(
+        &device.shared,
+        what,
+        size,
+        vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR
+            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+        MemoryLocation::GpuOnly,
+    )?;
+    let info = vk::AccelerationStructureCreateInfoKHR::default()
+        .buffer(buffer.buffer)
+        .offset(0)
+        .size(size)
+        .ty(ty);
+    // SAFETY: the buffer has ACCELERATION_STRUCTURE_STORAGE usage and `size` bytes at offset 0.
+    let handle = unsafe { loader.create_acceleration_structure(&info, None) }
+        .during("vkCreateAccelerationStructureKHR")?;
+    Ok(Accel {
+        handle,
+        _buffer: buffer,
+    })
+}
 
-    /// A scratch buffer of at least `size` bytes and its address, aligned as the device requires.
-    fn scratch(&self, size: u64) -> Result<(GpuBuffer, vk::DeviceAddress)> {
-        let align = u64::from(self.hardware_scratch_alignment.max(1));
-        let buffer = GpuBuffer::new(
-            &self.shared,
-            "acceleration-structure scratch",
-            size + align,
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
-            MemoryLocation::GpuOnly,
-        )?;
-        let address = buffer.device_address(&self.shared).div_ceil(align) * align;
-        Ok((buffer, address))
-    }
+/// A scratch buffer of at least `size` bytes and its address, aligned as the device requires.
+fn scratch(device: &Device, size: u64) -> Result<(GpuBuffer, vk::DeviceAddress)> {
+    let align = u64::from(device.hardware_scratch_alignment.max(1));
+    let buffer = GpuBuffer::new(
+        &device.shared,
+        "acceleration-structure scratch",
+        size + align,
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+        MemoryLocation::GpuOnly,
+    )?;
+    let address = buffer.device_address(&device.shared).div_ceil(align) * align;
+    Ok((buffer, address))
+}
 
-    /// Sizes the build `info` (with `counts` primitives per geometry), creates its destination (guarded)
-    /// and scratch buffer, and points `info` at them; returns those and the structure's size in bytes.
-    fn prepare_build<'l, 'g>(
-        &self,
-        loader: &'l ash::khr::acceleration_structure::Device,
-        info: vk::AccelerationStructureBuildGeometryInfoKHR<'g>,
-        counts: &[u32],
-        what: &str,
-    ) -> Result<(
-        AccelGuard<'l>,
-        GpuBuffer,
-        vk::AccelerationStructureBuildGeometryInfoKHR<'g>,
-        u64,
-    )> {
-        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-        // SAFETY: valid build info whose geometry count matches `counts`.
-        unsafe {
-            loader.get_acceleration_structure_build_sizes(
-                vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                &info,
-                counts,
-                &mut sizes,
-            )
-        };
-        let size = sizes.acceleration_structure_size.max(256);
-        let accel = AccelGuard::new(loader, self.create_accel(loader, what, info.ty, size)?);
-        let (scratch, scratch_address) = self.scratch(sizes.build_scratch_size)?;
-        let info = info
-            .dst_acceleration_structure(accel.handle())
-            .scratch_data(vk::DeviceOrHostAddressKHR {
-                device_address: scratch_address,
-            });
-        Ok((accel, scratch, info, sizes.acceleration_structure_size))
-    }
+/// Sizes the build `info` (with `counts` primitives per geometry), creates its destination (guarded)
+/// and scratch buffer, and points `info` at them; returns those and the structure's size in bytes.
+fn prepare_build<'l, 'g>(
+    device: &Device,
+    loader: &'l ash::khr::acceleration_structure::Device,
+    info: vk::AccelerationStructureBuildGeometryInfoKHR<'g>,
+    counts: &[u32],
+    what: &str,
+) -> Result<(
+    AccelGuard<'l>,
+    GpuBuffer,
+    vk::AccelerationStructureBuildGeometryInfoKHR<'g>,
+    u64,
+)> {
+    let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+    // SAFETY: valid build info whose geometry count matches `counts`.
+    unsafe {
+        loader.get_acceleration_structure_build_sizes(
+            vk::AccelerationStructureBuildTypeKHR::DEVICE,
+            &info,
+            counts,
+            &mut sizes,
+        )
+    };
+    let size = sizes.acceleration_structure_size.max(256);
+    let accel = AccelGuard::new(loader, create_accel(device, loader, what, info.ty, size)?);
+    let (scratch, scratch_address) = scratch(device, sizes.build_scratch_size)?;
+    let info = info
+        .dst_acceleration_structure(accel.handle())
+        .scratch_data(vk::DeviceOrHostAddressKHR {
+            device_address: scratch_address,
+        });
+    Ok((accel, scratch, info, sizes.acceleration_structure_size))
+}
 
+impl HardwareScene {
     /// Builds the acceleration structures of `packed` (see the module documentation).
     ///
     /// Long because building the acceleration structures is one sequence of dependent Vulkan calls
     /// (geometry buffers, sizes, the bottom-level build, the instance, the top-level build, one
     /// submission).
-    pub(crate) fn build_hardware_scene(&mut self, packed: &PackedScene) -> Result<HardwareScene> {
+    pub(crate) fn build(device: &mut Device, packed: &PackedScene) -> Result<Self> {
         let start = Instant::now();
         let loader = ash::khr::acceleration_structure::Device::new(
-            &self.shared.instance.instance,
-            &self.shared.device,
+            &device.shared.instance.instance,
+            &device.shared.device,
         );
         let (vertices, order, n_opaque) = triangle_order(packed);
         let n = order.len() as u64;
@@ -239,13 +240,13 @@ impl VulkanContext {
             None
         } else {
             let vertex_bytes: &[u8] = bytemuck::cast_slice(&vertices);
-            let vertex_buffer = self.upload(
+            let vertex_buffer = device.upload(
                 "acceleration-structure vertices",
                 &[(0, vertex_bytes)],
                 vertex_bytes.len() as u64,
                 input_usage,
             )?;
-            let base = vertex_buffer.device_address(&self.shared);
+            let base = vertex_buffer.device_address(&device.shared);
             let stride = 12u64;
             let geometry = |first: u64, count: u64, opaque: bool| {
                 let triangles = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
@@ -288,7 +289,8 @@ impl VulkanContext {
                 )
                 .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
                 .geometries(&geometries);
-            let (full, _scratch, info, full_size) = self.prepare_build(
+            let (full, _scratch, info, full_size) = prepare_build(
+                device,
                 &loader,
                 info,
                 &counts,
@@ -296,7 +298,7 @@ impl VulkanContext {
             )?;
             // SAFETY: valid device and create info; the pool is destroyed below.
             let pool = unsafe {
-                self.shared.device.create_query_pool(
+                device.shared.device.create_query_pool(
                     &vk::QueryPoolCreateInfo::default()
                         .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
                         .query_count(1),
@@ -306,7 +308,7 @@ impl VulkanContext {
             .during("vkCreateQueryPool")?;
             let handle = full.handle();
             let loader_ref = &loader;
-            let built = self.submit_and_wait(
+            let built = device.submit_and_wait(
                 "the bottom-level acceleration structure build",
                 CHUNK_TIMEOUT,
                 |device, cb| {
@@ -334,7 +336,7 @@ impl VulkanContext {
             let read = built.and_then(|()| {
                 // SAFETY: the query was written by the submission just waited on.
                 unsafe {
-                    self.shared.device.get_query_pool_results(
+                    device.shared.device.get_query_pool_results(
                         pool,
                         0,
                         &mut compacted,
@@ -344,11 +346,12 @@ impl VulkanContext {
                 .during("vkGetQueryPoolResults")
             });
             // SAFETY: nothing uses the pool any more.
-            unsafe { self.shared.device.destroy_query_pool(pool, None) };
+            unsafe { device.shared.device.destroy_query_pool(pool, None) };
             read?;
             stats.blas_bytes_uncompacted = full_size;
             let size = compacted[0].clamp(1, full_size);
-            let compact = self.create_accel(
+            let compact = create_accel(
+                device,
                 &loader,
                 "compacted bottom-level acceleration structure",
                 vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
@@ -359,7 +362,7 @@ impl VulkanContext {
                 .src(full.handle())
                 .dst(compact.handle())
                 .mode(vk::CopyAccelerationStructureModeKHR::COMPACT);
-            self.submit_and_wait(
+            device.submit_and_wait(
                 "the acceleration structure compaction",
                 CHUNK_TIMEOUT,
                 |device, cb| {
@@ -391,7 +394,7 @@ impl VulkanContext {
         });
         let instance_bytes = instance_record(blas_address);
         let mut instances = GpuBuffer::new(
-            &self.shared,
+            &device.shared,
             "acceleration-structure instance",
             instance_bytes.len() as u64,
             input_usage,
@@ -402,7 +405,7 @@ impl VulkanContext {
         let instance_data = vk::AccelerationStructureGeometryInstancesDataKHR::default()
             .array_of_pointers(false)
             .data(vk::DeviceOrHostAddressConstKHR {
-                device_address: instances.device_address(&self.shared),
+                device_address: instances.device_address(&device.shared),
             });
         let geometries = [vk::AccelerationStructureGeometryKHR::default()
             .geometry_type(vk::GeometryTypeKHR::INSTANCES)
@@ -417,14 +420,15 @@ impl VulkanContext {
             .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
             .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
             .geometries(&geometries);
-        let (tlas, _scratch, info, tlas_size) = self.prepare_build(
+        let (tlas, _scratch, info, tlas_size) = prepare_build(
+            device,
             &loader,
             info,
             &[instance_count],
             "top-level acceleration structure",
         )?;
         let loader_ref = &loader;
-        self.submit_and_wait(
+        device.submit_and_wait(
             "the top-level acceleration structure build",
             CHUNK_TIMEOUT,
             |device, cb| {
@@ -454,11 +458,11 @@ impl VulkanContext {
         ]);
         words.extend_from_slice(&order);
         let map_bytes: &[u8] = bytemuck::cast_slice(&words);
-        self.check_size(
+        device.check_size(
             "the hardware-traversal triangle map",
             map_bytes.len() as u64,
         )?;
-        let map = self.upload(
+        let map = device.upload(
             "hardware-traversal triangle map",
             &[(0, map_bytes)],
             map_bytes.len() as u64,
@@ -467,7 +471,7 @@ impl VulkanContext {
         stats.map_bytes = map_bytes.len() as u64;
         stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(HardwareScene {
-            shared: self.shared.clone(),
+            shared: device.shared.clone(),
             blas,
             tlas: Some(tlas.into_inner()),
             loader,

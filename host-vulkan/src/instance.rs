@@ -56,12 +56,17 @@ impl InstanceHandle {
     /// Loads Vulkan and creates an instance (API 1.2). With `validation`, enables the Khronos validation
     /// layer and a messenger that records warnings and errors.
     pub fn new(validation: bool) -> Result<Self> {
-        Self::with_extensions(validation, &[])
+        Self::with_extensions(validation, &[], None)
     }
 
     /// [`Self::new`] with `extra_extensions` enabled besides (a window's surface extensions); a missing
-    /// one is an error that names it.
-    pub fn with_extensions(validation: bool, extra_extensions: &[&CStr]) -> Result<Self> {
+    /// one is an error that names it. With `factory`, it creates the instance from fovea's create info
+    /// (an OpenXR runtime, which adds its own extensions).
+    pub fn with_extensions(
+        validation: bool,
+        extra_extensions: &[&CStr],
+        factory: Option<&dyn crate::factory::DeviceFactory>,
+    ) -> Result<Self> {
         // SAFETY: loading the system Vulkan loader runs its initialisation code; we trust the loader.
         let entry =
             unsafe { ash::Entry::load() }.map_err(|e| VulkanError::NoLoader(e.to_string()))?;
@@ -129,13 +134,17 @@ impl InstanceHandle {
             .application_info(&app)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
-        // SAFETY: `info` and the name arrays it points to live until the call returns.
-        let instance = unsafe { entry.create_instance(&info, None) }.map_err(|r| match r {
-            vk::Result::ERROR_INCOMPATIBLE_DRIVER => {
-                VulkanError::NoDevice(" (the loader found no compatible driver)".into())
-            }
-            other => VulkanError::vk("vkCreateInstance", other),
-        })?;
+        let instance = match factory {
+            // SAFETY: `info` and the name arrays it points to live until the call returns.
+            Some(factory) => unsafe { factory.create_instance(&entry, &info) }?,
+            // SAFETY: as above.
+            None => unsafe { entry.create_instance(&info, None) }.map_err(|r| match r {
+                vk::Result::ERROR_INCOMPATIBLE_DRIVER => {
+                    VulkanError::NoDevice(" (the loader found no compatible driver)".into())
+                }
+                other => VulkanError::vk("vkCreateInstance", other),
+            })?,
+        };
         let log: MessageLog = Arc::default();
         let log_box = Box::new(log.clone());
         let mut handle = Self {

@@ -26,10 +26,13 @@ mod barrier;
 pub mod blocks;
 mod buffer;
 pub mod context;
+pub mod device;
 pub mod error;
+pub mod factory;
 pub mod frame;
 pub mod hardware;
 pub mod instance;
+pub mod kernel;
 mod limits;
 pub mod present;
 pub mod probe;
@@ -39,10 +42,13 @@ pub mod spirv;
 pub mod swapchain;
 mod timestamps;
 pub mod traversal;
+#[cfg(feature = "xr")]
+pub mod xr;
 
 /// The `ash` Vulkan types (result codes for [`VulkanContext::inject_fault`]).
 pub use ash::vk;
 pub use context::{validation_requested, ContextOptions, VulkanContext};
+pub use device::Device;
 pub use error::VulkanError;
 pub use fovea_frame::RenderedFrame;
 pub use frame::{FrameOutput, FrameRequest, GpuRenderStats};

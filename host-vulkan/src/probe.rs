@@ -14,14 +14,17 @@ use fovea_core::kernel_abi::{
 };
 
 use crate::buffer::GpuBuffer;
-use crate::context::{create_compute_pipelines, VulkanContext, CHUNK_TIMEOUT};
+use crate::context::CHUNK_TIMEOUT;
+use crate::device::Device;
 use crate::error::{Result, VkContext, VulkanError};
+use crate::kernel::create_compute_pipelines;
+use crate::kernel::Kernel;
 use crate::scene::GpuScene;
 use crate::spirv;
 
 pub use crate::spirv::{PROBE_ENTRY_POINT, PROBE_SCENE_ENTRY_POINT};
 
-/// Which probe entry point a dispatch runs (index into `VulkanContext::probe_pipelines`).
+/// Which probe entry point a dispatch runs (index into `Kernel::probe_pipelines`).
 #[derive(Clone, Copy)]
 enum ProbeEntry {
     Functions = 0,
@@ -37,7 +40,14 @@ impl ProbeEntry {
     }
 }
 
-impl VulkanContext {
+/// The probe entry points on a device's kernel ([`crate::VulkanContext::probes`]): the CPU/GPU probe
+/// tables run core's functions through them.
+pub struct Probes<'a> {
+    pub(crate) device: &'a mut Device,
+    pub(crate) kernel: &'a mut Kernel,
+}
+
+impl Probes<'_> {
     /// Runs the `probe` entry point with `selector` over `inputs.len() / PROBE_INPUT_RECORDS` items
     /// (item `i` reads `inputs[8 i .. 8 i + 8]`) and returns `PROBE_OUTPUT_RECORDS` records per item.
     /// The frame parameters are zero and the images empty (see [`Self::run_probe_with`]).
@@ -56,18 +66,18 @@ impl VulkanContext {
         replicated: &[[f32; 4]],
         cell_means: &[[f32; 4]],
     ) -> Result<Vec<[f32; 4]>> {
-        self.check_usable()?;
-        self.check_kernel()?;
+        self.device.check_usable()?;
+        self.kernel.check_kernel()?;
         let record = std::mem::size_of::<[f32; 4]>() as u64;
         for (what, n) in [
             ("the probe image", replicated.len()),
             ("the probe cell means", cell_means.len()),
         ] {
-            self.check_size(what, n as u64 * record)?;
+            self.device.check_size(what, n as u64 * record)?;
         }
         let host_buffer = |what: &str, data: &[u8]| -> Result<GpuBuffer> {
             let mut b = GpuBuffer::new(
-                &self.shared,
+                &self.device.shared,
                 what,
                 data.len() as u64,
                 vk::BufferUsageFlags::STORAGE_BUFFER,
@@ -95,9 +105,9 @@ impl VulkanContext {
         selector: u32,
         inputs: &[[f32; 4]],
     ) -> Result<Vec<[f32; 4]>> {
-        self.check_usable()?;
-        self.check_kernel()?;
-        scene.check_uploaded_to(&self.shared)?;
+        self.device.check_usable()?;
+        self.kernel.check_kernel()?;
+        scene.check_uploaded_to(&self.device.shared)?;
         let extra = scene.buffer_infos();
         self.dispatch_probe(
             ProbeEntry::Scene,
@@ -138,13 +148,13 @@ impl VulkanContext {
             ("the probe inputs", inputs.len()),
             ("the probe outputs", out_records),
         ] {
-            self.check_size(what, n as u64 * record)?;
+            self.device.check_size(what, n as u64 * record)?;
         }
         let pipeline = self.probe_pipeline(entry)?;
 
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let mut input_buf = GpuBuffer::new(
-            &self.shared,
+            &self.device.shared,
             "probe inputs",
             inputs.len() as u64 * record,
             storage,
@@ -152,14 +162,14 @@ impl VulkanContext {
         )?;
         input_buf.write(inputs)?;
         let mut output_buf = GpuBuffer::new(
-            &self.shared,
+            &self.device.shared,
             "probe outputs",
             out_records as u64 * record,
             storage,
             MemoryLocation::GpuToCpu,
         )?;
 
-        let set = ProbeSet::new(self)?;
+        let set = ProbeSet::new(self.device, self.kernel)?;
         let mut bindings = vec![
             (BINDING_PROBE_INPUT, whole(&input_buf)),
             (BINDING_PROBE_OUTPUT, whole(&output_buf)),
@@ -173,7 +183,7 @@ impl VulkanContext {
                 vk::WriteDescriptorSet::default()
                     .dst_set(set.set)
                     .dst_binding(*binding)
-                    .descriptor_type(crate::context::descriptor_type(*binding))
+                    .descriptor_type(crate::kernel::descriptor_type(*binding))
                     .buffer_info(std::slice::from_ref(info))
             })
             .chain(
@@ -183,7 +193,12 @@ impl VulkanContext {
             )
             .collect();
         // SAFETY: the set is new and unused; every buffer and view is alive.
-        unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
+        unsafe {
+            self.device
+                .shared
+                .device
+                .update_descriptor_sets(&writes, &[])
+        };
 
         let pc = KernelPushConstants {
             block_count: 0,
@@ -195,37 +210,38 @@ impl VulkanContext {
             flags: 0,
             _pad: 0,
         };
-        let layout = self.pipeline_layout;
-        let max_x = self.limits.max_workgroup_count_x;
+        let layout = self.kernel.pipeline_layout;
+        let max_x = self.device.limits.max_workgroup_count_x;
         let descriptor_set = set.set;
-        self.submit_and_wait("a probe", CHUNK_TIMEOUT, |device, cb| {
-            crate::frame::record_dispatch(
-                device,
-                cb,
-                pipeline,
-                layout,
-                descriptor_set,
-                0,
-                &pc,
-                items as u64,
-                max_x,
-            );
-            // SAFETY: the barrier makes the shader writes visible to the mapped read after the fence.
-            unsafe {
-                let to_host = [vk::MemoryBarrier::default()
-                    .src_access_mask(vk::AccessFlags::SHADER_WRITE)
-                    .dst_access_mask(vk::AccessFlags::HOST_READ)];
-                device.cmd_pipeline_barrier(
+        self.device
+            .submit_and_wait("a probe", CHUNK_TIMEOUT, |device, cb| {
+                crate::frame::record_dispatch(
+                    device,
                     cb,
-                    vk::PipelineStageFlags::COMPUTE_SHADER,
-                    vk::PipelineStageFlags::HOST,
-                    vk::DependencyFlags::empty(),
-                    &to_host,
-                    &[],
-                    &[],
+                    pipeline,
+                    layout,
+                    descriptor_set,
+                    0,
+                    &pc,
+                    items as u64,
+                    max_x,
                 );
-            }
-        })?;
+                // SAFETY: the barrier makes the shader writes visible to the mapped read after the fence.
+                unsafe {
+                    let to_host = [vk::MemoryBarrier::default()
+                        .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+                        .dst_access_mask(vk::AccessFlags::HOST_READ)];
+                    device.cmd_pipeline_barrier(
+                        cb,
+                        vk::PipelineStageFlags::COMPUTE_SHADER,
+                        vk::PipelineStageFlags::HOST,
+                        vk::DependencyFlags::empty(),
+                        &to_host,
+                        &[],
+                        &[],
+                    );
+                }
+            })?;
         drop(set);
         output_buf.read::<[f32; 4]>(out_records)
     }
@@ -234,8 +250,8 @@ impl VulkanContext {
     /// them).
     fn probe_pipeline(&mut self, entry: ProbeEntry) -> Result<vk::Pipeline> {
         let slot = entry as usize;
-        if self.probe_pipelines[slot] != vk::Pipeline::null() {
-            return Ok(self.probe_pipelines[slot]);
+        if self.kernel.probe_pipelines[slot] != vk::Pipeline::null() {
+            return Ok(self.kernel.probe_pipelines[slot]);
         }
         let code = spirv::load_kernel()?;
         let info = spirv::module_info(&code);
@@ -246,20 +262,21 @@ impl VulkanContext {
                 info.entry_points
             )));
         }
-        let device = &self.shared.device;
+        let device = &self.device.shared.device;
         let name = std::ffi::CString::new(entry_name).expect("no NUL in the name");
         let create = [vk::ComputePipelineCreateInfo::default()
             .stage(
                 vk::PipelineShaderStageCreateInfo::default()
                     .stage(vk::ShaderStageFlags::COMPUTE)
-                    .module(self.module)
+                    .module(self.kernel.module)
                     .name(&name),
             )
-            .layout(self.pipeline_layout)];
+            .layout(self.kernel.pipeline_layout)];
         // SAFETY: the create info points at the context's live module, layout and `name`, all valid until
         // the call returns.
-        self.probe_pipelines[slot] = unsafe { create_compute_pipelines(device, &create)? }[0];
-        Ok(self.probe_pipelines[slot])
+        self.kernel.probe_pipelines[slot] =
+            unsafe { create_compute_pipelines(device, &create)? }[0];
+        Ok(self.kernel.probe_pipelines[slot])
     }
 }
 
@@ -279,9 +296,9 @@ struct ProbeSet {
 }
 
 impl ProbeSet {
-    fn new(ctx: &VulkanContext) -> Result<Self> {
-        let device = ctx.shared.device.clone();
-        let sizes = crate::context::descriptor_pool_sizes();
+    fn new(owner: &Device, kernel: &Kernel) -> Result<Self> {
+        let device = owner.shared.device.clone();
+        let sizes = crate::kernel::descriptor_pool_sizes();
         // SAFETY: valid create info.
         let pool = unsafe {
             device.create_descriptor_pool(
@@ -292,7 +309,7 @@ impl ProbeSet {
             )
         }
         .during("vkCreateDescriptorPool")?;
-        let layouts = [ctx.set_layout];
+        let layouts = [kernel.set_layout];
         // SAFETY: the pool has room for one set of this layout.
         let set = unsafe {
             device.allocate_descriptor_sets(

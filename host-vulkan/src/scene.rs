@@ -116,7 +116,7 @@ impl GpuScene {
     /// Long because uploading is one sequence of buffer creations (each checked against the device's
     /// limits) followed by one staging copy.
     pub fn upload(ctx: &mut VulkanContext, packed: &PackedScene) -> Result<Self> {
-        ctx.check_usable()?;
+        ctx.device.check_usable()?;
         let triangle_light: Vec<u32> =
             if packed.lights.triangle_light.is_empty() && packed.triangle_count() > 0 {
                 vec![INVALID_INDEX; packed.triangle_count()]
@@ -133,7 +133,11 @@ impl GpuScene {
             .map(|a| (a.binding, a.name, a.bytes))
             .collect();
         debug_assert_eq!(sourced.first().map(|a| a.0), Some(BINDING_NODES));
-        let align = ctx.limits.min_storage_buffer_offset_alignment.max(16);
+        let align = ctx
+            .device
+            .limits
+            .min_storage_buffer_offset_alignment
+            .max(16);
         let mut offsets = vec![0u64; sourced.len()];
         let mut texels_size = 0u64;
         for (k, (_, what, data)) in sourced.iter().enumerate() {
@@ -146,16 +150,17 @@ impl GpuScene {
         // reads as zeros; the last texture's 1 × 1 mip level was lost that way).
         let texels_size = align_up(texels_size, 16);
         let texel_count = texels_size / 16;
-        if texel_count > ctx.limits.max_texel_buffer_elements {
+        if texel_count > ctx.device.limits.max_texel_buffer_elements {
             return Err(VulkanError::TooLarge {
                 what: "the scene's BVH, triangles, materials, vertex attributes and textures"
                     .into(),
                 bytes: texels_size,
                 limit_name: "maxTexelBufferElements (16-byte texels)",
-                limit: ctx.limits.max_texel_buffer_elements * 16,
+                limit: ctx.device.limits.max_texel_buffer_elements * 16,
             });
         }
-        ctx.check_allocation("the scene texel buffer", texels_size)?;
+        ctx.device
+            .check_allocation("the scene texel buffer", texels_size)?;
         // The first texel of the array bound at `binding`.
         let texel_offset = |binding: u32| {
             let k = sourced.iter().position(|(b, ..)| *b == binding);
@@ -196,12 +201,12 @@ impl GpuScene {
             ctx.check_size(what, data.len() as u64)?;
             total += (data.len() as u64).max(16);
         }
-        if total > ctx.limits.device_local_heap {
+        if total > ctx.device.limits.device_local_heap {
             return Err(VulkanError::TooLarge {
                 what: "the scene".into(),
                 bytes: total,
                 limit_name: "device-local heap size",
-                limit: ctx.limits.device_local_heap,
+                limit: ctx.device.limits.device_local_heap,
             });
         }
 
@@ -212,7 +217,7 @@ impl GpuScene {
             .zip(offsets.iter().copied())
             .map(|((_, _, data), offset)| (offset, *data))
             .collect();
-        let mut buffers = vec![ctx.upload(
+        let mut buffers = vec![ctx.device.upload(
             "the scene texel buffer",
             &parts,
             texels_size,
@@ -235,13 +240,21 @@ impl GpuScene {
             };
             bindings.push((*binding, range));
             let size = (data.len() as u64).max(16);
-            buffers.push(ctx.upload(what, &[(0, data)], size, vk::BufferUsageFlags::empty())?);
+            buffers.push(ctx.device.upload(
+                what,
+                &[(0, data)],
+                size,
+                vk::BufferUsageFlags::empty(),
+            )?);
         }
 
         // Hardware traversal's map (the ray-query module reads it); the software module does not read
         // the binding, which then points at the globals.
-        let hardware = if ctx.hardware_traversal {
-            Some(ctx.build_hardware_scene(packed)?)
+        let hardware = if ctx.kernel.hardware_traversal {
+            Some(crate::hardware::HardwareScene::build(
+                &mut ctx.device,
+                packed,
+            )?)
         } else {
             None
         };
@@ -259,13 +272,13 @@ impl GpuScene {
             .range(texel_count * 16);
         // SAFETY: the buffer was created with STORAGE_TEXEL_BUFFER usage and is `texel_count * 16` bytes
         // long, within maxTexelBufferElements (checked above).
-        let view = unsafe { ctx.shared.device.create_buffer_view(&info, None) }
+        let view = unsafe { ctx.device.shared.device.create_buffer_view(&info, None) }
             .during("vkCreateBufferView")?;
         Ok(Self {
             buffers,
             bindings,
             texel_view: TexelView {
-                shared: ctx.shared.clone(),
+                shared: ctx.device.shared.clone(),
                 view,
             },
             bytes: total,

@@ -226,6 +226,7 @@ pub fn vulkan_context_with_or_skip(
         window: None,
         traversal,
         present_only: false,
+        factory: None,
     };
     vulkan_context_from_or_skip(what, &options)
 }

@@ -186,6 +186,7 @@ fn bad_device_index_is_a_clear_error() {
         window: None,
         traversal: fovea_vulkan::Traversal::Software,
         present_only: false,
+        factory: None,
     })
     .err()
     .expect("an out-of-range index fails");
@@ -273,6 +274,7 @@ fn a_present_only_context_has_no_kernel_and_says_so() {
         window: None,
         traversal: fovea_vulkan::Traversal::Software,
         present_only: true,
+        factory: None,
     };
     let Some(mut ctx) = vulkan_context_from_or_skip("the present-only test", &options) else {
         return;
