@@ -4,6 +4,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/setup-slurm.sh
+# Monado, the OpenXR runtime `fovea xr`'s test runs against (built once per machine).
+bash scripts/setup-monado.sh
 export PATH="$HOME/.cargo/bin:$PATH"
 echo "== cargo fmt --check"
 cargo fmt --all -- --check

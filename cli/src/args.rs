@@ -37,6 +37,9 @@ pub enum Command {
     /// Live view: a window whose fovea follows the gaze (mouse, an eye tracker over UDP, or a trace),
     /// with fly controls, per-pixel history that survives gaze and camera moves, and a frame-time budget.
     View(Box<ViewArgs>),
+    /// A headset through OpenXR: both eyes rendered each frame at the poses and fields of view the
+    /// runtime gives, each with its own gaze, foveation and history, into the runtime's swapchain.
+    Xr(Box<XrArgs>),
     /// List the devices fovea can render on.
     Devices,
 }
@@ -191,6 +194,93 @@ pub struct ViewArgs {
     pub target: BackendArgs,
     #[command(flatten)]
     pub path: PathArgs,
+}
+
+/// `fovea xr`.
+#[derive(Args, Debug, Clone)]
+pub struct XrArgs {
+    /// Scene file (.gltf, .glb or .obj). Default: the bundled Lost Empire.
+    pub scene: Option<PathBuf>,
+    /// Each eye's image size (default: the size the runtime recommends).
+    #[arg(long, value_name = "WxH", allow_hyphen_values = true)]
+    pub size: Option<Resolution>,
+    /// End the session after this many rendered frames (default: run until the runtime ends it).
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole_number::<u32>)]
+    pub frames: Option<u32>,
+    /// Where each eye's gaze comes from: `ahead` (the point straight ahead of each eye) or
+    /// `udp:PORT` (an eye tracker's `t,x,y` datagrams, 0..1 of each eye's image, as for `view`).
+    #[arg(long, default_value = "ahead", value_name = "SOURCE")]
+    pub gaze_source: XrGazeSource,
+    /// Scene units per metre of the headset's tracking space (the scene's camera is the origin of
+    /// that space).
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "S",
+        allow_hyphen_values = true
+    )]
+    pub world_scale: f64,
+    /// Render each frame alone, without each eye's history.
+    #[arg(long)]
+    pub no_history: bool,
+    /// The denoiser after each eye's history.
+    #[arg(long)]
+    pub denoise: bool,
+    #[command(flatten)]
+    pub foveation: FoveationArgs,
+    #[command(flatten)]
+    pub image: ImageArgs,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub lighting: LightingArgs,
+    #[command(flatten)]
+    pub materials: MtlArgs,
+    /// Render with every optional feature on.
+    #[arg(long)]
+    pub no_specialize: bool,
+    /// Write each frame's eye poses (`views.csv`, the format of `render --stereo-views`), each eye's
+    /// gaze (`gaze.csv`, a binocular `--gaze-trace`) and each eye's linear image (`f_left_00012.exr`)
+    /// to this folder, so that `render` can reproduce the session.
+    #[arg(long, value_name = "DIR")]
+    pub record: Option<PathBuf>,
+    /// Write the session's figures (per eye and frame) as JSON.
+    #[arg(long, value_name = "FILE.json")]
+    pub stats: Option<PathBuf>,
+    /// No summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub target: BackendArgs,
+    #[command(flatten)]
+    pub path: PathArgs,
+}
+
+/// Where `fovea xr` takes each eye's gaze from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum XrGazeSource {
+    /// Straight ahead of each eye.
+    Ahead,
+    /// Datagrams on this UDP port of 127.0.0.1.
+    Udp(u16),
+}
+
+impl std::str::FromStr for XrGazeSource {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s.trim() {
+            "ahead" => Ok(Self::Ahead),
+            other => match other.strip_prefix("udp:") {
+                Some(port) => port
+                    .parse::<u16>()
+                    .ok()
+                    .filter(|&p| p > 0)
+                    .map(Self::Udp)
+                    .ok_or_else(|| format!("'{port}' is not a UDP port (1 to 65535)")),
+                None => Err(format!("'{other}': expected ahead or udp:PORT")),
+            },
+        }
+    }
 }
 
 /// Which backend renders.

@@ -20,7 +20,8 @@
 //!     origin bottom-left. Values beyond `±1e6` are rejected.
 //!
 //! A datagram may give both eyes' gaze, `t,lx,ly,rx,ry` (the left eye's, then the right's, in the
-//! same convention); the view shows one image, so it fixates between them.
+//! same convention); the view shows one image, so it fixates between them, and `fovea xr` fixates
+//! each eye on its own.
 //!
 //! The viewer drains every pending datagram each frame and uses the newest valid one. A datagram
 //! that is not valid UTF-8, is longer than 512 bytes, or does not match `t,x,y` is dropped, counted
@@ -128,6 +129,9 @@ pub struct GazeSample {
     pub x: f32,
     /// Vertical window pixel, `0` = top edge.
     pub y: f32,
+    /// Each eye's gaze in window pixels, the left's then the right's, where the sample gives both
+    /// (`x, y` is then between them): a headset fixates each eye on its own.
+    pub eyes: Option<[[f32; 2]; 2]>,
 }
 
 /// Converts raw gaze coordinates in `convention` to window pixels with the origin top-left, for a
@@ -166,12 +170,18 @@ pub fn parse_sample(
             )
         })?;
     // Both eyes' gaze: the view shows one image, fixated between them.
+    let eyes = right.map(|[rx, ry]| {
+        [
+            to_window_pixels(convention, x, y, window),
+            to_window_pixels(convention, rx, ry, window),
+        ]
+    });
     let [x, y] = match right {
         Some([rx, ry]) => [0.5 * (x + rx), 0.5 * (y + ry)],
         None => [x, y],
     };
     let [x, y] = to_window_pixels(convention, x, y, window);
-    Ok(GazeSample { t, x, y })
+    Ok(GazeSample { t, x, y, eyes })
 }
 
 /// The columns of a trace: one gaze per line (`KEY,x,y`), or each eye's (`KEY,lx,ly,rx,ry`).
@@ -778,7 +788,12 @@ impl GazeTrace {
         let sample = self.raw_at(at)?;
         let [x, y] = sample.between();
         let [x, y] = to_window_pixels(self.convention, x, y, window);
-        Some(GazeSample { t: sample.t, x, y })
+        Some(GazeSample {
+            t: sample.t,
+            x,
+            y,
+            eyes: None,
+        })
     }
 
     /// The newest raw sample with `key <= at`.
@@ -1082,6 +1097,22 @@ mod tests {
             (s.x - 30.0).abs() < 1e-4 && (s.y - 50.0).abs() < 1e-4,
             "{s:?}"
         );
+        // ... and keeps each eye's, for a headset's two views.
+        let [l, r] = s.eyes.expect("both eyes");
+        assert!(
+            (l[0] - 20.0).abs() < 1e-4 && (l[1] - 40.0).abs() < 1e-4,
+            "{l:?}"
+        );
+        assert!(
+            (r[0] - 40.0).abs() < 1e-4 && (r[1] - 60.0).abs() < 1e-4,
+            "{r:?}"
+        );
+        assert_eq!(
+            parse_sample("1.5,0.2,0.4", GazeConvention::Normalized, [100, 100])
+                .unwrap()
+                .eyes,
+            None
+        );
     }
 
     #[test]
@@ -1129,6 +1160,7 @@ mod tests {
             t: 12.5,
             x: 320.0,
             y: 360.0,
+            eyes: None,
         };
         for text in [
             "12.5,0.4,0.6",
@@ -1147,7 +1179,8 @@ mod tests {
             Ok(GazeSample {
                 t: 1000.0,
                 x: 100.0,
-                y: 450.0
+                y: 450.0,
+                eyes: None,
             })
         );
         // Slightly outside the window is fine.
@@ -1244,7 +1277,8 @@ mod tests {
             GazeSample {
                 t: 2.0,
                 x: 400.0,
-                y: 150.0
+                y: 150.0,
+                eyes: None,
             }
         );
         assert!(drained >= before);
@@ -1286,7 +1320,8 @@ mod tests {
             Some(GazeSample {
                 t: 5.0,
                 x: 100.0,
-                y: 450.0
+                y: 450.0,
+                eyes: None,
             })
         );
     }
@@ -1328,7 +1363,8 @@ mod tests {
             GazeSample {
                 t: 0.0,
                 x: 400.0,
-                y: 300.0
+                y: 300.0,
+                eyes: None,
             }
         );
         assert_eq!(at(0.49).t, 0.0);
@@ -1338,7 +1374,8 @@ mod tests {
             GazeSample {
                 t: 0.5,
                 x: 80.0,
-                y: 60.0
+                y: 60.0,
+                eyes: None,
             }
         );
         assert_eq!(at(1.99).t, 0.5);
@@ -1358,7 +1395,8 @@ mod tests {
             Some(GazeSample {
                 t: 1.0,
                 x: 30.0,
-                y: 560.0
+                y: 560.0,
+                eyes: None,
             })
         );
         assert_eq!(trace.convention(), GazeConvention::PixelsBottomLeft);

@@ -26,6 +26,7 @@ mod stereo;
 mod values;
 #[cfg_attr(not(feature = "vulkan"), allow(dead_code))]
 mod view;
+mod xr;
 
 use clap::Parser;
 
@@ -38,6 +39,7 @@ fn main() -> std::process::ExitCode {
         args::Command::Report(r) => report::run(r),
         args::Command::Bench(b) => bench::run(b),
         args::Command::View(v) => view::run(v),
+        args::Command::Xr(x) => xr::run(x),
         args::Command::Devices => {
             backend::print_devices();
             Ok(())

@@ -59,6 +59,15 @@ pub struct EyeView {
 }
 
 impl EyeView {
+    /// Where the eye looks straight ahead on its `size` image, in pixels (the image's centre for a
+    /// symmetric frustum): the gaze when no eye tracker gives one.
+    #[must_use]
+    #[cfg_attr(not(feature = "vulkan"), allow(dead_code))]
+    pub fn ahead_px(&self, [w, h]: [u32; 2]) -> [f32; 2] {
+        let [l, r, u, d] = self.angles.map(f32::tan);
+        [w as f32 * -l / (r - l), h as f32 * u / (u - d)]
+    }
+
     /// The eye's camera in the scene's coordinates (`origin`: where the scene's origin lies in the
     /// world, see `fovea_scene::rebase`).
     #[must_use]
