@@ -57,10 +57,11 @@ rm -rf "$dest"
 mkdir -p "$dest"
 tar xzf "$tarball" -C "$dest"
 src="$dest/monado-$snapshot"
-# No service (the runtime runs in the application's process), no tests, no documentation.
+# No service (the runtime runs in the application's process), no tests, no documentation; only the
+# runtime and its manifest are built (254 of the 322 steps).
 if ! { cmake -S "$src" -B "$dest/build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DXRT_FEATURE_SERVICE=OFF -DBUILD_TESTING=OFF -DBUILD_DOC=OFF >"$dest/cmake.log" 2>&1 &&
-  ninja -C "$dest/build" >"$dest/ninja.log" 2>&1; }; then
+  ninja -C "$dest/build" openxr_monado-dev.json >"$dest/ninja.log" 2>&1; }; then
   echo "setup-monado: warning: building Monado failed (see $dest/cmake.log and ninja.log); the OpenXR test will not run" >&2
   exit 0
 fi
