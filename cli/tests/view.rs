@@ -525,6 +525,12 @@ fn bad_input_fails_with_a_clear_message() {
         e.contains("--screenshot-dir") && e.contains("is a file"),
         "{e}"
     );
+    // A folder that takes no files (a probe tells, not the permission bits).
+    let e = fails(&["--screenshot-dir", "/proc/fovea-shots"], |_| {});
+    assert!(
+        e.contains("--screenshot-dir") && e.contains("cannot write into the folder '/proc'"),
+        "{e}"
+    );
     let e = fails(
         &["--exit-after-frames", "5", "--screenshot-at-frame", "9"],
         |_| {},

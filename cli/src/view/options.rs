@@ -108,6 +108,20 @@ fn check_screenshots(args: &ViewArgs) -> Result<()> {
             format!("'{}' is a file, not a folder", dir.display()),
         ));
     }
+    // The folder, or the nearest one above it that exists (where it will be made), takes files: a
+    // probe, so that a read-only mount or /proc is named now, not at the first screenshot.
+    if let Some(existing) = dir
+        .ancestors()
+        .find(|a| a.is_dir() || a.as_os_str().is_empty())
+    {
+        let existing = if existing.as_os_str().is_empty() {
+            std::path::Path::new(".")
+        } else {
+            existing
+        };
+        crate::output::check_folder_takes_files(existing)
+            .map_err(|why| FoveaError::option("--screenshot-dir", why))?;
+    }
     if let Some(file) = dir.ancestors().skip(1).find(|a| a.is_file()) {
         return Err(FoveaError::option(
             "--screenshot-dir",
