@@ -102,51 +102,69 @@ pub fn resolved_path(p: &Path) -> PathBuf {
     }
 }
 
+/// The files a run will write, each resolved once to the file it names ([`resolved_path`]; numbered
+/// outputs share a folder, which is resolved once), with the option that names it.
+pub struct WrittenFiles {
+    resolved: std::collections::HashMap<PathBuf, (&'static str, PathBuf)>,
+}
+
+impl WrittenFiles {
+    /// Resolves `outputs` (option, path), refusing one that another output writes too: fovea never
+    /// overwrites one output with another.
+    pub fn resolve<P: AsRef<Path>>(outputs: &[(&'static str, P)]) -> Result<Self> {
+        let mut resolved = std::collections::HashMap::new();
+        let mut folders: std::collections::HashMap<PathBuf, PathBuf> =
+            std::collections::HashMap::new();
+        for (option, output) in outputs {
+            let output = output.as_ref();
+            let out = match (output.canonicalize(), output.file_name()) {
+                (Ok(c), _) => c,
+                (Err(_), Some(name)) => folders
+                    .entry(parent_dir(output))
+                    .or_insert_with_key(|dir| dir.canonicalize().unwrap_or_else(|_| dir.clone()))
+                    .join(name),
+                (Err(_), None) => output.to_path_buf(),
+            };
+            if let Some((other, first)) = resolved.insert(out, (*option, output.to_path_buf())) {
+                return Err(FoveaError::option(
+                    option,
+                    format!(
+                        "'{}' is also written as '{}' ({other}); give each output its own file",
+                        output.display(),
+                        first.display()
+                    ),
+                ));
+            }
+        }
+        Ok(Self { resolved })
+    }
+
+    /// Refuses, before any work, an output that is one of `inputs`, by the files they resolve to:
+    /// fovea never overwrites its input.
+    pub fn refuse_inputs(&self, inputs: &[&Path]) -> Result<()> {
+        for input in inputs {
+            if let Some((option, output)) = self.resolved.get(&resolved_path(input)) {
+                return Err(FoveaError::option(
+                    option,
+                    format!(
+                        "'{}' is an input of this run ('{}'); fovea never overwrites its input",
+                        output.display(),
+                        input.display()
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Refuses, before any work, an output (`option`, path) that is one of the run's `inputs`, or that
-/// another output writes too, compared by the files they resolve to ([`resolved_path`]): fovea never
-/// overwrites its input, nor one output with another.
+/// another output writes too ([`WrittenFiles`]).
 pub fn refuse_overwriting_inputs<P: AsRef<Path>>(
     outputs: &[(&'static str, P)],
     inputs: &[&Path],
 ) -> Result<()> {
-    let inputs: std::collections::HashMap<PathBuf, &Path> =
-        inputs.iter().map(|i| (resolved_path(i), *i)).collect();
-    let mut written: std::collections::HashMap<PathBuf, (&'static str, &Path)> =
-        std::collections::HashMap::new();
-    // Outputs numbered per frame share a folder: resolve each folder once.
-    let mut folders: std::collections::HashMap<PathBuf, PathBuf> = std::collections::HashMap::new();
-    for (option, output) in outputs {
-        let output = output.as_ref();
-        let out = match (output.canonicalize(), output.file_name()) {
-            (Ok(c), _) => c,
-            (Err(_), Some(name)) => folders
-                .entry(parent_dir(output))
-                .or_insert_with_key(|dir| dir.canonicalize().unwrap_or_else(|_| dir.clone()))
-                .join(name),
-            (Err(_), None) => output.to_path_buf(),
-        };
-        if let Some(input) = inputs.get(&out) {
-            return Err(FoveaError::option(
-                option,
-                format!(
-                    "'{}' is an input of this run ('{}'); fovea never overwrites its input",
-                    output.display(),
-                    input.display()
-                ),
-            ));
-        }
-        if let Some((other, first)) = written.insert(out, (option, output)) {
-            return Err(FoveaError::option(
-                option,
-                format!(
-                    "'{}' is also written as '{}' ({other}); give each output its own file",
-                    output.display(),
-                    first.display()
-                ),
-            ));
-        }
-    }
-    Ok(())
+    WrittenFiles::resolve(outputs)?.refuse_inputs(inputs)
 }
 
 /// Why the folder `dir` cannot take an output file: a path through a file names that file, else the

@@ -13,7 +13,7 @@ use crate::backend::{FrameOutput, Renderer};
 use crate::error::{FoveaError, Result};
 use crate::output::{
     check_json_path, check_output_path, regions_overlay, tonemapped_rgb8, write_image, write_png,
-    ImageFormat,
+    ImageFormat, WrittenFiles,
 };
 use crate::partial::{
     identity_lines, largest_spp, samples_in_part, write_part, PartSpec, RenderIdentity,
@@ -64,6 +64,8 @@ struct Plan {
     stereo: Option<StereoSource>,
     settings: FrameSettings,
     lighting: Lighting,
+    /// Every file the run writes (each frame's and eye's), resolved once.
+    written: WrittenFiles,
     /// Options that are accepted but do not do what a user may expect (printed unless `--quiet`).
     warnings: Vec<String>,
 }
@@ -224,10 +226,14 @@ fn plan(args: &RenderArgs) -> Result<Plan> {
         keep_raw,
         settings: FrameSettings::new(resolution, &args.path, &args.image),
         lighting: Lighting::default(),
+        written: WrittenFiles::resolve::<PathBuf>(&[])?,
         warnings,
     };
-    // Before the environment map is read: an output over it must be refused, not a missing map.
-    refuse_overwriting_inputs(args, &plan, &[])?;
+    // Every file the run writes, checked against each other and the command line's inputs before
+    // the environment map is read (an output over it must be refused, not a missing map); the
+    // scene's own files are checked against the same set once the scene is read.
+    plan.written = WrittenFiles::resolve(&written_files(args, &plan))?;
+    plan.written.refuse_inputs(&command_line_inputs(args))?;
     plan.lighting = Lighting::from_args(&args.lighting)?;
     Ok(plan)
 }
@@ -380,7 +386,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         renderer.wants_wide_bvh(),
     )?;
     // The scene's own files (its MTL libraries, buffers, textures) are known once it is read.
-    refuse_overwriting_inputs(args, &plan, &scene.files)?;
+    let scene_files: Vec<&Path> = scene.files.iter().map(PathBuf::as_path).collect();
+    plan.written.refuse_inputs(&scene_files)?;
     run_warnings.extend(describe_scene(args, &scene));
 
     let settings = plan.settings;
@@ -711,12 +718,10 @@ fn print_summary(args: &RenderArgs, [w, h]: [u32; 2], backend: &str, frames: &[F
     );
 }
 
-/// Fails if a file the run writes ([`written_files`]: every frame's and eye's) is one of its input
-/// files (the scene, `--mtl`, `--env-map`, `--gaze-trace`, `--camera-path`, `--stereo-views`, and
-/// `extra`: the files the scene's load read) or is written twice, compared by the files they
-/// resolve to: fovea never overwrites its input, nor one output with another.
-fn refuse_overwriting_inputs(args: &RenderArgs, plan: &Plan, extra: &[PathBuf]) -> Result<()> {
-    let inputs: Vec<&Path> = [
+/// The run's input files named on the command line (the scene, `--mtl`, `--env-map`,
+/// `--gaze-trace`, `--camera-path`, `--stereo-views`), which no output may replace.
+fn command_line_inputs(args: &RenderArgs) -> Vec<&Path> {
+    [
         args.scene.as_deref(),
         args.materials.mtl.as_deref(),
         args.lighting.env_map.as_deref(),
@@ -726,9 +731,7 @@ fn refuse_overwriting_inputs(args: &RenderArgs, plan: &Plan, extra: &[PathBuf]) 
     ]
     .into_iter()
     .flatten()
-    .chain(extra.iter().map(PathBuf::as_path))
-    .collect();
-    crate::output::refuse_overwriting_inputs(&written_files(args, plan), &inputs)
+    .collect()
 }
 
 #[cfg(test)]

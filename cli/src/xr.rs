@@ -153,8 +153,8 @@ mod session {
         let lighting = Lighting::from_args(&args.lighting)?;
         let system = XrSystem::new().map_err(xr_failure)?;
         let size = args.size.map_or(system.recommended_size, |s| s.0);
-        let (mut renderer, copier) = Renderer::for_headset(system.device_factory(), &args.target)?;
-        let mut copier = copier;
+        let (mut renderer, mut copier) =
+            Renderer::for_headset(system.device_factory(), &args.target)?;
         let device = match (renderer.vulkan_context(), copier.as_ref()) {
             (Some(ctx), _) => ctx.device_description(),
             (None, Some(ctx)) => ctx.device_description(),
