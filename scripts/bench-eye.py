@@ -33,6 +33,9 @@ CONFIGS = {
     "32-16-8-history": ["--spp", "32,16,8", "--history"],
     "32-2-1-history": ["--spp", "32,2,1", "--history"],
     "8-4-2-history": ["--spp", "8,4,2", "--history"],
+    "8-4-16-history": ["--spp", "8,4,16", "--history"],
+    "16-4-8-history": ["--spp", "16,4,8", "--history"],
+    "4-4-16-history": ["--spp", "4,4,16", "--history"],
     "32-16-8-history-denoised": ["--spp", "32,16,8", "--history", "--denoise"],
 }
 SCORER = r'''
