@@ -11,6 +11,7 @@ docs/performance.md.
 
     python3 scripts/bench-eye.py [--fovea target/release/fovea] [--resolution 480x270]
         [--display-cm 17.712x9.963] [--fps 30] [--backend cpu] [--out bench-eye] [--configs NAME,...]
+        [--render-args "--fov 16.43"]
 
 The default image and display give 28.4 pixels per degree, as 1920x1080 on the default display does.
 It needs FovVideoVDP's environment (`bash scripts/setup-fvvdp.sh`) and installs the OpenEXR package into
@@ -37,6 +38,9 @@ CONFIGS = {
     "16-4-8-history": ["--spp", "16,4,8", "--history"],
     "4-4-16-history": ["--spp", "4,4,16", "--history"],
     "32-16-8-history-denoised": ["--spp", "32,16,8", "--history", "--denoise"],
+    "uniform-1-history-denoised": ["--uniform", "--spp", "1,1,1", "--history", "--denoise"],
+    "4-2-8-history-denoised": ["--spp", "4,2,8", "--history", "--denoise"],
+    "2-2-4-history-denoised": ["--spp", "2,2,4", "--history", "--denoise"],
 }
 SCORER = r'''
 import json, math, sys, numpy as np, torch, pyfvvdp, OpenEXR
@@ -105,12 +109,14 @@ def main():
     ap.add_argument("--reference-spp", default="512")
     ap.add_argument("--out", default="bench-eye")
     ap.add_argument("--configs", default=",".join(CONFIGS))
+    ap.add_argument("--render-args", default="",
+                    help="more `fovea render` options for every run and the reference, e.g. \"--fov 16.43\"")
     a = ap.parse_args()
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     py = python_with_exr()
     w, h = map(int, a.resolution.split("x"))
-    display = ["--resolution", a.resolution, "--display-cm", a.display_cm, "-q"]
+    display = ["--resolution", a.resolution, "--display-cm", a.display_cm, "-q", *a.render_args.split()]
     common = [*display, "--backend", a.backend]
     reference = out / f"reference-{a.resolution}-{a.reference_spp}.exr"
     if not reference.exists():
