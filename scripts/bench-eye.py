@@ -21,6 +21,8 @@ import argparse
 import json
 import math
 import os
+import re
+import shlex
 import statistics
 import subprocess
 import sys
@@ -116,9 +118,12 @@ def main():
     out.mkdir(parents=True, exist_ok=True)
     py = python_with_exr()
     w, h = map(int, a.resolution.split("x"))
-    display = ["--resolution", a.resolution, "--display-cm", a.display_cm, "-q", *a.render_args.split()]
+    extra = shlex.split(a.render_args)
+    display = ["--resolution", a.resolution, "--display-cm", a.display_cm, "-q", *extra]
     common = [*display, "--backend", a.backend]
-    reference = out / f"reference-{a.resolution}-{a.reference_spp}.exr"
+    # The cached reference is named by everything that shapes it, the extra options included.
+    shaped = re.sub(r"[^A-Za-z0-9.]+", "_", " ".join(extra)).strip("_")
+    reference = out / f"reference-{a.resolution}-{a.reference_spp}{'-' + shaped if shaped else ''}.exr"
     if not reference.exists():
         spp = a.reference_spp
         run([a.fovea, "render", *display, "--uniform", "--spp", f"{spp},{spp},{spp}", "--seed", "99",
