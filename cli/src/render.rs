@@ -411,15 +411,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         if let Some(spec) = plan.samples {
             let frame = settings.frame(g.number, camera, plan.foveation_rule.at(g.gaze, None));
             let bar = progress_bar(args.quiet, &plan, &frame.foveation);
-            frames.push(render_part(
-                args,
-                &plan,
-                spec,
-                &mut renderer,
-                &scene,
-                &frame,
-                &bar,
-            )?);
+            let part = render_part(args, &plan, spec, &mut renderer, &scene, &frame, &bar)?;
+            // The eye's gaze, which a uniform frame's foveation does not follow.
+            frames.push(FrameStats {
+                gaze: g.gaze,
+                ..part
+            });
             continue;
         }
         // The HDR image is needed for EXR output; PNG and the overlay use the backend's tone map.
@@ -444,8 +441,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             let request = request.for_view(view.unwrap_or(0) as u32);
             let rendered = renderer.render(&scene.packed, &frame, &request, &|n| bar.inc(n))?;
             bar.finish_and_clear();
-            let (stats, black) =
-                write_frame_outputs(args, &plan, &frame, g.number, view, rendered)?;
+            let (stats, black) = write_frame_outputs(args, &plan, &frame, g, view, rendered)?;
             black_frames += usize::from(black);
             frames.push(stats);
         }
@@ -639,16 +635,20 @@ fn written_files(args: &RenderArgs, plan: &Plan) -> Vec<(&'static str, PathBuf)>
     files
 }
 
-/// Writes frame `number`'s outputs (the image, `--keep-raw`, `--regions-overlay`; numbered over a
-/// sequence); returns its statistics and whether its 8-bit image is all black.
+/// Writes the outputs of view `view` of frame `scheduled` (the image, `--keep-raw`,
+/// `--regions-overlay`; numbered over a sequence); returns its statistics and whether its 8-bit image
+/// is all black.
 fn write_frame_outputs(
     args: &RenderArgs,
     plan: &Plan,
     frame: &FrameParams,
-    number: u32,
+    scheduled: &ScheduledFrame,
     view: Option<usize>,
     rendered: crate::backend::Rendered,
 ) -> Result<(FrameStats, bool)> {
+    let number = scheduled.number;
+    // The eye's gaze, which a uniform frame's foveation does not follow.
+    let gaze = view.map_or(scheduled.gaze, |v| scheduled.eye_gaze(v));
     let [w, h] = plan.resolution;
     let exposure = plan.settings.exposure_ev;
     let numbered = |path: &Path| numbered_output(plan, path, number, view);
@@ -680,7 +680,7 @@ fn write_frame_outputs(
     let black = rgb8.iter().all(|&byte| byte == 0);
     let stats = FrameStats {
         frame: number,
-        gaze: frame.foveation.gaze,
+        gaze,
         output,
         render: rendered.stats,
         extra: rendered.extra,

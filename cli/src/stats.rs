@@ -12,6 +12,8 @@ use crate::scene_setup::PreparedScene;
 /// One rendered frame.
 pub struct FrameStats {
     pub frame: u32,
+    /// The eye's point of gaze (image pixels): the trace's for this frame, also in a uniform run,
+    /// whose samples do not follow it (a scorer takes it as the frame's fixation).
     pub gaze: [f32; 2],
     pub output: PathBuf,
     pub render: RenderStats,

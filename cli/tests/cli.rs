@@ -244,6 +244,63 @@ fn gaze_trace_writes_one_numbered_image_per_frame() {
     assert!(dir.join("f_00000.png").is_file() && dir.join("f_00001.png").is_file());
 }
 
+/// `--stats` records each frame's gaze from the trace, in a uniform run too: a scorer takes it as the
+/// eye's fixation, and the eye moves whether or not the samples follow it (a uniform run used to
+/// record the first frame's gaze for every frame, so its sequences were scored as if the eye stood
+/// still).
+#[test]
+fn stats_record_each_frames_gaze_in_uniform_and_foveated_runs() {
+    let dir = temp_dir("trace-stats");
+    let trace = dir.join("gaze.csv");
+    std::fs::write(&trace, "frame,x,y\n0,10,10\n1,40,30\n2,25.5,4\n").unwrap();
+    for (name, mode) in [
+        ("uniform", &["--uniform", "--spp", "1,1,1"][..]),
+        ("foveated", &["--spp", "2,1,1"]),
+    ] {
+        let stats = dir.join(format!("{name}.json"));
+        let out = fovea()
+            .arg("render")
+            .arg(cornell())
+            .args(CAMERA)
+            .args([
+                "--resolution",
+                "48x32",
+                "--radii",
+                "6,12",
+                "-q",
+                "--history",
+            ])
+            .args(mode)
+            .arg("--gaze-trace")
+            .arg(&trace)
+            .arg("-o")
+            .arg(dir.join(format!("{name}.png")))
+            .arg("--stats")
+            .arg(&stats)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        let gazes: Vec<[f64; 2]> = json["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| {
+                [
+                    f["gaze"][0].as_f64().unwrap(),
+                    f["gaze"][1].as_f64().unwrap(),
+                ]
+            })
+            .collect();
+        assert_eq!(gazes, [[10.0, 10.0], [40.0, 30.0], [25.5, 4.0]], "{name}");
+    }
+}
+
 /// `--history` over a `--camera-path` and a timed gaze trace: one image per frame, each the history's
 /// mean, the temporal passes timed in the stats; a bad camera path fails cleanly.
 #[test]
