@@ -9,11 +9,19 @@
 //! the two weighted by the inverse of their errors (in luminance). With `σ²` the variance of one
 //! sample (from the spread of the pixel's own samples, shrunk towards a relative spread of
 //! [`RESOLVE_PRIOR_SPREAD`] while they are few), the own mean's error is its noise `n_o = σ² / w`
-//! (`w` samples), the fill's is its noise `n_f = σ² / (τ F)` (`τ` samples per block and frame, `F`
-//! frames) plus its blur `β²`, taken as the squared difference of the two means where that difference
-//! is significant (beyond two standard errors, so that one outlying sample is not taken for detail):
+//! (`w` samples), the fill's is its noise `n_f = σ² b² / (τ F)` (`τ` samples per block of `b × b`
+//! pixels and frame, `F` frames) plus its blur `β²`, the part of the squared difference of the two
+//! means beyond two standard errors (`β² = max(0, (L_o − L_f)² − 4 (n_o + n_f))`, so that one outlying
+//! sample is not taken for detail, and what is shown does not jump where the difference crosses them):
 //!
 //! `s = min((β² + n_f) / (β² + n_f + n_o), w / (w + κ))`,
+//!
+//! The fill's noise is counted at `b²` times the variance of its mean because it is one error shared by
+//! the block's `b²` pixels: the pixels' own errors are independent and average out over the block, the
+//! fill's does not, and it shows as a block-sized blotch that changes from frame to frame. Counted as
+//! `σ² / (τ F)`, as it was until 2026-12-02, a resting periphery showed the fill over most of its
+//! pixels: it had less relMSE than uniform 1 spp + history but 0.14 JOD less in FovVideoVDP over
+//! frames 15-60 (docs/performance.md, 2026-12-02, evening).
 //!
 //! the second bound ([`RESOLVE_MIN_SAMPLES`] = `κ`) keeping a pixel's first few samples, which no
 //! variance estimate can yet tell from outliers, from showing alone: they would flicker.
@@ -70,13 +78,14 @@ pub fn own_share(history: &HistoryTexel, block_size: u32, block_spp: u32) -> f32
         / (frames + RESOLVE_PRIOR_FRAMES)
         + 1.0e-12;
     let noise_own = sigma2 / w;
-    let noise_fill = sigma2 / (block_spp.max(1) as f32 * fill_frames);
+    // The fill's error is one error for the whole block (and, bilinearly, its neighbours): it does
+    // not average out over the block's pixels as their own samples' errors do.
+    let noise_fill =
+        sigma2 * (block_size * block_size) as f32 / (block_spp.max(1) as f32 * fill_frames);
     let d2 = (own - fill) * (own - fill);
-    let blur = if d2 > 4.0 * (noise_own + noise_fill) {
-        d2
-    } else {
-        0.0
-    };
+    // The part of the difference beyond two standard errors, so that what is shown does not jump
+    // where the difference crosses them.
+    let blur = (d2 - 4.0 * (noise_own + noise_fill)).max(0.0);
     let weighted = (blur + noise_fill) / (blur + noise_fill + noise_own);
     weighted.min(w / (w + RESOLVE_MIN_SAMPLES))
 }
@@ -171,10 +180,43 @@ mod tests {
     }
 
     #[test]
-    fn where_the_fill_is_right_its_average_of_many_more_samples_is_shown() {
+    fn where_the_fill_is_right_it_shows_while_the_pixel_has_few_samples() {
         // Own samples agree with the fill (no blur); the fill has 8 samples a frame behind it.
-        let s = own_share(&texel(1.0, 10.0, 0.5, 1.0), 4, 8);
-        assert!(s < 0.15, "{s}");
+        let s = own_share(&texel(1.0, 2.0, 0.5, 1.0), 4, 8);
+        assert!(s <= 0.2, "{s}");
+    }
+
+    #[test]
+    fn a_fills_error_counts_once_for_its_whole_block() {
+        // 40 frames of one sample a pixel, and a fill of a 4 x 4 block's 16 samples over as many
+        // frames: the fill's error is shared by the 16 pixels, so at the block's scale it is as large as
+        // the pixel's own, and each shows about half. (Counted as the variance of a 640-sample mean,
+        // the fill took 94 % of the pixel.)
+        let s = own_share(&texel(1.0, 40.0, 0.5, 1.0), 4, 16);
+        assert!((0.45..0.55).contains(&s), "{s}");
+        // A fill of more samples a pixel weighs more.
+        assert!(own_share(&texel(1.0, 40.0, 0.5, 1.0), 4, 64) < 0.25);
+    }
+
+    #[test]
+    fn what_is_shown_changes_smoothly_as_the_pixels_mean_leaves_the_fills() {
+        // 64 frames, the κ bound (0.89) above the share: the share must not jump where the difference
+        // of the two means passes two standard errors.
+        let shares: std::vec::Vec<f32> = (0..10_000)
+            .map(|i| own_share(&texel(1.0 + i as f32 * 1.0e-4, 64.0, 0.5, 1.0), 4, 8))
+            .collect();
+        let largest_step = shares
+            .windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .fold(0.0f32, f32::max);
+        assert!(largest_step < 0.01, "{largest_step}");
+        // It does take over: from the fill's share to the κ bound.
+        assert!(
+            shares[0] < 0.7 && shares[9999] > 0.85,
+            "{} {}",
+            shares[0],
+            shares[9999]
+        );
     }
 
     #[test]
