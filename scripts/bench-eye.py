@@ -11,7 +11,7 @@ docs/performance.md.
 
     python3 scripts/bench-eye.py [--fovea target/release/fovea] [--resolution 480x270]
         [--display-cm 17.712x9.963] [--fps 30] [--backend cpu] [--out bench-eye] [--configs NAME,...]
-        [--render-args "--fov 16.43"]
+        [--render-args "--fov 16.43"] [--windows 0:10,10:61] [--curve] [--keep]
 
 The default image and display give 28.4 pixels per degree, as 1920x1080 on the default display does.
 It needs FovVideoVDP's environment (`bash scripts/setup-fvvdp.sh`) and installs the OpenEXR package into
@@ -79,7 +79,20 @@ yy, xx = np.mgrid[0:h, 0:w]
 dist = np.hypot(xx + 0.5 - g[0], yy + 0.5 - g[1])
 rel = ((last - ref) ** 2 / (ref.astype(np.float64) ** 2 + 1e-2)).mean(-1)
 r1, r2 = job["radii"]
-out = {"jod": float(q), "relmse_all": float(rel.mean()),
+# JOD of parts of the sequence (--windows), to see which frames cost the score.
+windows = {}
+for a, b in job.get("windows", []):
+    qw, _ = fv.predict(test[a:b], refs[a:b], dim_order="FHWC", frames_per_second=job["fps"],
+                       fixation_point=fix[a:b])
+    windows[f"{a}:{b}"] = float(qw)
+# The periphery's relMSE on every frame, around that frame's gaze (--curve).
+curve = []
+if job.get("curve"):
+    for f, gz in zip(frames, job["fixations"]):
+        dd = np.hypot(xx + 0.5 - gz[0], yy + 0.5 - gz[1])
+        rr = ((f.astype(np.float64) - ref) ** 2 / (ref.astype(np.float64) ** 2 + 1e-2)).mean(-1)
+        curve.append(float(rr[dd >= job["radii"][1]].mean()) if (dd >= job["radii"][1]).any() else None)
+out = {"jod": float(q), "windows": windows, "curve_periphery": curve, "relmse_all": float(rel.mean()),
        "relmse_fovea": float(rel[dist < r1].mean()) if (dist < r1).any() else None,
        "relmse_periphery": float(rel[dist >= r2].mean()) if (dist >= r2).any() else None}
 print(json.dumps(out))
@@ -113,9 +126,26 @@ def main():
     ap.add_argument("--reference-spp", default="512")
     ap.add_argument("--out", default="bench-eye")
     ap.add_argument("--configs", default=",".join(CONFIGS))
+    ap.add_argument("--windows", default="",
+                    help="also score parts of each sequence, as first:end frame ranges, e.g. 0:10,10:61")
+    ap.add_argument("--curve", action="store_true",
+                    help="print the periphery's relMSE on every frame of each sequence")
+    ap.add_argument("--keep", action="store_true", help="keep the frames (they are deleted once scored)")
     ap.add_argument("--render-args", default="",
                     help="more `fovea render` options for every run and the reference, e.g. \"--fov 16.43\"")
     a = ap.parse_args()
+    windows = []
+    for part in filter(None, a.windows.split(",")):
+        try:
+            first, end = map(int, part.split(":"))
+        except ValueError:
+            sys.exit(f"--windows: '{part}' is not first:end (two frame numbers, e.g. 0:10)")
+        if not 0 <= first < end:
+            sys.exit(f"--windows: '{part}' needs 0 <= first < end")
+        windows.append((first, end))
+    unknown = [c for c in a.configs.split(",") if c not in CONFIGS]
+    if unknown:
+        sys.exit(f"--configs: unknown {', '.join(unknown)}; known: {', '.join(CONFIGS)}")
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     py = python_with_exr()
@@ -155,6 +185,8 @@ def main():
                 "fixations": [f["gaze"] for f in s["frames"]],
                 "fps": fps,
                 "radii": s["radii_px"] or [0, 0],
+                "windows": [w_ for w_ in windows if w_[1] <= len(s["frames"])],
+                "curve": a.curve,
                 "display": {"width_cm": float(a.display_cm.split("x")[0]),
                             "height_cm": float(a.display_cm.split("x")[1]), "distance_cm": 60.0},
             }
@@ -165,12 +197,21 @@ def main():
             r = json.loads(run([py, scorer, job_path]).stdout.strip().splitlines()[-1])
             r["ms"] = statistics.median(f["render_ms"] for f in s["frames"])
             row[trace] = r
-            for f in job["frames"]:
-                os.remove(f)
+            if not a.keep:
+                for f in job["frames"]:
+                    os.remove(f)
         ms = statistics.median([row["saccades"]["ms"], row["still"]["ms"]])
         p = row["still"]["relmse_periphery"]
         print(f"| {name} | {ms:.0f} | {row['saccades']['jod']:.2f} | {row['still']['jod']:.2f} | "
               f"{p:.4f} |" if p is not None else "| - |", flush=True)
+        for trace in traces:
+            if row[trace]["windows"]:
+                parts = ", ".join(f"frames {k}: {v:.2f}" for k, v in row[trace]["windows"].items())
+                print(f"  {name}, {trace}: JOD of {parts}", flush=True)
+            if row[trace]["curve_periphery"]:
+                c = row[trace]["curve_periphery"]
+                print(f"  {name}, {trace}: periphery relMSE by frame: "
+                      + " ".join(f"{i}:{v:.4f}" for i, v in enumerate(c) if v is not None), flush=True)
 
 
 if __name__ == "__main__":
