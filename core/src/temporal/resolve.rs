@@ -26,10 +26,10 @@
 //! the second bound ([`RESOLVE_MIN_SAMPLES`] = `κ`) keeping a pixel's first few samples, which no
 //! variance estimate can yet tell from outliers, from showing alone: they would flicker.
 //!
-//! Where the fill is right (a flat, evenly lit surface) the pixel shows the fill's average, which has
-//! many more samples behind it; where it is blurred (an edge, a shadow's border), the pixel's own
-//! samples take over as soon as they are precise enough to show the difference, and a resting eye and
-//! camera converge to them. When the fovea leaves a pixel, its 32 samples a frame outweigh the new
+//! Where the fill is right (a flat, evenly lit surface) the pixel shows the fill's average while it has
+//! fewer samples of its own than the fill has per pixel of its block, and its own history as it gets
+//! more; where the fill is blurred (an edge, a shadow's border), the pixel's own samples take over as
+//! soon as they are precise enough to show the difference. A resting eye and camera converge to them. When the fovea leaves a pixel, its 32 samples a frame outweigh the new
 //! coarse fill. A pixel of a one-pixel block (the paper's fovea) shows its own history: its fill is its
 //! own samples. Both are lighting; the pixel's own albedo multiplies the result back
 //! ([`super::albedo`]).
