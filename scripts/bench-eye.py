@@ -41,6 +41,8 @@ CONFIGS = {
     "4-4-16-history": ["--spp", "4,4,16", "--history"],
     "4-2-8-history": ["--spp", "4,2,8", "--history"],
     "8-4-8-history": ["--spp", "8,4,8", "--history"],
+    "8-8-8-history": ["--spp", "8,8,8", "--history"],
+    "4-2-24-history": ["--spp", "4,2,24", "--history"],
     "32-16-8-history-denoised": ["--spp", "32,16,8", "--history", "--denoise"],
     "uniform-1-history-denoised": ["--uniform", "--spp", "1,1,1", "--history", "--denoise"],
     "4-2-8-history-denoised": ["--spp", "4,2,8", "--history", "--denoise"],
