@@ -12,8 +12,11 @@ docs/performance.md.
     python3 scripts/bench-eye.py [--fovea target/release/fovea] [--resolution 480x270]
         [--display-cm 17.712x9.963] [--fps 30] [--backend cpu] [--out bench-eye] [--configs NAME,...]
         [--render-args "--fov 16.43"] [--windows 0:10,10:61] [--curve] [--keep]
+        [--frames 31] [--camera-path assets/camera/lost_empire_pan-2s.csv]
 
 The default image and display give 28.4 pixels per degree, as 1920x1080 on the default display does.
+With --camera-path every run follows the path (its first frames, one a frame of the sequence) and each
+frame is scored against its own converged reference, rendered once over the path and kept in --out.
 It needs FovVideoVDP's environment (`bash scripts/setup-fvvdp.sh`) and installs the OpenEXR package into
 it if missing (the frames are read as linear EXR and tone-mapped as fovea's tone map does).
 """
@@ -62,11 +65,17 @@ def tonemap(c):
     c = (c / (1.0 + l)[..., None]).clip(0, 1)
     s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
     return (s * 255.0 + 0.5).astype(np.uint8)
-ref = read(job["reference"])
 frames = [read(p) for p in job["frames"]]
 test = np.stack([tonemap(f) for f in frames])
 n, h, w, _ = test.shape
-refs = np.ascontiguousarray(np.broadcast_to(tonemap(ref), (n, h, w, 3)))
+# One reference for a still camera, or one a frame along a camera path.
+references = [read(p) for p in job["references"]]
+if len(references) == 1:
+    refs = np.ascontiguousarray(np.broadcast_to(tonemap(references[0]), (n, h, w, 3)))
+else:
+    assert len(references) == n, (len(references), n)
+    refs = np.stack([tonemap(r) for r in references])
+ref = references[-1]
 d = job["display"]
 geometry = pyfvvdp.fvvdp_display_geometry((w, h), distance_m=d["distance_cm"] / 100.0,
     diagonal_size_inches=math.hypot(d["width_cm"], d["height_cm"]) / 2.54)
@@ -90,9 +99,10 @@ for a, b in job.get("windows", []):
 # The periphery's relMSE on every frame, around that frame's gaze (--curve).
 curve = []
 if job.get("curve"):
-    for f, gz in zip(frames, job["fixations"]):
+    for i, (f, gz) in enumerate(zip(frames, job["fixations"])):
+        r_ = references[i if len(references) > 1 else 0].astype(np.float64)
         dd = np.hypot(xx + 0.5 - gz[0], yy + 0.5 - gz[1])
-        rr = ((f.astype(np.float64) - ref) ** 2 / (ref.astype(np.float64) ** 2 + 1e-2)).mean(-1)
+        rr = ((f.astype(np.float64) - r_) ** 2 / (r_ ** 2 + 1e-2)).mean(-1)
         curve.append(float(rr[dd >= job["radii"][1]].mean()) if (dd >= job["radii"][1]).any() else None)
 out = {"jod": float(q), "windows": windows, "curve_periphery": curve, "relmse_all": float(rel.mean()),
        "relmse_fovea": float(rel[dist < r1].mean()) if (dist < r1).any() else None,
@@ -135,7 +145,14 @@ def main():
     ap.add_argument("--keep", action="store_true", help="keep the frames (they are deleted once scored)")
     ap.add_argument("--render-args", default="",
                     help="more `fovea render` options for every run and the reference, e.g. \"--fov 16.43\"")
+    ap.add_argument("--frames", type=int, default=0,
+                    help="score only the first N frames of the trace (default: all of it)")
+    ap.add_argument("--camera-path", default="",
+                    help="a camera path (frame,eye_x,eye_y,eye_z,target_x,target_y,target_z) every run "
+                         "follows; each frame is scored against its own reference")
     a = ap.parse_args()
+    if a.frames < 0:
+        sys.exit(f"--frames: {a.frames} is negative; give a frame count, or 0 for the whole trace")
     windows = []
     for part in filter(None, a.windows.split(",")):
         try:
@@ -155,22 +172,64 @@ def main():
     extra = shlex.split(a.render_args)
     display = ["--resolution", a.resolution, "--display-cm", a.display_cm, "-q", *extra]
     common = [*display, "--backend", a.backend]
-    # The cached reference is named by everything that shapes it, the extra options included.
-    shaped = re.sub(r"[^A-Za-z0-9.]+", "_", " ".join(extra)).strip("_")
-    reference = out / f"reference-{a.resolution}-{a.reference_spp}{'-' + shaped if shaped else ''}.exr"
-    if not reference.exists():
-        spp = a.reference_spp
-        run([a.fovea, "render", *display, "--uniform", "--spp", f"{spp},{spp},{spp}", "--seed", "99",
-             "--backend", "cpu", "-o", reference])
     # The still gaze: the trace's frame count, the gaze at the centre.
     frames = sum(1 for line in open(a.trace) if line[:1].isdigit())
     fps = float(a.fps)
     duration = (frames - 1) / 120.0  # the bundled traces are sampled at 120 Hz
     n = int(math.floor(duration * fps)) + 1
+    trace_path = a.trace
+    if a.frames:
+        if a.frames > n:
+            sys.exit(f"--frames: {a.frames} is more than the trace's {n} frames at {a.fps} fps")
+        n = a.frames
+        # The trace's samples up to the last frame's time, so that it gives n frames.
+        keep = (n - 1) / fps + 1e-6
+        lines = open(a.trace).read().splitlines()
+        cut = [l for l in lines if not l[:1].isdigit() or float(l.split(",")[0]) <= keep]
+        trace_path = out / f"trace-{n}.csv"
+        trace_path.write_text("\n".join(cut) + "\n")
+    camera = []
+    shaped = re.sub(r"[^A-Za-z0-9.]+", "_", " ".join(extra)).strip("_")
+    if a.camera_path:
+        keys = [l for l in open(a.camera_path).read().splitlines() if l[:1].isdigit()]
+        if len(keys) < n:
+            sys.exit(f"--camera-path: {a.camera_path} has {len(keys)} frames; the sequence needs {n}")
+        stem = Path(a.camera_path).stem
+        camera_file = out / f"camera-{stem}-{n}.csv"
+        camera_file.write_text("frame,eye_x,eye_y,eye_z,target_x,target_y,target_z\n"
+                               + "\n".join(keys[:n]) + "\n")
+        camera = ["--camera-path", str(camera_file)]
+        # One reference a frame, rendered once over the path and kept.
+        ref_dir = out / f"reference-{a.resolution}-{a.reference_spp}-{stem}-{n}{'-' + shaped if shaped else ''}"
+        ref_stats = ref_dir / "stats.json"
+        if not ref_stats.exists():
+            ref_dir.mkdir(parents=True, exist_ok=True)
+            spp = a.reference_spp
+            run([a.fovea, "render", *display, "--uniform", "--spp", f"{spp},{spp},{spp}", "--seed", "99",
+                 "--backend", "cpu", *camera, "-o", ref_dir / "ref.exr", "--stats", ref_dir / "partial.json"])
+            os.replace(ref_dir / "partial.json", ref_stats)
+        references = [f["output"] for f in json.load(open(ref_stats))["frames"]]
+        if len(references) != n:
+            sys.exit(f"the reference over {camera_file} has {len(references)} frames, not {n}")
+    else:
+        # The cached reference is named by everything that shapes it, the extra options included.
+        reference = out / f"reference-{a.resolution}-{a.reference_spp}{'-' + shaped if shaped else ''}.exr"
+        if not reference.exists():
+            spp = a.reference_spp
+            run([a.fovea, "render", *display, "--uniform", "--spp", f"{spp},{spp},{spp}", "--seed", "99",
+                 "--backend", "cpu", "-o", reference])
+        references = [str(reference)]
+    # The regions' radii on this display, for every configuration's relMSE by region (a uniform run's
+    # stats have none: its one region is everything).
+    radii_stats = out / f"radii-{a.resolution}{'-' + shaped if shaped else ''}.json"
+    run([a.fovea, "render", *display, "--spp", "1,1,1", "--backend", "cpu", "-o", out / "radii.exr",
+         "--stats", radii_stats])
+    radii = json.load(open(radii_stats))["radii_px"]
     still = out / "still.csv"
     still.write_text("frame,x,y\n" + "".join(f"{i},{w / 2},{h / 2}\n" for i in range(n)))
-    traces = {"saccades": ["--gaze-trace", a.trace, "--gaze-normalized", "--trace-fps", a.fps],
-              "still": ["--gaze-trace", str(still)]}
+    traces = {"saccades": ["--gaze-trace", str(trace_path), "--gaze-normalized", "--trace-fps", a.fps,
+                           *camera],
+              "still": ["--gaze-trace", str(still), *camera]}
     print(f"| configuration | ms/frame | JOD, saccades | JOD, still | relMSE periphery, still (last frame) |")
     print("|---|---:|---:|---:|---:|")
     for name in a.configs.split(","):
@@ -181,12 +240,14 @@ def main():
             stats = d / "stats.json"
             run([a.fovea, "render", *common, *CONFIGS[name], *args, "-o", d / "f.exr", "--stats", stats])
             s = json.load(open(stats))
+            if len(s["frames"]) != n:
+                sys.exit(f"{name}, {trace}: {len(s['frames'])} frames rendered, not {n}")
             job = {
-                "reference": str(reference),
+                "references": references,
                 "frames": [f["output"] for f in s["frames"]],
                 "fixations": [f["gaze"] for f in s["frames"]],
                 "fps": fps,
-                "radii": s["radii_px"] or [0, 0],
+                "radii": radii,
                 "windows": [w_ for w_ in windows if w_[1] <= len(s["frames"])],
                 "curve": a.curve,
                 "display": {"width_cm": float(a.display_cm.split("x")[0]),
