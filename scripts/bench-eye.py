@@ -182,8 +182,9 @@ def main():
         if a.frames > n:
             sys.exit(f"--frames: {a.frames} is more than the trace's {n} frames at {a.fps} fps")
         n = a.frames
-        # The trace's samples up to the last frame's time, so that it gives n frames.
-        keep = (n - 1) / fps + 1e-6
+        # The trace's samples up to half a frame past the last frame's time, so that it gives n frames
+        # (its times are rounded, and a last sample just short of that frame would lose it).
+        keep = (n - 0.5) / fps
         lines = open(a.trace).read().splitlines()
         cut = [l for l in lines if not l[:1].isdigit() or float(l.split(",")[0]) <= keep]
         trace_path = out / f"trace-{n}.csv"
@@ -265,8 +266,9 @@ def main():
                     os.remove(f)
         ms = statistics.median([row["saccades"]["ms"], row["still"]["ms"]])
         p = row["still"]["relmse_periphery"]
+        periphery = f"{p:.4f}" if p is not None else "- (no periphery)"
         print(f"| {name} | {ms:.0f} | {row['saccades']['jod']:.2f} | {row['still']['jod']:.2f} | "
-              f"{p:.4f} |" if p is not None else "| - |", flush=True)
+              f"{periphery} |", flush=True)
         for trace in traces:
             if row[trace]["windows"]:
                 parts = ", ".join(f"frames {k}: {v:.2f}" for k, v in row[trace]["windows"].items())
