@@ -223,8 +223,9 @@ def main():
     # The regions' radii on this display, for every configuration's relMSE by region (a uniform run's
     # stats have none: its one region is everything).
     radii_stats = out / f"radii-{a.resolution}{'-' + shaped if shaped else ''}.json"
-    run([a.fovea, "render", *display, "--spp", "1,1,1", "--backend", "cpu", "-o", out / "radii.exr",
-         "--stats", radii_stats])
+    if not radii_stats.exists():
+        run([a.fovea, "render", *display, "--spp", "1,1,1", "--backend", "cpu", "-o", out / "radii.exr",
+             "--stats", radii_stats])
     radii = json.load(open(radii_stats))["radii_px"]
     still = out / "still.csv"
     still.write_text("frame,x,y\n" + "".join(f"{i},{w / 2},{h / 2}\n" for i in range(n)))
