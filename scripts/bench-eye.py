@@ -48,6 +48,7 @@ CONFIGS = {
     "4-2-24-history": ["--spp", "4,2,24", "--history"],
     "32-16-8-history-denoised": ["--spp", "32,16,8", "--history", "--denoise"],
     "uniform-1-history-denoised": ["--uniform", "--spp", "1,1,1", "--history", "--denoise"],
+    "8-4-16-history-denoised": ["--spp", "8,4,16", "--history", "--denoise"],
     "4-2-8-history-denoised": ["--spp", "4,2,8", "--history", "--denoise"],
     "2-2-4-history-denoised": ["--spp", "2,2,4", "--history", "--denoise"],
 }
