@@ -21,6 +21,7 @@ It needs FovVideoVDP's environment (`bash scripts/setup-fvvdp.sh`) and installs 
 it if missing (the frames are read as linear EXR and tone-mapped as fovea's tone map does).
 """
 import argparse
+import hashlib
 import json
 import math
 import os
@@ -119,6 +120,12 @@ def run(cmd):
     return r
 
 
+def render_reference(fovea, display, spp, args):
+    """A converged uniform render (seed 99, the CPU backend) with `display` and more `args`."""
+    run([fovea, "render", *display, "--uniform", "--spp", f"{spp},{spp},{spp}", "--seed", "99",
+         "--backend", "cpu", *args])
+
+
 def python_with_exr():
     py = VENV / "bin" / "python"
     if not py.exists():
@@ -196,19 +203,19 @@ def main():
         keys = [l for l in open(a.camera_path).read().splitlines() if l[:1].isdigit()]
         if len(keys) < n:
             sys.exit(f"--camera-path: {a.camera_path} has {len(keys)} frames; the sequence needs {n}")
-        stem = Path(a.camera_path).stem
-        camera_file = out / f"camera-{stem}-{n}.csv"
-        camera_file.write_text("frame,eye_x,eye_y,eye_z,target_x,target_y,target_z\n"
-                               + "\n".join(keys[:n]) + "\n")
+        text = "frame,eye_x,eye_y,eye_z,target_x,target_y,target_z\n" + "\n".join(keys[:n]) + "\n"
+        # Named by the path's frames themselves, so an edited path never meets a stale reference.
+        key = f"{Path(a.camera_path).stem}-{n}-{hashlib.sha256(text.encode()).hexdigest()[:10]}"
+        camera_file = out / f"camera-{key}.csv"
+        camera_file.write_text(text)
         camera = ["--camera-path", str(camera_file)]
         # One reference a frame, rendered once over the path and kept.
-        ref_dir = out / f"reference-{a.resolution}-{a.reference_spp}-{stem}-{n}{'-' + shaped if shaped else ''}"
+        ref_dir = out / f"reference-{a.resolution}-{a.reference_spp}-{key}{'-' + shaped if shaped else ''}"
         ref_stats = ref_dir / "stats.json"
         if not ref_stats.exists():
             ref_dir.mkdir(parents=True, exist_ok=True)
-            spp = a.reference_spp
-            run([a.fovea, "render", *display, "--uniform", "--spp", f"{spp},{spp},{spp}", "--seed", "99",
-                 "--backend", "cpu", *camera, "-o", ref_dir / "ref.exr", "--stats", ref_dir / "partial.json"])
+            render_reference(a.fovea, display, a.reference_spp,
+                             [*camera, "-o", ref_dir / "ref.exr", "--stats", ref_dir / "partial.json"])
             os.replace(ref_dir / "partial.json", ref_stats)
         references = [f["output"] for f in json.load(open(ref_stats))["frames"]]
         if len(references) != n:
@@ -217,9 +224,7 @@ def main():
         # The cached reference is named by everything that shapes it, the extra options included.
         reference = out / f"reference-{a.resolution}-{a.reference_spp}{'-' + shaped if shaped else ''}.exr"
         if not reference.exists():
-            spp = a.reference_spp
-            run([a.fovea, "render", *display, "--uniform", "--spp", f"{spp},{spp},{spp}", "--seed", "99",
-                 "--backend", "cpu", "-o", reference])
+            render_reference(a.fovea, display, a.reference_spp, ["-o", reference])
         references = [str(reference)]
     # The regions' radii on this display, for every configuration's relMSE by region (a uniform run's
     # stats have none: its one region is everything).
