@@ -18,12 +18,15 @@
 //! yet confident the frame's block reconstruction, times the pixel's albedo ([`super::resolve`]).
 //!
 //! **Following the camera.** The history is reprojected ([`super::reproject`]) and its weight scaled by
-//! its validity. While the camera moves, its colour is clamped to the box `μ ± γσ` of this frame's
-//! filled values at the pixel and its eight neighbours, so that what the camera uncovered does not
-//! ghost; a pixel that got no sample this frame is clamped too. The neighbours are adjacent pixels even
-//! in coarse blocks: their bilinear fill makes them alike, so the box is tight, which is what stops a
-//! bright object's blur, which coarse blocks spread over their neighbours, from staying behind it. While
-//! the camera rests nothing is clamped and the mean converges as a plain running mean.
+//! its validity. While the camera moves, its colour is clamped to the box `μ ± γσ` around this frame's
+//! filled values at the pixel and its eight neighbours ([`neighbourhood_box`]), so that what the camera
+//! uncovered does not ghost; a pixel that got no sample this frame is clamped too. The neighbours are
+//! adjacent pixels even in coarse blocks: their bilinear fill makes them alike, so the box is tight
+//! where the image is smooth, which is what stops a bright object's blur, which coarse blocks spread
+//! over their neighbours, from staying behind it. It is never tighter than the spread of the samples
+//! that landed there this frame: a box narrower than the frame's own noise would pull the history to
+//! the block means' error. While the camera rests nothing is clamped and the mean converges as a plain
+//! running mean.
 //!
 //! **History length.** The history's weight is capped at `(N − 1)` frames (of the larger of the frame's
 //! weight and the history's mean weight per frame), so a frame like the history's count at least
@@ -96,44 +99,95 @@ pub fn frame_sample(
     }
 }
 
-/// The box `(μ − γσ, μ + γσ)` of the frame's filled values at pixel (`x`, `y`) and its eight neighbours
-/// `step` pixels apart (clamped to the image), per channel. Non-finite values are left out.
+/// The box `(μ − γσ, μ + γσ)` at pixel (`x`, `y`) and its eight neighbours `step` pixels apart
+/// (clamped to the image), per channel: `μ` the mean of the frame's filled values there, `σ` the
+/// larger of their spread and the spread of the means of the samples that landed there this frame
+/// (`pixel_samples`, where at least two of the nine pixels have one). Non-finite values are left out.
+///
+/// The filled values are smooth in coarse blocks (the nine pixels blend one to four block means), so
+/// their spread does not show the frame's noise, and a box of it alone pulls a history that is more
+/// precise than the frame's block means to their error: a new block-sized error every frame while the
+/// camera moves (docs/performance.md, 2026-12-03). The landed samples' spread is the frame's noise at
+/// the pixel's own sampling density, as uniform sampling's box sees it; where every pixel takes its
+/// samples (uniform, the fovea) the two are the same values and the box is unchanged. The centre stays
+/// the fill's, which sees every sample of the blocks.
 #[must_use]
 pub fn neighbourhood_box(
     frame: &FrameParams,
     filled: &[[f32; 4]],
+    pixel_samples: &[[f32; 4]],
     x: u32,
     y: u32,
     step: u32,
     gamma: f32,
 ) -> ClampBox {
-    let mut sum = Vec3::ZERO;
-    let mut sum_sq = Vec3::ZERO;
-    let mut n = 0.0f32;
+    let max = Vec3::splat(HISTORY_SAMPLE_MAX);
+    let mut fill = Moments3::ZERO;
+    let mut landed = Moments3::ZERO;
     let mut k = 0u32;
     while k < 9 {
         let ox = (k % 3) as i32 - 1;
         let oy = (k / 3) as i32 - 1;
         let nx = (x as i32 + ox * step as i32).clamp(0, frame.width as i32 - 1) as u32;
         let ny = (y as i32 + oy * step as i32).clamp(0, frame.height as i32 - 1) as u32;
-        let c = vec3_from(filled[(ny * frame.width + nx) as usize]);
+        let p = (ny * frame.width + nx) as usize;
+        let c = vec3_from(filled[p]);
         if is_finite3(c) {
-            let c = c.clamp(Vec3::ZERO, Vec3::splat(HISTORY_SAMPLE_MAX));
-            sum += c;
-            sum_sq += c * c;
-            n += 1.0;
+            fill.add(c.clamp(Vec3::ZERO, max));
+        }
+        let s = pixel_samples[p];
+        if s[3] > 0.0 {
+            let m = vec3_from(s) / s[3];
+            if is_finite3(m) {
+                landed.add(m.clamp(Vec3::ZERO, max));
+            }
         }
         k += 1;
     }
-    if n == 0.0 {
+    if fill.n == 0.0 {
         return ClampBox::NONE;
     }
-    let mean = sum / n;
-    let var = (sum_sq / n - mean * mean).max(Vec3::ZERO);
+    let mean = fill.mean();
+    let var = if landed.n >= 2.0 {
+        fill.variance().max(landed.variance())
+    } else {
+        fill.variance()
+    };
     let sigma = Vec3::new(sqrt(var.x), sqrt(var.y), sqrt(var.z)) * gamma;
     ClampBox {
         lo: mean - sigma,
         hi: mean + sigma,
+    }
+}
+
+/// Running sums of a few colours, for their mean and (population) variance per channel.
+#[derive(Clone, Copy)]
+struct Moments3 {
+    sum: Vec3,
+    sum_sq: Vec3,
+    n: f32,
+}
+
+impl Moments3 {
+    const ZERO: Self = Self {
+        sum: Vec3::ZERO,
+        sum_sq: Vec3::ZERO,
+        n: 0.0,
+    };
+
+    fn add(&mut self, c: Vec3) {
+        self.sum += c;
+        self.sum_sq += c * c;
+        self.n += 1.0;
+    }
+
+    fn mean(&self) -> Vec3 {
+        self.sum / self.n
+    }
+
+    fn variance(&self) -> Vec3 {
+        let mean = self.mean();
+        (self.sum_sq / self.n - mean * mean).max(Vec3::ZERO)
     }
 }
 
@@ -355,7 +409,8 @@ pub fn temporal_accumulate(
                 frames: temporal.max_frames_moving,
                 weight: temporal.max_weight_moving,
             },
-            neighbourhood_box(frame, filled, x, y, 1, temporal.clamp_gamma).demodulated(albedo),
+            neighbourhood_box(frame, filled, pixel_samples, x, y, 1, temporal.clamp_gamma)
+                .demodulated(albedo),
         )
     } else {
         (
@@ -551,8 +606,35 @@ mod tests {
         );
         assert_eq!(after, h);
         // The neighbourhood box leaves them out.
-        let b = neighbourhood_box(&frame, &sums, 1, 1, 1, 1.0);
+        let b = neighbourhood_box(&frame, &sums, &sums, 1, 1, 1, 1.0);
         assert!(b.lo.is_finite() && b.hi.is_finite(), "{b:?}");
+    }
+
+    #[test]
+    fn the_box_is_as_wide_as_the_frames_own_samples_vary() {
+        let frame = tiny_frame([0.5, 0.5]);
+        // A smooth fill (a coarse block's bilinear blend, all 1.0) over one sample a pixel, 0.5 and 1.5
+        // in alternate columns: the box is the samples' spread (0.47 over the 3 x 3) around the fill,
+        // not the fill's (0).
+        let filled = vec![[1.0f32, 1.0, 1.0, 1.0]; 64];
+        let sums: Vec<[f32; 4]> = (0..64u32)
+            .map(|i| {
+                let v = if i % 2 == 0 { 0.5 } else { 1.5 };
+                [v, v, v, 1.0]
+            })
+            .collect();
+        let b = neighbourhood_box(&frame, &filled, &sums, 6, 6, 1, 2.0);
+        assert!((b.lo.x - (1.0 - 2.0 * 0.4714)).abs() < 1e-3, "{b:?}");
+        assert!((b.hi.x - (1.0 + 2.0 * 0.4714)).abs() < 1e-3, "{b:?}");
+        // Fewer than two of the nine pixels with a sample: the fill's spread alone.
+        let mut sparse = vec![[0.0f32; 4]; 64];
+        sparse[(6 * 8 + 6) as usize] = [9.0, 9.0, 9.0, 1.0];
+        let b = neighbourhood_box(&frame, &filled, &sparse, 6, 6, 1, 2.0);
+        assert_eq!((b.lo, b.hi), (Vec3::ONE, Vec3::ONE));
+        // Where the filled values are the pixels' own samples (uniform, the fovea), the box is theirs.
+        let b = neighbourhood_box(&frame, &sums, &sums, 6, 6, 1, 2.0);
+        let fill_only = neighbourhood_box(&frame, &sums, &sparse, 6, 6, 1, 2.0);
+        assert_eq!(b, fill_only);
     }
 
     #[test]
