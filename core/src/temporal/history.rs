@@ -83,20 +83,29 @@ pub fn frame_sample(
     y: u32,
 ) -> FrameSample {
     let p = (y * frame.width + x) as usize;
-    let s = pixel_samples[p];
-    let count = s[3];
-    if !(count > 0.0) {
+    let Some(mean) = landed_mean(pixel_samples[p]) else {
         return FrameSample::NONE;
-    }
-    let mean = vec3_from(s) / count;
-    if !is_finite3(mean) {
-        return FrameSample::NONE;
-    }
+    };
     let max = Vec3::splat(HISTORY_SAMPLE_MAX);
     FrameSample {
-        lighting: (mean.clamp(Vec3::ZERO, max) / demodulation_albedo(&gbuffer[p])).min(max),
-        weight: count,
+        lighting: (mean / demodulation_albedo(&gbuffer[p])).min(max),
+        weight: pixel_samples[p][3],
     }
+}
+
+/// The mean radiance of the samples in one pixel's sum (`[r, g, b, count]`), clamped to
+/// `[0, HISTORY_SAMPLE_MAX]`; `None` where none landed or the mean is not finite.
+#[inline]
+#[must_use]
+fn landed_mean(sum: [f32; 4]) -> Option<Vec3> {
+    if !(sum[3] > 0.0) {
+        return None;
+    }
+    let mean = vec3_from(sum) / sum[3];
+    if !is_finite3(mean) {
+        return None;
+    }
+    Some(mean.clamp(Vec3::ZERO, Vec3::splat(HISTORY_SAMPLE_MAX)))
 }
 
 /// The box `(μ − γσ, μ + γσ)` at pixel (`x`, `y`) and its eight neighbours `step` pixels apart
@@ -135,12 +144,8 @@ pub fn neighbourhood_box(
         if is_finite3(c) {
             fill.add(c.clamp(Vec3::ZERO, max));
         }
-        let s = pixel_samples[p];
-        if s[3] > 0.0 {
-            let m = vec3_from(s) / s[3];
-            if is_finite3(m) {
-                landed.add(m.clamp(Vec3::ZERO, max));
-            }
+        if let Some(m) = landed_mean(pixel_samples[p]) {
+            landed.add(m);
         }
         k += 1;
     }
