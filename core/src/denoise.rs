@@ -59,6 +59,23 @@ pub const DENOISE_DEPTH_SLOPE: f32 = 0.01;
 /// The B3-spline kernel's taps at offsets 0, ±1, ±2.
 const KERNEL: [f32; 3] = [3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
 
+/// `√(dx² + dy²)` of the kernel's taps, indexed by `dx² + dy²` (0 to 8), each the correctly rounded
+/// `f32`, as `sqrt` gives it: the offset of a tap in steps. A table because `libm`'s `sqrtf` is an
+/// opaque instruction on x86 that the compiler can neither fold nor schedule, and that one call per tap
+/// was about two thirds of the à-trous pass's time on the CPU (docs/performance.md, "The denoiser's
+/// tap offsets").
+const TAP_DISTANCE: [f32; 9] = [
+    0.0,
+    1.0,
+    core::f32::consts::SQRT_2,
+    0.0, // no tap (3 = dx² + dy² has no solution)
+    2.0,
+    2.236_068,
+    0.0, // no tap
+    0.0, // no tap
+    2.0 * core::f32::consts::SQRT_2,
+];
+
 /// One pixel between the denoiser's passes (32 bytes, GPU layout): `color` = (demodulated radiance
 /// rgb, its luminance variance), `info` = (à-trous steps it takes, 1 if valid else 0, its block's
 /// edge, 0).
@@ -345,7 +362,7 @@ pub fn denoise_atrous(
                 if t.is_valid() {
                     let kernel =
                         KERNEL[dx.unsigned_abs() as usize] * KERNEL[dy.unsigned_abs() as usize];
-                    let offset = step as f32 * sqrt((dx * dx + dy * dy) as f32);
+                    let offset = step as f32 * TAP_DISTANCE[(dx * dx + dy * dy) as usize];
                     let mut weight = kernel;
                     if q != p {
                         weight *= geometry_weight(&gbuffer[p], &gbuffer[q], offset);
@@ -447,6 +464,16 @@ mod tests {
     fn noisy(i: u32, mean: f32) -> f32 {
         let u = (i.wrapping_mul(2_654_435_761) >> 8) as f32 / (1u32 << 24) as f32;
         mean * (0.4 + 1.2 * u)
+    }
+
+    #[test]
+    fn the_tap_distances_are_the_square_roots() {
+        for dy in -2i32..=2 {
+            for dx in -2i32..=2 {
+                let n = (dx * dx + dy * dy) as usize;
+                assert_eq!(TAP_DISTANCE[n].to_bits(), sqrt(n as f32).to_bits(), "√{n}");
+            }
+        }
     }
 
     #[test]
