@@ -34,25 +34,24 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 VENV = Path(os.environ.get("FOVEA_FVVDP_VENV", Path.home() / ".cache/fovea/fvvdp-venv"))
-CONFIGS = {
-    "uniform-1-history": ["--uniform", "--spp", "1,1,1", "--history"],
-    "uniform-2-history": ["--uniform", "--spp", "2,2,2", "--history"],
-    "32-16-8-history": ["--spp", "32,16,8", "--history"],
-    "32-2-1-history": ["--spp", "32,2,1", "--history"],
-    "8-4-2-history": ["--spp", "8,4,2", "--history"],
-    "8-4-16-history": ["--spp", "8,4,16", "--history"],
-    "16-4-8-history": ["--spp", "16,4,8", "--history"],
-    "4-4-16-history": ["--spp", "4,4,16", "--history"],
-    "4-2-8-history": ["--spp", "4,2,8", "--history"],
-    "8-4-8-history": ["--spp", "8,4,8", "--history"],
-    "8-8-8-history": ["--spp", "8,8,8", "--history"],
-    "4-2-24-history": ["--spp", "4,2,24", "--history"],
-    "32-16-8-history-denoised": ["--spp", "32,16,8", "--history", "--denoise"],
-    "uniform-1-history-denoised": ["--uniform", "--spp", "1,1,1", "--history", "--denoise"],
-    "8-4-16-history-denoised": ["--spp", "8,4,16", "--history", "--denoise"],
-    "4-2-8-history-denoised": ["--spp", "4,2,8", "--history", "--denoise"],
-    "2-2-4-history-denoised": ["--spp", "2,2,4", "--history", "--denoise"],
-}
+DEFAULT_CONFIGS = [
+    "uniform-1-history", "uniform-2-history", "32-16-8-history", "8-4-16-history", "4-4-16-history",
+    "32-16-8-history-denoised", "uniform-1-history-denoised", "8-4-16-history-denoised",
+]
+CONFIG_NAME = re.compile(r"(?:uniform-(\d+)|(\d+)-(\d+)-(\d+))(-history)?(-denoised)?")
+
+
+def config_args(name):
+    """`fovea render` options of a configuration named `uniform-N[-history][-denoised]` (N spp in every
+    pixel) or `F-I-P[-history][-denoised]` (the fovea's spp a pixel, the ring's a 2x2 block, the
+    periphery's a 4x4 block); None if the name is neither."""
+    m = CONFIG_NAME.fullmatch(name)
+    if not m or any(g is not None and int(g) == 0 for g in m.groups()[:4]):
+        return None
+    uniform, fovea, ring, periphery, history, denoised = m.groups()
+    args = ["--uniform", "--spp", f"{uniform},{uniform},{uniform}"] if uniform else \
+        ["--spp", f"{fovea},{ring},{periphery}"]
+    return args + (["--history"] if history else []) + (["--denoise"] if denoised else [])
 SCORER = r'''
 import json, math, sys, numpy as np, torch, pyfvvdp, OpenEXR
 job = json.load(open(sys.argv[1]))
@@ -145,7 +144,9 @@ def main():
     ap.add_argument("--trace", default=str(ROOT / "assets/gaze/saccades-2s.csv"))
     ap.add_argument("--reference-spp", default="512")
     ap.add_argument("--out", default="bench-eye")
-    ap.add_argument("--configs", default=",".join(CONFIGS))
+    ap.add_argument("--configs", default=",".join(DEFAULT_CONFIGS),
+                    help="uniform-N or F-I-P (spp of the fovea a pixel, the ring a 2x2 block, the periphery a "
+                         "4x4 block), each optionally -history and then -denoised, e.g. 4-4-16-history")
     ap.add_argument("--windows", default="",
                     help="also score parts of each sequence, as first:end frame ranges, e.g. 0:10,10:61")
     ap.add_argument("--curve", action="store_true",
@@ -170,9 +171,10 @@ def main():
         if not 0 <= first < end:
             sys.exit(f"--windows: '{part}' needs 0 <= first < end")
         windows.append((first, end))
-    unknown = [c for c in a.configs.split(",") if c not in CONFIGS]
+    unknown = [c for c in a.configs.split(",") if config_args(c) is None]
     if unknown:
-        sys.exit(f"--configs: unknown {', '.join(unknown)}; known: {', '.join(CONFIGS)}")
+        sys.exit(f"--configs: cannot read {', '.join(unknown)}: give uniform-N or F-I-P (positive sample "
+                 f"counts), optionally followed by -history and -denoised, e.g. 4-4-16-history")
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     py = python_with_exr()
@@ -227,8 +229,9 @@ def main():
             render_reference(a.fovea, display, a.reference_spp, ["-o", reference])
         references = [str(reference)]
     # The regions' radii on this display, for every configuration's relMSE by region (a uniform run's
-    # stats have none: its one region is everything).
-    radii_stats = out / f"radii-{a.resolution}{'-' + shaped if shaped else ''}.json"
+    # stats have none: its one region is everything). Named by the display too: the reference is the
+    # same image on any display, the radii are not.
+    radii_stats = out / f"radii-{a.resolution}-{a.display_cm}{'-' + shaped if shaped else ''}.json"
     if not radii_stats.exists():
         run([a.fovea, "render", *display, "--spp", "1,1,1", "--backend", "cpu", "-o", out / "radii.exr",
              "--stats", radii_stats])
@@ -246,7 +249,7 @@ def main():
             d = out / name / trace
             d.mkdir(parents=True, exist_ok=True)
             stats = d / "stats.json"
-            run([a.fovea, "render", *common, *CONFIGS[name], *args, "-o", d / "f.exr", "--stats", stats])
+            run([a.fovea, "render", *common, *config_args(name), *args, "-o", d / "f.exr", "--stats", stats])
             s = json.load(open(stats))
             if len(s["frames"]) != n:
                 sys.exit(f"{name}, {trace}: {len(s['frames'])} frames rendered, not {n}")
