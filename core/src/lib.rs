@@ -24,6 +24,10 @@
 // inputs against NaN as well as against zero and negative values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+// The CPU host's square root from the standard library (`math::float::sqrt`); the math stays `no_std`.
+#[cfg(feature = "std")]
+extern crate std;
+
 pub mod bsdf;
 pub mod bvh;
 pub mod camera;

@@ -16,17 +16,31 @@ pub const INV_2PI: f32 = 0.5 * core::f32::consts::FRAC_1_PI;
 /// 1 / (4π).
 pub const INV_4PI: f32 = 0.25 * core::f32::consts::FRAC_1_PI;
 
+/// The correctly rounded square root (IEEE 754), so the same bits on every backend.
+///
+/// With the `std` feature (the CPU host) it is `f32::sqrt`, which the compiler emits as `vsqrtss` in AVX
+/// code. Without it (core alone, the SPIR-V kernel) it is `libm`'s `sqrtf`, which on x86-64 is an `asm!`
+/// block of the legacy-encoded `sqrtss`: the compiler cannot schedule it, and in code that uses the
+/// AVX-512 registers it cost a fifth of the à-trous step's time (`perf annotate`, docs/performance.md).
+/// Both round exactly, so the results are the same bits.
 #[inline]
 #[must_use]
 pub fn sqrt(x: f32) -> f32 {
-    libm::sqrtf(x)
+    #[cfg(feature = "std")]
+    {
+        x.sqrt()
+    }
+    #[cfg(not(feature = "std"))]
+    {
+        libm::sqrtf(x)
+    }
 }
 
 /// `sqrt(max(x, 0))`: total for inputs that rounding pushed slightly below zero.
 #[inline]
 #[must_use]
 pub fn safe_sqrt(x: f32) -> f32 {
-    libm::sqrtf(x.max(0.0))
+    sqrt(x.max(0.0))
 }
 
 #[inline]
@@ -118,4 +132,36 @@ pub fn sqr(x: f32) -> f32 {
 pub fn is_finite(x: f32) -> bool {
     // Bit test: GPU compilers may fold `x == x` away under fast-math assumptions.
     (x.to_bits() & 0x7f80_0000) != 0x7f80_0000
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+
+    /// Whichever square root the build picks (`f32::sqrt` with `std`, `libm` without), it is the
+    /// correctly rounded one, bit for bit what the other build and libm give: the CPU host's switch to
+    /// `std` changes no pixel. (An f32's root rounded through f64 is correctly rounded: 53 ≥ 2·24 + 2.)
+    #[test]
+    fn the_square_root_is_correctly_rounded_and_libms_bits() {
+        let mut bits = 0u32;
+        let mut checked = 0;
+        while bits < 0x7f80_0000 {
+            let x = f32::from_bits(bits);
+            let exact = (f64::from(x)).sqrt() as f32;
+            assert_eq!(sqrt(x).to_bits(), exact.to_bits(), "sqrt({x:e})");
+            assert_eq!(
+                sqrt(x).to_bits(),
+                libm::sqrtf(x).to_bits(),
+                "sqrt({x:e}) against libm"
+            );
+            bits += 0x7f7; // about 1.04 million inputs, every exponent, odd and even mantissas
+            checked += 1;
+        }
+        assert!(checked > 1_000_000);
+        assert_eq!(sqrt(f32::INFINITY), f32::INFINITY);
+        assert_eq!(sqrt(-0.0).to_bits(), (-0.0f32).to_bits());
+        assert!(sqrt(-1.0).is_nan());
+        assert_eq!(safe_sqrt(-1.0e-9), 0.0);
+    }
 }
