@@ -24,7 +24,8 @@
 // inputs against NaN as well as against zero and negative values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-// The CPU host's square root from the standard library (`math::float::sqrt`); the math stays `no_std`.
+// The CPU host's square root and fused multiply-add from the standard library (`math::float`); the math
+// stays `no_std`.
 #[cfg(feature = "std")]
 extern crate std;
 

@@ -18,6 +18,7 @@
 use glam::{Vec3, Vec4};
 
 use super::ray::Ray;
+use crate::math::float::fma;
 use crate::math::lane_mask::{eq_mask, gt_mask, lane, negate_where_negative};
 use crate::scene::{Features, SceneSource, SceneView, TriangleBlock, TrianglePositions};
 
@@ -108,8 +109,8 @@ fn component(v: Vec3, k: u32) -> f32 {
 #[must_use]
 pub fn difference_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
     let cd = c * d;
-    let error = libm::fmaf(-c, d, cd);
-    let dop = libm::fmaf(a, b, -cd);
+    let error = fma(-c, d, cd);
+    let dop = fma(a, b, -cd);
     dop + error
 }
 
