@@ -315,8 +315,6 @@ pub fn geometry_weight(p: &GBufferTexel, q: &GBufferTexel, offset_px: f32) -> f3
         (true, false) | (false, true) => return 0.0,
         _ => {}
     }
-    let (zp, zq) = (p.distance(), q.distance());
-    let depth = exp(-(zp - zq).abs() / (DENOISE_DEPTH_SLOPE * zp * offset_px + 1.0e-6));
     // max(0, n_p · n_q)^128 by seven squarings (the same arithmetic on every backend).
     let mut normal = p.normal().dot(q.normal()).max(0.0);
     let mut i = 0;
@@ -324,6 +322,13 @@ pub fn geometry_weight(p: &GBufferTexel, q: &GBufferTexel, offset_px: f32) -> f3
         normal *= normal;
         i += 1;
     }
+    // Across a crease the weight is 0 whatever the depths say: the exponential is left out (the
+    // product would be +0 all the same).
+    if normal == 0.0 {
+        return 0.0;
+    }
+    let (zp, zq) = (p.distance(), q.distance());
+    let depth = exp(-(zp - zq).abs() / (DENOISE_DEPTH_SLOPE * zp * offset_px + 1.0e-6));
     depth * normal
 }
 
@@ -366,14 +371,17 @@ pub fn denoise_atrous(
                     let mut weight = kernel;
                     if q != p {
                         weight *= geometry_weight(&gbuffer[p], &gbuffer[q], offset);
-                        // An invalid centre has no luminance to compare with.
-                        if centre.is_valid() {
+                        // An invalid centre has no luminance to compare with; a tap the geometry
+                        // already shut out needs none (adding +0 to the sums changes nothing).
+                        if centre.is_valid() && weight > 0.0 {
                             weight *= exp(-(luminance(t.radiance()) - lp).abs() / sigma);
                         }
                     }
-                    sum_c += t.radiance() * weight;
-                    sum_v += t.variance() * weight * weight;
-                    sum_w += weight;
+                    if weight > 0.0 {
+                        sum_c += t.radiance() * weight;
+                        sum_v += t.variance() * weight * weight;
+                        sum_w += weight;
+                    }
                 }
             }
             dx += 1;
