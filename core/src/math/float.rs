@@ -1,7 +1,8 @@
 //! Scalar float functions for core code on both targets (instead of `f32::sin` &c., which need `std`).
 //!
-//! `sqrt`, `floor` and `abs` go through `libm`, which rustc_codegen_spirv maps to GLSL.std.450
-//! instructions; those are exactly rounded on both backends. The transcendental functions are the
+//! `sqrt`, `fma`, `floor` and `abs` go through `libm`, which rustc_codegen_spirv maps to GLSL.std.450
+//! instructions; those are exactly rounded on both backends. On the CPU host (core's `std` feature)
+//! `sqrt` and `fma` are the standard library's instead: the same bits, without libm's x86-64 `asm!`. The transcendental functions are the
 //! portable polynomials of [`super::transcendental`], so that the CPU and a Vulkan driver agree to the
 //! bit (the GPU's own `Sin`, `Log`, `Pow` differ from `libm` by an ulp here and there).
 
